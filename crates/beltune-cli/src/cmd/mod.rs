@@ -1,0 +1,10 @@
+//! One file per subcommand.
+
+pub mod commission;
+pub mod design;
+pub mod friction;
+pub mod identify;
+pub mod plant;
+pub mod serve;
+pub mod trajectory;
+pub mod util;

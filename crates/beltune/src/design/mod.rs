@@ -1,0 +1,1 @@
+//! Controller design of thesis chapter 4 (being written).

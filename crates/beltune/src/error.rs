@@ -1,0 +1,170 @@
+//! The one error type of the `beltune` library. Variants are structured so that
+//! the CLI can print one precise line; each module adds what it needs in its
+//! own section below.
+
+use std::path::PathBuf;
+
+/// Result with the library's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything the library reports instead of panicking or returning NaN.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    // ---- parameters and models ----
+    /// A parameter is non-finite or outside its physical range.
+    #[error("invalid parameter `{name}` = {value}: {reason}")]
+    InvalidParameter {
+        /// Parameter name (field name, with its unit where it helps).
+        name: String,
+        /// The offending value.
+        value: f64,
+        /// Why it is not accepted.
+        reason: String,
+    },
+    /// A named plant is not built in.
+    #[error("unknown plant `{name}` (built in: {known})")]
+    UnknownPlant {
+        /// The requested name.
+        name: String,
+        /// The built-in names, comma separated.
+        known: String,
+    },
+
+    // ---- data records ----
+    /// A record contains NaN or infinity.
+    #[error("non-finite value in `{what}` at sample {index}")]
+    NonFinite {
+        /// Which signal.
+        what: String,
+        /// Zero-based sample index.
+        index: usize,
+    },
+    /// A record is too short for what was asked.
+    #[error("record too short for {what}: needs {needed} samples, has {got}")]
+    TooShort {
+        /// What needed the samples.
+        what: String,
+        /// Samples needed.
+        needed: usize,
+        /// Samples available.
+        got: usize,
+    },
+    /// Signals that must have equal lengths do not.
+    #[error("length mismatch: {what}")]
+    LengthMismatch {
+        /// Description of the mismatch.
+        what: String,
+    },
+    /// The input signal does not excite the system.
+    #[error("no excitation: {what}")]
+    NoExcitation {
+        /// What was found instead.
+        what: String,
+    },
+    /// A CSV file is malformed (missing column, bad cell, non-monotonic time, ...).
+    #[error("{path}: {message}")]
+    Csv {
+        /// The file.
+        path: String,
+        /// What is wrong, naming the column and the row.
+        message: String,
+    },
+
+    // ---- identification and design ----
+    /// A parametric fit did not converge or gave a non-physical result.
+    #[error("fit failed: {reason}")]
+    FitFailed {
+        /// Why.
+        reason: String,
+    },
+    /// The requested design has no solution.
+    #[error("infeasible design: {reason}")]
+    Infeasible {
+        /// Why no solution exists.
+        reason: String,
+    },
+    /// A designed loop is unstable.
+    #[error("unstable closed loop: {reason}")]
+    Unstable {
+        /// Which loop and why.
+        reason: String,
+    },
+
+    // ---- commissioning ----
+    /// The safety supervisor stopped the axis.
+    #[error("safety stop: {reason}")]
+    SafetyStop {
+        /// Which limit was violated, with the values.
+        reason: String,
+    },
+
+    // ---- files ----
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A configuration file could not be parsed.
+    #[error("{path}: {message}")]
+    Parse {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The real-time crate refused a configuration.
+    #[error("real-time core: {0}")]
+    Rt(#[from] beltune_rt::Error),
+}
+
+impl Error {
+    /// Shorthand for [`Error::InvalidParameter`].
+    pub fn invalid(name: impl Into<String>, value: f64, reason: impl Into<String>) -> Self {
+        Error::InvalidParameter {
+            name: name.into(),
+            value,
+            reason: reason.into(),
+        }
+    }
+}
+
+/// `Ok(x)` if `x` is finite and `> 0`.
+pub fn require_positive(name: &str, x: f64) -> Result<f64> {
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(Error::invalid(name, x, "must be finite and > 0"))
+    }
+}
+
+/// `Ok(x)` if `x` is finite and `>= 0`.
+pub fn require_non_negative(name: &str, x: f64) -> Result<f64> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(Error::invalid(name, x, "must be finite and >= 0"))
+    }
+}
+
+/// `Ok(x)` if `x` is finite.
+pub fn require_finite(name: &str, x: f64) -> Result<f64> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::invalid(name, x, "must be finite"))
+    }
+}
+
+/// `Ok(())` if every sample is finite, else [`Error::NonFinite`] naming the first bad index.
+pub fn require_all_finite(what: &str, xs: &[f64]) -> Result<()> {
+    match xs.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(index) => Err(Error::NonFinite {
+            what: what.to_string(),
+            index,
+        }),
+    }
+}

@@ -1,0 +1,1 @@
+//! Identification of thesis chapter 3 (being written).

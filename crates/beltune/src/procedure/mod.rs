@@ -1,0 +1,1 @@
+//! The commissioning procedure (being written).

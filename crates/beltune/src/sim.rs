@@ -1,0 +1,1 @@
+//! Time-domain simulation of an axis (being written).

@@ -1,0 +1,31 @@
+//! Proof that `beltune-rt` is `#![no_std]` and allocation-free: this binary has
+//! no standard library, no allocator and no `main`, and links on the host.
+//! Any dependency of `beltune-rt` that pulls in `std` or `alloc` breaks the build.
+//!
+//! Built in CI with `cargo build -p nostd-check --profile nostd`.
+#![no_std]
+#![no_main]
+
+use beltune_rt::filter::{butterworth_lowpass, Sos};
+
+#[panic_handler]
+fn panic(_info: &core::panic::PanicInfo) -> ! {
+    loop {}
+}
+
+/// Entry point called by the C runtime. Runs one filter sample so the
+/// real-time code is actually linked, not just type-checked.
+#[no_mangle]
+pub extern "C" fn main(_argc: i32, _argv: *const *const u8) -> i32 {
+    let coeffs = match butterworth_lowpass(123.24, 1e-4) {
+        Ok(c) => c,
+        Err(_) => return 1,
+    };
+    let mut f = Sos::new(coeffs);
+    let y = f.step(1.0);
+    if y.is_finite() {
+        0
+    } else {
+        2
+    }
+}
