@@ -13,6 +13,11 @@ fn panic(_info: &core::panic::PanicInfo) -> ! {
     loop {}
 }
 
+/// The host's precompiled `core` references this unwinding hook even with
+/// `panic = "abort"`; a bare-metal target would not. It is never called.
+#[no_mangle]
+pub extern "C" fn rust_eh_personality() {}
+
 /// Entry point called by the C runtime. Runs one filter sample so the
 /// real-time code is actually linked, not just type-checked.
 #[no_mangle]
