@@ -6,3 +6,9 @@ pub mod safety;
 
 pub use progress::{LogProgress, NoProgress, Progress};
 pub use safety::{SafetyLimits, SafetySupervisor, Violation};
+
+pub mod bootstrap;
+pub mod motion;
+pub mod result;
+pub mod runner;
+pub mod validation;
