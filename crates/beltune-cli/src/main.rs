@@ -8,7 +8,11 @@ use clap::{Parser, Subcommand};
 mod cmd;
 
 #[derive(Parser)]
-#[command(name = "beltune", version, about = "Self-commissioning of belt-driven servo axes")]
+#[command(
+    name = "beltune",
+    version,
+    about = "Self-commissioning of belt-driven servo axes"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

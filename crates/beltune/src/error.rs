@@ -108,6 +108,14 @@ pub enum Error {
         reason: String,
     },
 
+    // ---- report ----
+    /// A plot could not be drawn or the report not rendered.
+    #[error("report: {reason}")]
+    Report {
+        /// What failed.
+        reason: String,
+    },
+
     // ---- files ----
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
