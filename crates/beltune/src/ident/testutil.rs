@@ -47,44 +47,73 @@ pub fn simulate_discrete(u: &[f64], a: f64, b: f64) -> Vec<f64> {
 
 /// Exact ZOH discretization of the two-mass model (2.33) with belt damping `d`:
 /// states `[phi, omega, xi, xi']`, torque input held over each sample.
-/// Returns the motor angle sampled at the start of each sample (the response
-/// to `torque[k]` appears at `k + 1`), then the cart position.
+pub struct ZohTwoMass {
+    ad: SMatrix<f64, 4, 4>,
+    bd: SVector<f64, 4>,
+    x: SVector<f64, 4>,
+}
+
+impl ZohTwoMass {
+    /// At rest at the origin.
+    pub fn new(p: &TwoMassParams, ts: f64) -> Self {
+        let it = p.i_t;
+        let j = p.theta_e;
+        let m = p.m_c;
+        let mut a = SMatrix::<f64, 5, 5>::zeros();
+        // phi' = omega
+        a[(0, 1)] = 1.0;
+        // Theta_e omega' = tau - it^2 dm omega - it c (it phi - xi) - it d (it omega - v)
+        a[(1, 0)] = -it * it * p.c / j;
+        a[(1, 1)] = -(it * it * p.d_m + it * it * p.d) / j;
+        a[(1, 2)] = it * p.c / j;
+        a[(1, 3)] = it * p.d / j;
+        a[(1, 4)] = 1.0 / j;
+        // xi' = v
+        a[(2, 3)] = 1.0;
+        // m v' = -dc v + c (it phi - xi) + d (it omega - v)
+        a[(3, 0)] = p.c * it / m;
+        a[(3, 1)] = p.d * it / m;
+        a[(3, 2)] = -p.c / m;
+        a[(3, 3)] = -(p.d_c + p.d) / m;
+        let e = (a * ts).exp();
+        ZohTwoMass {
+            ad: e.fixed_view::<4, 4>(0, 0).into_owned(),
+            bd: e.fixed_view::<4, 1>(0, 4).into_owned(),
+            x: SVector::zeros(),
+        }
+    }
+
+    /// Motor angle now (rad).
+    pub fn phi(&self) -> f64 {
+        self.x[0]
+    }
+
+    /// Cart position now (m).
+    pub fn xi(&self) -> f64 {
+        self.x[2]
+    }
+
+    /// Hold `tau` for one sample.
+    pub fn step(&mut self, tau: f64) {
+        self.x = self.ad * self.x + self.bd * tau;
+    }
+}
+
+/// Open-loop response: the motor angle sampled at the start of each sample
+/// (the response to `torque[k]` appears at `k + 1`), then the cart position.
 pub fn simulate_two_mass(p: &TwoMassParams, torque: &[f64], ts: f64) -> (Vec<f64>, Vec<f64>) {
-    let it = p.i_t;
-    let j = p.theta_e;
-    let m = p.m_c;
-    let mut a = SMatrix::<f64, 5, 5>::zeros();
-    // phi' = omega
-    a[(0, 1)] = 1.0;
-    // Theta_e omega' = tau - it^2 dm omega - it c (it phi - xi) - it d (it omega - v)
-    a[(1, 0)] = -it * it * p.c / j;
-    a[(1, 1)] = -(it * it * p.d_m + it * it * p.d) / j;
-    a[(1, 2)] = it * p.c / j;
-    a[(1, 3)] = it * p.d / j;
-    a[(1, 4)] = 1.0 / j;
-    // xi' = v
-    a[(2, 3)] = 1.0;
-    // m v' = -dc v + c (it phi - xi) + d (it omega - v)
-    a[(3, 0)] = p.c * it / m;
-    a[(3, 1)] = p.d * it / m;
-    a[(3, 2)] = -p.c / m;
-    a[(3, 3)] = -(p.d_c + p.d) / m;
-    let e = (a * ts).exp();
-    let ad = e.fixed_view::<4, 4>(0, 0).into_owned();
-    let bd: SVector<f64, 4> = e.fixed_view::<4, 1>(0, 4).into_owned();
-    let mut x = SVector::<f64, 4>::zeros();
+    let mut sys = ZohTwoMass::new(p, ts);
     let mut phi = Vec::with_capacity(torque.len());
     let mut xi = Vec::with_capacity(torque.len());
     for &tau in torque {
-        phi.push(x[0]);
-        xi.push(x[2]);
-        x = ad * x + bd * tau;
+        phi.push(sys.phi());
+        xi.push(sys.xi());
+        sys.step(tau);
     }
     (phi, xi)
 }
 
 /// Delay a sequence by `n` samples (zeros in front).
-#[allow(dead_code)] // used by the dead-time tests
 pub fn delay(x: &[f64], n: usize) -> Vec<f64> {
     let mut out = vec![0.0; n.min(x.len())];
     out.extend_from_slice(&x[..x.len() - n.min(x.len())]);
