@@ -391,6 +391,43 @@ mod tests {
         }
     }
 
+    /// Every edge of a constant-speed stream chatters (new, old, new levels
+    /// within a few ticks, random number of bounces): the count and the
+    /// increment time stamps are those of the clean stream.
+    #[test]
+    fn chattering_edges_count_once_with_the_first_edge_time() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(63);
+        for sign in [1i64, -1] {
+            let mut d = QuadratureDecoder::new(false, false);
+            let mut pos = 0i64;
+            let mut t = 0u64;
+            // settle the direction first (a reversal from the start state costs one)
+            walk(&mut d, &mut pos, sign, 1, &mut t);
+            let start = d.position_counts();
+            for j in 0..2000 {
+                t += 1000;
+                let edge_t = t;
+                let old = quadrature_levels(pos);
+                pos += sign;
+                let new = quadrature_levels(pos);
+                let inc = d.update(new.0, new.1, edge_t).expect("first edge counts");
+                assert_eq!((i64::from(inc.direction.sign()), inc.ticks), (sign, edge_t));
+                for _ in 0..rng.random_range(0..4u32) {
+                    t += 1;
+                    assert!(d.update(old.0, old.1, t).is_none(), "bounce back, edge {j}");
+                    t += 1;
+                    assert!(
+                        d.update(new.0, new.1, t).is_none(),
+                        "bounce forth, edge {j}"
+                    );
+                }
+            }
+            assert_eq!(d.position_counts() - start, 2000 * sign);
+            let w = d.take_window();
+            assert_eq!(w.gate_interval_ticks.map(|g| g >= 1000), Some(true));
+        }
+    }
+
     #[test]
     fn skipped_states_are_counted_as_invalid_and_produce_no_increment() {
         let mut d = QuadratureDecoder::new(false, false);
