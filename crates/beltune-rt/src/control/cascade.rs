@@ -244,12 +244,41 @@ pub struct ControlOutput<T = f64> {
     pub finite: bool,
 }
 
+/// The velocity filter `G_R(z) = b0 (1 - z^-1) / (1 + a1 z^-1)` evaluated on the
+/// angle increment, `y[k] = b0 (x[k] - x[k-1]) - a1 y[k-1]`: the same transfer
+/// function as a [`FirstOrder`] section with `b1 = -b0`, but without the
+/// cancellation of two terms of the size `b0 x` (about 5000 rad/s at 10 rad
+/// for `T_R = 2 ms`), which in `f32` would add 5e-4 rad/s of rounding noise per
+/// sample. Cost: 2 multiplications, 2 additions.
+#[derive(Clone, Copy, Debug)]
+struct VelocityFilterState<T> {
+    b0: T,
+    a1: T,
+    last_angle_rad: T,
+    last_velocity_rad_s: T,
+}
+
+impl<T: Real> VelocityFilterState<T> {
+    #[inline]
+    fn step(&mut self, angle_rad: T) -> T {
+        let y = self.b0 * (angle_rad - self.last_angle_rad) - self.a1 * self.last_velocity_rad_s;
+        self.last_angle_rad = angle_rad;
+        self.last_velocity_rad_s = y;
+        y
+    }
+
+    fn reset_to(&mut self, angle_rad: T) {
+        self.last_angle_rad = angle_rad;
+        self.last_velocity_rad_s = T::ZERO;
+    }
+}
+
 /// The cascaded P-PI controller with prefilter, anti-windup and feedforward.
 #[derive(Clone, Copy, Debug)]
 pub struct CascadeController<T = f64> {
     config: CascadeConfig<T>,
     ff: FeedforwardParams<T>,
-    vel_filter: FirstOrder<T>,
+    vel_filter: VelocityFilterState<T>,
     desired_lp: FirstOrder<T>,
     prefilter: Cascade<T, 2>,
     integrator_rad: T,
@@ -271,7 +300,12 @@ impl<T: Real> CascadeController<T> {
         let mut c = CascadeController {
             config,
             ff: config.feedforward.effective(),
-            vel_filter: FirstOrder::new(vf),
+            vel_filter: VelocityFilterState {
+                b0: vf.b0,
+                a1: vf.a1,
+                last_angle_rad: T::ZERO,
+                last_velocity_rad_s: T::ZERO,
+            },
             desired_lp: FirstOrder::new(lp),
             prefilter: Cascade::new(config.prefilter),
             integrator_rad: T::ZERO,
@@ -289,7 +323,7 @@ impl<T: Real> CascadeController<T> {
     /// Bumpless start at the current position: the velocity filter sees a
     /// motor at rest at `angle_rad`, all filter states and the integrator are zero.
     pub fn reset_to(&mut self, angle_rad: T) {
-        self.vel_filter.reset_to(angle_rad, T::ZERO);
+        self.vel_filter.reset_to(angle_rad);
         self.desired_lp.reset();
         self.prefilter.reset();
         self.integrator_rad = T::ZERO;
@@ -329,7 +363,7 @@ impl<T: Real> CascadeController<T> {
         let omega_hat = self.vel_filter.step(measured_angle_rad);
         let out = self.step_with_velocity(setpoint, measured_angle_rad, omega_hat);
         if !out.finite {
-            self.vel_filter.reset_to(measured_angle_rad, T::ZERO);
+            self.vel_filter.reset_to(measured_angle_rad);
         }
         out
     }

@@ -39,3 +39,6 @@ pub use feedforward::{
 };
 pub use pid::{pid_to_ppi, position_gain_root, ppi_to_pid, PidGains, PositionGainRoot};
 pub use setpoint::{BeltStretch, CartSample, MotionSample, Setpoint, SetpointConversion};
+
+#[cfg(test)]
+mod closed_loop_tests;
