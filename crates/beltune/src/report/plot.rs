@@ -412,7 +412,7 @@ pub fn moves_svg(moves: &[MovePlot]) -> Result<String> {
         let t_range = range_of(moves.iter().flat_map(|m| m.time_s.iter()), 0.0..1.0);
         let t_range = t_range.start.max(0.0)..t_range.end;
         let color = |i: usize| PALETTE[i % PALETTE.len()];
-        let desired: Vec<_> = moves
+        let desired: Vec<(String, &[f64], &[f64], RGBColor)> = moves
             .iter()
             .take(1)
             .map(|m| {
@@ -420,10 +420,9 @@ pub fn moves_svg(moves: &[MovePlot]) -> Result<String> {
                     "desired".to_string(),
                     &m.time_s[..],
                     &m.desired_m[..],
-                    BLACK.into(),
+                    BLACK,
                 )
             })
-            .map(|(l, t, y, c): (String, &[f64], &[f64], RGBColor)| (l, t, y, c))
             .collect();
         draw_time_panel(
             &panels[0],
