@@ -547,4 +547,79 @@ mod tests {
             CascadeConfig::<f64>::new(CascadeGains::new(1.0, 1.0, 1.0), TS, -1.0, 1.0).is_err()
         );
     }
+
+    /// (6.26): while the error keeps pushing into the limit, the integrator is
+    /// set so that the tentative next torque meets the limit exactly.
+    #[test]
+    fn conditional_integration_holds_the_torque_exactly_at_the_limit() {
+        let mut cfg = config();
+        cfg.prefilter = [SosCoeffs::IDENTITY; 2];
+        cfg.torque_offset_nm = 0.25;
+        let mut c = CascadeController::new(cfg).unwrap();
+        let g = cfg.gains;
+        for k in 0..50 {
+            let out = c.step(&Setpoint::hold(5.0), 0.0);
+            // first sample saturated, then exactly at the limit
+            assert!((out.torque_nm - 2.0).abs() < 1e-12);
+            let e_f = out.velocity_error_filtered_rad_s;
+            let next = g.k_p_nm_s_per_rad * e_f + g.k_i_nm_per_rad * out.integrator_rad + 0.25;
+            assert!((next - 2.0).abs() < 1e-12, "k {k}: {next}");
+        }
+        // plain integration (6.25) keeps integrating instead
+        cfg.anti_windup = AntiWindup::Off;
+        let mut c = CascadeController::new(cfg).unwrap();
+        let mut x = 0.0;
+        for _ in 0..50 {
+            let out = c.step(&Setpoint::hold(5.0), 0.0);
+            let expected = x + TS * out.velocity_error_filtered_rad_s;
+            assert!((out.integrator_rad - expected).abs() < 1e-15);
+            x = out.integrator_rad;
+        }
+    }
+
+    /// `step` is `step_with_velocity` fed with `G_R` of the measured angle.
+    #[test]
+    fn step_equals_step_with_velocity_from_the_velocity_filter() {
+        let cfg = config();
+        let mut a = CascadeController::new(cfg).unwrap();
+        let mut b = CascadeController::new(cfg).unwrap();
+        let mut g_r = crate::filter::FirstOrder::new(cfg.velocity_filter);
+        g_r.reset_to(0.0, 0.0);
+        for k in 0..500 {
+            let phi = libm::sin(k as f64 * 0.01);
+            let sp = Setpoint::hold(0.3);
+            let oa = a.step(&sp, phi);
+            let ob = b.step_with_velocity(&sp, phi, g_r.step(phi));
+            assert!((oa.torque_nm - ob.torque_nm).abs() < 1e-9);
+            assert!((oa.velocity_estimate_rad_s - ob.velocity_estimate_rad_s).abs() < 1e-9);
+        }
+    }
+
+    /// Refinement (a): the low-pass applied to `omega_d` gives what `G_R`
+    /// makes of `phi_d` (`G_R = L_R D` with the Tustin differentiator `D`); for
+    /// a cubic `phi_d` the two differ by the Tustin derivative error
+    /// `T_s^2 phi''' / 12` only.
+    #[test]
+    fn desired_velocity_filter_equals_g_r_of_the_desired_angle() {
+        let mut cfg = config();
+        cfg.filter_desired_velocity = true;
+        cfg.gains.k_pp_per_s = 0.0; // omega_ref = L(omega_d) exactly
+        let mut c = CascadeController::new(cfg).unwrap();
+        let mut g_r = crate::filter::FirstOrder::new(cfg.velocity_filter);
+        g_r.reset_to(0.0, 0.0);
+        let j = 3000.0;
+        for k in 0..3000 {
+            let t = k as f64 * TS;
+            let sp = Setpoint::at(MotionSample {
+                angle_rad: j * t * t * t / 6.0,
+                velocity_rad_s: j * t * t / 2.0,
+                acceleration_rad_s2: j * t,
+            });
+            let out = c.step(&sp, 0.0);
+            let via_g_r = g_r.step(sp.now.angle_rad);
+            let tol = TS * TS * j / 12.0 * 1.01 + 1e-12 * sp.now.velocity_rad_s;
+            let diff = (out.velocity_reference_rad_s - via_g_r).abs();
+            assert!(diff <= tol, "k {k}: {diff} > {tol}");
+        }
+    }
 }
