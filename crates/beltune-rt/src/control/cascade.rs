@@ -21,8 +21,16 @@
 //! absolute angle (better conditioned in `f32`) and without a start transient.
 //!
 //! The integrator state `x_I` is the integral of the filtered velocity error, in rad;
-//! `K_I x_I` is a torque. The torque offset (holding torque, e.g. on a tilted axis)
-//! is treated like the feedforward in (6.26).
+//! `K_I x_I` is a torque. The error `e_omega` of (6.25)/(6.26) is the PI input of
+//! Figure 6.9, i.e. the prefiltered error `e_f`. The output uses `x_I[k]` (forward
+//! Euler, as (6.25)); the condition of (6.26) is evaluated on the tentative next
+//! torque `K_P e_f[k] + K_I (x_I[k] + T_s e_f[k]) + tau_FF[k]`, and the reset makes
+//! `K_P e_f[k] + K_I x_I[k+1] + tau_FF[k]` equal the limit exactly. The torque
+//! offset (holding torque, e.g. on a tilted axis) is treated like the feedforward
+//! in (6.26). With `K_I = 0` there is no integral action and (6.26) is skipped.
+//!
+//! [`CascadeController::reset_to`] assumes the axis at rest (`omega_d = 0`); the
+//! desired-velocity low-pass starts from zero.
 //!
 //! Cost per sample (f64, see the crate README for measured numbers): the velocity
 //! filter and the desired-velocity low-pass (3 multiplications each), two
