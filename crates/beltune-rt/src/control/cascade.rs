@@ -329,6 +329,29 @@ impl<T: Real> CascadeController<T> {
         &self.config
     }
 
+    /// Replace the configuration at run time (e.g. gains from a tuning slider).
+    /// Filter states are kept (coefficients replaced), and the integrator is
+    /// rescaled so that the integral torque `K_I x_I` is continuous: a gain change
+    /// at zero error causes no torque step. An invalid configuration is rejected
+    /// and the controller is left unchanged.
+    pub fn set_config(&mut self, config: CascadeConfig<T>) -> Result<(), Error> {
+        let mut next = Self::new(config)?;
+        next.vel_filter.last_angle_rad = self.vel_filter.last_angle_rad;
+        next.vel_filter.last_velocity_rad_s = self.vel_filter.last_velocity_rad_s;
+        let mut lp = self.desired_lp;
+        lp.coeffs = next.desired_lp.coeffs;
+        next.desired_lp = lp;
+        let mut pre = self.prefilter;
+        for (n, o) in next.prefilter.sections.iter().zip(pre.sections.iter_mut()) {
+            o.coeffs = n.coeffs;
+        }
+        next.prefilter = pre;
+        let integral_torque = self.config.gains.k_i_nm_per_rad * self.integrator_rad;
+        next.integrator_rad = integral_torque * next.inv_k_i;
+        *self = next;
+        Ok(())
+    }
+
     /// Bumpless start at the current position: the velocity filter sees a
     /// motor at rest at `angle_rad`, all filter states and the integrator are zero.
     pub fn reset_to(&mut self, angle_rad: T) {
@@ -696,5 +719,24 @@ mod tests {
     #[test]
     fn random_finite_inputs_give_bounded_finite_torque_f32() {
         sweep_invariants::<f32>(2);
+    }
+
+    #[test]
+    fn set_config_changes_gains_without_a_torque_step() {
+        let mut c = CascadeController::new(config()).unwrap();
+        c.reset_to_holding(0.0, 0.7);
+        for _ in 0..10 {
+            c.step(&Setpoint::hold(0.0), 0.0);
+        }
+        let before = c.step(&Setpoint::hold(0.0), 0.0).torque_nm;
+        let mut cfg = config();
+        cfg.gains.k_i_nm_per_rad *= 3.0;
+        cfg.gains.k_p_nm_s_per_rad *= 2.0;
+        c.set_config(cfg).unwrap();
+        let after = c.step(&Setpoint::hold(0.0), 0.0).torque_nm;
+        assert!((before - 0.7).abs() < 1e-12 && (after - before).abs() < 1e-12);
+        cfg.torque_max_nm = -1.0;
+        assert!(c.set_config(cfg).is_err());
+        assert_eq!(c.config().gains.k_i_nm_per_rad, 3.0 * 1.39);
     }
 }
