@@ -32,10 +32,11 @@
 //! [`CascadeController::reset_to`] assumes the axis at rest (`omega_d = 0`); the
 //! desired-velocity low-pass starts from zero.
 //!
-//! Cost per sample (f64, see the crate README for measured numbers): the velocity
-//! filter and the desired-velocity low-pass (3 multiplications each), two
-//! second-order sections (5 each), feedforward (2), PI and anti-windup (about 6):
-//! about 25 multiplications, no division, no allocation, no panic.
+//! Cost per sample: the velocity filter (2 multiplications), the desired-velocity
+//! low-pass (3), two second-order sections (5 each), feedforward (2), position
+//! loop, PI and anti-windup (about 8): about 25 multiplications, no division, no
+//! allocation, no panic. Measured (crate README): 140 instructions, about 80 ns
+//! per step in f64 on the development machine (137 instructions in f32).
 
 use super::feedforward::{Feedforward, FeedforwardParams};
 use super::setpoint::Setpoint;
