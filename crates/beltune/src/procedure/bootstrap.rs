@@ -13,7 +13,7 @@
 
 use crate::error::require_positive;
 use crate::Result;
-use beltune_rt::control::{AntiWindup, CascadeConfig, CascadeGains};
+use beltune_rt::control::{AntiWindup, CascadeConfig, CascadeGains, Feedforward};
 use beltune_rt::filter::{butterworth_lowpass, SosCoeffs};
 
 /// Lowest crossover of the bootstrap velocity loop, Hz.
@@ -59,5 +59,8 @@ pub fn bootstrap_controller(
     let mut cfg = CascadeConfig::new(gains, ts_s, T_R_S, torque_max_nm)?;
     cfg.prefilter = [butterworth_lowpass(4.0 * w_c, ts_s)?, SosCoeffs::IDENTITY];
     cfg.anti_windup = AntiWindup::ConditionalIntegration;
+    // The data-sheet inertia is known: accelerate it by feedforward (4.16),
+    // friction is not known yet.
+    cfg.feedforward = Feedforward::linear(j, 0.0);
     Ok(cfg)
 }

@@ -86,6 +86,34 @@ impl DataSheet {
         Ok(())
     }
 
+    /// What a technician enters for a plant: its data-sheet inertia,
+    /// transmission, moving mass (cart plus stated payload), torque limit, and a
+    /// travel window inside the stroke (Table A.8: -10 mm to stroke - 30 mm;
+    /// a linear set without stroke gets 0.6 m). `origin_m` is the homing result,
+    /// `travel_window_m` overrides the window.
+    pub fn for_plant(
+        plant: &crate::model::rigs::Plant,
+        origin_m: f64,
+        travel_window_m: Option<(f64, f64)>,
+    ) -> Self {
+        use crate::model::rigs::Plant;
+        let (theta_e, i_t, mass, stroke) = match plant {
+            Plant::Physical(p) => (p.theta_e(), p.i_t(), p.m_c(), p.stroke_m),
+            Plant::Linear(l) => (l.two_mass.theta_e, l.two_mass.i_t, l.two_mass.m_c, 0.6),
+        };
+        let (lo, hi) = travel_window_m.unwrap_or((-0.01, stroke - 0.03));
+        DataSheet {
+            theta_e_kg_m2: theta_e,
+            i_t_m: i_t,
+            moving_mass_kg: mass,
+            origin_m,
+            travel_min_m: lo,
+            travel_max_m: hi,
+            torque_max_nm: plant.info().torque_limit_nm,
+            velocity_max_m_s: 2.5,
+        }
+    }
+
     /// Rigid-body inertia from the data sheet, `Theta_e + i_t^2 m`, kg m^2.
     pub fn rigid_inertia(&self) -> f64 {
         self.theta_e_kg_m2 + self.i_t_m * self.i_t_m * self.moving_mass_kg
@@ -103,6 +131,8 @@ pub struct ExcitationConfig {
     pub periods: usize,
     /// Leading periods discarded as transient.
     pub skip_periods: usize,
+    /// A fixed amplitude `A_PRBS` in N m instead of the search (expert use).
+    pub fixed_amplitude_nm: Option<f64>,
     /// First amplitude tried, as a fraction of the torque limit.
     pub amplitude_start_fraction: f64,
     /// Factor between successive amplitudes.
@@ -131,6 +161,7 @@ impl Default for ExcitationConfig {
             clock_period: 16,
             periods: 3,
             skip_periods: 1,
+            fixed_amplitude_nm: None,
             amplitude_start_fraction: 0.02,
             amplitude_growth: 1.5,
             amplitude_max_fraction: 0.5,
@@ -171,7 +202,7 @@ impl Default for CommissioningConfig {
             friction_speeds_m_s: vec![0.1, 0.25, 0.5],
             friction_run_m: 0.1,
             validation: MoveSpec::default(),
-            following_error_max_m: 0.02,
+            following_error_max_m: 0.05,
         }
     }
 }
@@ -308,7 +339,7 @@ pub fn commission(
     // the load (a vertical axis sags first), for a first holding torque ----
     st.start("take axis", 0);
     let start = st.runner.position_m();
-    let catch_s = 0.6;
+    let catch_s = 0.4;
     let rec = hold(st.runner, &boot, catch_s)?;
     let tail = &rec[rec.len() / 2..];
     let first_hold = tail.iter().map(|s| s.torque_command_nm).sum::<f64>() / tail.len() as f64;
@@ -347,15 +378,18 @@ pub fn commission(
     // ---- 4. excitation amplitude ----
     let ex = &cfg.excitation;
     st.start("excitation amplitude", 0);
-    let amplitude = find_amplitude(
-        st.runner,
-        &boot_hold,
-        id_pos,
-        &pos_limits,
-        holding,
-        torque_max,
-        ex,
-    )?;
+    let amplitude = match ex.fixed_amplitude_nm {
+        Some(a) => crate::error::require_positive("excitation amplitude [N m]", a)?.min(torque_max),
+        None => find_amplitude(
+            st.runner,
+            &boot_hold,
+            id_pos,
+            &pos_limits,
+            holding,
+            torque_max,
+            ex,
+        )?,
+    };
     let line = format!(
         "A_PRBS = {:.3} N m (+-{:.3} N m around the holding torque)",
         amplitude,
