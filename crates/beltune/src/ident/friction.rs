@@ -64,7 +64,9 @@ pub fn run_means(
                 .collect();
             if idx.is_empty() {
                 return Err(Error::TooShort {
-                    what: format!("constant-velocity run {start}..{end} s after {running_in_s} s running-in"),
+                    what: format!(
+                        "constant-velocity run {start}..{end} s after {running_in_s} s running-in"
+                    ),
                     needed: 1,
                     got: 0,
                 });
@@ -200,7 +202,10 @@ pub fn identify_from_motion(
         (position.to_vec(), torque.to_vec())
     } else {
         let grid: Vec<f64> = (0..n).map(|k| time_s[0] + k as f64 * dt).collect();
-        (resample(time_s, position, &grid), resample(time_s, torque, &grid))
+        (
+            resample(time_s, position, &grid),
+            resample(time_s, torque, &grid),
+        )
     };
     let fs = 1.0 / dt;
     let fc = cfg.cutoff_hz.unwrap_or(fs / 50.0);
@@ -301,7 +306,7 @@ fn lstsq(a: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>> {
     let svd = a.clone().svd(true, true);
     let smax = svd.singular_values.max();
     let smin = svd.singular_values.min();
-    if !(smax > 0.0) || smin < 1e-10 * smax {
+    if smax.is_nan() || smax <= 0.0 || smin < 1e-10 * smax {
         return Err(Error::FitFailed {
             reason: "friction regression is rank deficient (the data do not separate the terms)"
                 .into(),
@@ -344,7 +349,11 @@ mod tests {
         let (mut t, mut v, mut tau, mut windows) = (vec![], vec![], vec![], vec![]);
         let mut now = 0.0;
         for (i, &xi_dot) in THESIS_VELOCITY_SEQUENCE_M_S.iter().enumerate() {
-            let w = if i % 2 == 0 { xi_dot / i_t } else { -xi_dot / i_t };
+            let w = if i % 2 == 0 {
+                xi_dot / i_t
+            } else {
+                -xi_dot / i_t
+            };
             let start = now;
             for k in 0..500 {
                 // first 0.1 s: a decaying transient (running-in)
@@ -374,7 +383,12 @@ mod tests {
         let (mut t, mut x, mut f) = (vec![], vec![], vec![]);
         let n = (20.0 * rate_hz) as usize;
         for k in 0..n {
-            let tk = k as f64 / rate_hz + if jitter && k % 3 == 1 { 0.2 / rate_hz } else { 0.0 };
+            let tk = k as f64 / rate_hz
+                + if jitter && k % 3 == 1 {
+                    0.2 / rate_hz
+                } else {
+                    0.0
+                };
             let w1 = 2.0 * std::f64::consts::PI * 0.3;
             let w2 = 2.0 * std::f64::consts::PI * 0.7;
             let pos = 0.2 * (w1 * tk).sin() + 0.05 * (w2 * tk).sin();
