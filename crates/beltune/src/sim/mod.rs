@@ -283,6 +283,16 @@ impl SimAxis {
         }
     }
 
+    /// Whether the cart is outside the usable stroke `[0, stroke]` (a real
+    /// axis would hit its end stop; the simulation has none and keeps the belt
+    /// stiffness of the nearest stroke end). Always `false` for a linear set.
+    pub fn cart_outside_stroke(&self) -> bool {
+        match self.plant.stroke_m() {
+            Some(stroke) => !(0.0..=stroke).contains(&self.cart_position_m()),
+            None => false,
+        }
+    }
+
     /// The full three-mass state (2.18), if the three-mass model runs.
     pub fn three_mass_state(&self) -> Option<ThreeMassState> {
         match &self.dynamics {

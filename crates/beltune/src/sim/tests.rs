@@ -620,6 +620,12 @@ fn invalid_configurations_are_errors() {
     let mut axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
     assert!(axis.set_cart_position(-0.1).is_err());
     assert!(axis.set_cart_position(0.6).is_ok());
+    assert!(!axis.cart_outside_stroke());
+    // pushing beyond the end of the stroke is reported, not a panic
+    run_constant(&mut axis, 1.0, 0.05);
+    assert!(axis.cart_outside_stroke());
+    assert!(axis.cart_position_m().is_finite());
+    axis.set_cart_position(0.6).unwrap();
     assert_eq!(
         axis.linearized_truth(),
         plant.worst_case_two_mass().unwrap()
