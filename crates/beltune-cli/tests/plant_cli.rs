@@ -113,6 +113,14 @@ fn toml_file_round_trip_and_errors_are_one_line() {
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
         assert!(err.starts_with("error: "), "{err}");
     }
+    let err = String::from_utf8(beltune(&["plant", "show", "--plant", "missing-file.toml"]).stderr)
+        .unwrap();
+    assert!(err.contains("missing-file.toml"), "{err}");
+    assert_eq!(
+        err.matches("os error").count(),
+        1,
+        "the cause is printed once: {err}"
+    );
     let err = String::from_utf8(beltune(&["plant", "show", "--plant", "egc99"]).stderr).unwrap();
     assert!(err.contains("egc99") && err.contains("egc70"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();

@@ -323,11 +323,13 @@ pub fn builtin(name: &str, payload_kg: Option<f64>) -> Result<Plant> {
 /// [`PhysicalParams`], or `kind = "linear"` with those of [`LinearPlant`]
 /// (`[two_mass]` table). Errors name the file and the field.
 pub fn load_toml(path: &Path) -> Result<Plant> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
     let file = path.display().to_string();
+    // `Error::Parse` rather than `Error::Io`: the CLI prints the cause chain,
+    // and `Io` would repeat its source.
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Parse {
+        path: file.clone(),
+        message: format!("cannot read the plant file: {e}"),
+    })?;
     let plant: Plant = toml::from_str(&text).map_err(|e| Error::Parse {
         path: file.clone(),
         message: e.message().to_string()
