@@ -174,3 +174,71 @@ fn builtin_linear_sets_through_the_simulator() {
         assert!(rel(fit.params.d, truth.d) < belt_tol, "{name} d");
     }
 }
+
+/// The axis follows a two-tone position reference under a PD controller; the
+/// regression sees only the encoder angle and the (noisy) actual torque.
+fn egc70_motion_regression() -> (MotionFriction, crate::model::FrictionTotals, f64) {
+    let plant = builtin("egc70", None).unwrap();
+    let mut axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
+    let info = axis.info();
+    let ts = info.sample_time_s;
+    let truth = axis.friction_truth();
+    let j = axis.linearized_truth().rigid_inertia();
+    // 8 Hz position loop, velocity from a 1 ms low-passed difference
+    let w_c = 2.0 * std::f64::consts::PI * 8.0;
+    let (k_p, k_d) = (j * w_c * w_c, 2.0 * 0.8 * j * w_c);
+    let n = (12.0 / ts) as usize;
+    let (mut t, mut angle, mut torque) = (vec![], vec![], vec![]);
+    let (mut prev, mut vel) = (0.0, 0.0);
+    let alpha = ts / 1e-3;
+    let mut phi = 0.0;
+    for k in 0..n {
+        let tk = k as f64 * ts;
+        let (w1, w2) = (
+            2.0 * std::f64::consts::PI * 0.4,
+            2.0 * std::f64::consts::PI * 0.9,
+        );
+        let r = 8.0 * (w1 * tk).sin() + 2.0 * (w2 * tk).sin();
+        let rd = 8.0 * w1 * (w1 * tk).cos() + 2.0 * w2 * (w2 * tk).cos();
+        vel += alpha * ((phi - prev) / ts - vel);
+        prev = phi;
+        let tau = k_p * (r - phi) + k_d * (rd - vel);
+        let m = axis.step(tau);
+        phi = m.motor_counts as f64 * info.motor_rad_per_count;
+        t.push(tk);
+        angle.push(phi);
+        torque.push(m.torque_actual_nm);
+    }
+    // the regression assumes a rigid axis: filter well below f_z (about 20 Hz)
+    let cfg = MotionFrictionConfig {
+        cutoff_hz: Some(4.0),
+        ..Default::default()
+    };
+    let r = identify_from_motion(&t, &angle, &torque, &cfg).unwrap();
+    println!("{r:?}\ntruth {truth:?} J {j}");
+    (r, truth, j)
+}
+
+/// The rigid-body inertia from a recorded motion of the simulated `egc70`
+/// matches the linearized truth `Theta_e + i_t^2 m_c` within 5 %.
+#[test]
+fn egc70_inertia_from_a_recorded_motion() {
+    let (r, _, j) = egc70_motion_regression();
+    const TOL: f64 = 0.05;
+    assert!(rel(r.inertia, j) < TOL, "{r:?}");
+}
+
+/// Issue 4: viscous and Coulomb friction of the simulated `egc70` within 5 %.
+/// Ignored: the simulated axis shows about 0.055 N m Coulomb and 3.5e-3 N m
+/// s/rad viscous friction (also 0.082 N m mean torque at a constant 5 rad/s,
+/// where `friction_truth()` predicts 0.138 N m), against `friction_truth()`
+/// = 0.125 N m / 2.53e-3; the same regression recovers synthetic friction
+/// within 1 % (`friction::tests`). To be resolved with the simulator's author.
+#[test]
+#[ignore = "simulated egc70 friction differs from SimAxis::friction_truth (see doc)"]
+fn egc70_friction_from_a_recorded_motion() {
+    let (r, truth, _) = egc70_motion_regression();
+    const TOL: f64 = 0.05;
+    assert!(rel(r.viscous, truth.viscous_nm_s_per_rad) < TOL, "{r:?}");
+    assert!(rel(r.coulomb, truth.coulomb_nm) < TOL, "{r:?}");
+}
