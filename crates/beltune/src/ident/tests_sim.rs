@@ -184,13 +184,14 @@ fn egc70_motion_regression() -> (MotionFriction, crate::model::FrictionTotals, f
     let ts = info.sample_time_s;
     let truth = axis.friction_truth();
     let j = axis.linearized_truth().rigid_inertia();
-    // 8 Hz position loop, velocity from a 1 ms low-passed difference
-    let w_c = 2.0 * std::f64::consts::PI * 8.0;
+    // 3 Hz position loop, velocity from a 5 ms low-passed difference (an 8 Hz
+    // loop with 1 ms chatters in the torque limit on the encoder quantization)
+    let w_c = 2.0 * std::f64::consts::PI * 3.0;
     let (k_p, k_d) = (j * w_c * w_c, 2.0 * 0.8 * j * w_c);
     let n = (12.0 / ts) as usize;
     let (mut t, mut angle, mut torque) = (vec![], vec![], vec![]);
     let (mut prev, mut vel) = (0.0, 0.0);
-    let alpha = ts / 1e-3;
+    let alpha = ts / 5e-3;
     let mut phi = 0.0;
     for k in 0..n {
         let tk = k as f64 * ts;
@@ -229,13 +230,15 @@ fn egc70_inertia_from_a_recorded_motion() {
 }
 
 /// Issue 4: viscous and Coulomb friction of the simulated `egc70` within 5 %.
-/// Ignored: the simulated axis shows about 0.055 N m Coulomb and 3.5e-3 N m
-/// s/rad viscous friction (also 0.082 N m mean torque at a constant 5 rad/s,
-/// where `friction_truth()` predicts 0.138 N m), against `friction_truth()`
-/// = 0.125 N m / 2.53e-3; the same regression recovers synthetic friction
-/// within 1 % (`friction::tests`). To be resolved with the simulator's author.
+/// Ignored, open: on this two-tone motion the regression gives Coulomb
+/// 0.012 N m and viscous 4.9e-3 N m s/rad against `friction_truth()` 0.125 /
+/// 2.53e-3 (the inertia is right within 2 %, and a probe at a constant
+/// 5 rad/s under the same loop measured a mean torque of 0.127 N m where
+/// 0.138 is expected). The same regression recovers synthetic friction
+/// within 1 % (`friction::tests`); the cause (stick phases at the reversals,
+/// belt dynamics, or the excitation) is not found yet.
 #[test]
-#[ignore = "simulated egc70 friction differs from SimAxis::friction_truth (see doc)"]
+#[ignore = "open: regression on the simulated egc70 motion misses the Coulomb friction (see doc)"]
 fn egc70_friction_from_a_recorded_motion() {
     let (r, truth, _) = egc70_motion_regression();
     const TOL: f64 = 0.05;
