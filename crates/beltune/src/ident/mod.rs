@@ -22,6 +22,8 @@ pub mod strategy;
 #[cfg(test)]
 mod tests_measured;
 #[cfg(test)]
+mod tests_sim;
+#[cfg(test)]
 pub(crate) mod testutil;
 
 pub use dead_time::{estimate_dead_time, DeadTime};
