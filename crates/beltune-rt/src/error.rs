@@ -15,6 +15,14 @@ pub enum Error {
     },
     /// The requested target lies outside the position limits.
     TargetOutsideLimits,
+    /// The planned (time-optimal) trajectory would leave the position limits
+    /// on its way to an admissible target (overshoot or braking distance).
+    PositionLimitsViolated {
+        /// Lowest position the planned trajectory reaches (m or rad).
+        lowest: f64,
+        /// Highest position the planned trajectory reaches (m or rad).
+        highest: f64,
+    },
     /// No solution exists for the request (e.g. inconsistent limits).
     Infeasible {
         /// Why no solution exists.
@@ -29,6 +37,10 @@ impl fmt::Display for Error {
                 write!(f, "invalid parameter `{name}`: {reason}")
             }
             Error::TargetOutsideLimits => write!(f, "target position outside the position limits"),
+            Error::PositionLimitsViolated { lowest, highest } => write!(
+                f,
+                "the time-optimal trajectory leaves the position limits (it reaches {lowest} .. {highest})"
+            ),
             Error::Infeasible { reason } => write!(f, "infeasible: {reason}"),
         }
     }

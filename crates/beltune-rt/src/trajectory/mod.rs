@@ -1,0 +1,405 @@
+//! Jerk-limited, time-optimal trajectory generator for one axis (thesis 6.3,
+//! Figure 6.11).
+//!
+//! A move from any start state `(position, velocity, acceleration)` to any
+//! admissible target state is planned once ([`Trajectory::plan`], no
+//! allocation) and then sampled every `T_s` ([`Trajectory::sample`]). The
+//! profile has the seven phases P1-P7 of Figure 6.11 with jerk `+-j_max` or 0
+//! in each; limits may be asymmetric (`v_min < 0 < v_max`,
+//! `a_min < 0 < a_max`, jerk symmetric `+-j_max` as in Ruckig). A start state
+//! that violates (or will inevitably violate) the velocity or acceleration
+//! limits is first brought back inside them by a brake pre-phase of at most
+//! two constant-jerk segments. Position limits are checked: a target outside
+//! is [`Error::TargetOutsideLimits`], a planned move whose position extrema
+//! leave them is [`Error::PositionLimitsViolated`].
+//!
+//! Units: positions in m (or rad for a rotary axis), velocities in m/s,
+//! accelerations in m/s^2, jerks in m/s^3, times in s.
+//!
+//! | file | step |
+//! | --- | --- |
+//! | `brake.rs` | brake pre-phase for start states outside the limits |
+//! | `step1.rs` | the extremal (time-optimal) profile families |
+//! | `roots.rs` | roots of the quartics of step 1 |
+//! | `profile.rs` | a seven-phase profile and its admissibility check |
+//! | `block.rs` | choice of the fastest valid profile |
+//! | `math.rs` | integration of a constant-jerk phase, `libm` helpers |
+//!
+//! ## Attribution
+//!
+//! The step-1 equations, the brake pre-phase, the profile check, the quartic
+//! solver and the profile selection are a no_std, allocation-free port of
+//! Ruckig's 1-DOF position algorithm (Berscheid and Kroeger, "Jerk-limited
+//! Real-time Trajectory Generation with Arbitrary Target States", RSS 2021)
+//! from its Rust port rsruckig 3.0.1, under the MIT License:
+//!
+//! ```text
+//! MIT License
+//!
+//! Copyright (c) 2021 Lars Berscheid
+//! Copyright (c) 2023 Petri Koskinen (rsruckig)
+//!
+//! Permission is hereby granted, free of charge, to any person obtaining a copy
+//! of this software and associated documentation files (the "Software"), to deal
+//! in the Software without restriction, including without limitation the rights
+//! to use, copy, modify, merge, publish, distribute, sublicense, and/or sell
+//! copies of the Software, and to permit persons to whom the Software is
+//! furnished to do so, subject to the following conditions:
+//!
+//! The above copyright notice and this permission notice shall be included in all
+//! copies or substantial portions of the Software.
+//!
+//! THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+//! IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+//! FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+//! AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+//! LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+//! OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+//! SOFTWARE.
+//! ```
+
+mod block;
+mod brake;
+mod math;
+mod profile;
+mod roots;
+mod step1;
+
+use crate::error::{finite, positive};
+use crate::Error;
+use block::Block;
+use brake::{v_at_a_zero, BrakePhase};
+use math::integrate;
+use profile::Profile;
+use step1::ExtremalProfiles;
+
+/// Tolerance (m) with which the planned position extrema may touch the
+/// position limits: the profile check only guarantees the final position to
+/// 1e-8 m, so a move that ends exactly on a limit must not be rejected.
+const POSITION_LIMIT_TOL: f64 = 1e-8;
+
+/// A kinematic state of the axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct State {
+    /// Position in m (or rad).
+    pub position: f64,
+    /// Velocity in m/s (or rad/s).
+    pub velocity: f64,
+    /// Acceleration in m/s^2 (or rad/s^2).
+    pub acceleration: f64,
+}
+
+impl State {
+    /// A state at rest at `position`.
+    pub fn at_rest(position: f64) -> Self {
+        Self {
+            position,
+            velocity: 0.0,
+            acceleration: 0.0,
+        }
+    }
+}
+
+/// Kinematic limits of a move. Validated by [`Trajectory::plan`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    /// Highest velocity, m/s, finite and `> 0`.
+    pub v_max: f64,
+    /// Lowest velocity, m/s, finite and `< 0`.
+    pub v_min: f64,
+    /// Highest acceleration, m/s^2, finite and `> 0`.
+    pub a_max: f64,
+    /// Lowest acceleration, m/s^2, finite and `< 0`.
+    pub a_min: f64,
+    /// Jerk bound `|j| <= j_max`, m/s^3, finite and `> 0`.
+    pub j_max: f64,
+    /// Lowest admissible position, m (may be `-inf`).
+    pub position_min: f64,
+    /// Highest admissible position, m (may be `+inf`, `>= position_min`).
+    pub position_max: f64,
+}
+
+impl Limits {
+    /// Symmetric limits `+-v_max`, `+-a_max`, `+-j_max` without position limits.
+    pub fn symmetric(v_max: f64, a_max: f64, j_max: f64) -> Self {
+        Self {
+            v_max,
+            v_min: -v_max,
+            a_max,
+            a_min: -a_max,
+            j_max,
+            position_min: f64::NEG_INFINITY,
+            position_max: f64::INFINITY,
+        }
+    }
+
+    fn validate(&self) -> Result<(), Error> {
+        positive("v_max", self.v_max)?;
+        positive("-v_min", -self.v_min)?;
+        positive("a_max", self.a_max)?;
+        positive("-a_min", -self.a_min)?;
+        positive("j_max", self.j_max)?;
+        if self.position_min.is_nan() || self.position_max.is_nan() {
+            return Err(Error::InvalidParameter {
+                name: "position limits",
+                reason: "must not be NaN",
+            });
+        }
+        if self.position_min > self.position_max {
+            return Err(Error::InvalidParameter {
+                name: "position limits",
+                reason: "position_min must be <= position_max",
+            });
+        }
+        Ok(())
+    }
+}
+
+impl Default for Limits {
+    /// The limits of thesis Table A.8 (`v` 5 m/s, `a` 45 m/s^2, `j` 40 m/s^3,
+    /// symmetric) without position limits.
+    fn default() -> Self {
+        Self::symmetric(5.0, 45.0, 40.0)
+    }
+}
+
+/// The desired state and jerk at one instant.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sample {
+    /// Position in m.
+    pub position: f64,
+    /// Velocity in m/s.
+    pub velocity: f64,
+    /// Acceleration in m/s^2.
+    pub acceleration: f64,
+    /// Jerk in m/s^3.
+    pub jerk: f64,
+}
+
+/// Durations and jerks of the phases of a planned move.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Phases {
+    /// Durations of the (at most two) brake pre-phase segments, s; zero when
+    /// the start state is admissible.
+    pub brake_durations_s: [f64; 2],
+    /// Jerks of the brake pre-phase segments, m/s^3.
+    pub brake_jerks_m_s3: [f64; 2],
+    /// Durations of P1..P7 (Figure 6.11), s.
+    pub durations_s: [f64; 7],
+    /// Jerks in P1..P7, m/s^3 (`+-j_max` or 0).
+    pub jerks_m_s3: [f64; 7],
+}
+
+/// Lowest and highest position reached by a planned move.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PositionRange {
+    /// Lowest position, m.
+    pub lowest: f64,
+    /// Highest position, m.
+    pub highest: f64,
+}
+
+/// A planned time-optimal move; sample it with [`Trajectory::sample`].
+#[derive(Clone, Copy, Debug)]
+pub struct Trajectory {
+    profile: Profile,
+    start: State,
+    duration_s: f64,
+}
+
+impl Trajectory {
+    /// Plan the time-optimal jerk-limited move from `start` to `target`.
+    ///
+    /// Errors: non-finite states or invalid limits ([`Error::InvalidParameter`]),
+    /// a target whose acceleration or velocity is outside the limits, or from
+    /// which the velocity limits would inevitably be exceeded
+    /// ([`Error::Infeasible`]), a target position outside the position limits
+    /// ([`Error::TargetOutsideLimits`]), a planned move that leaves them
+    /// ([`Error::PositionLimitsViolated`]), and a numerical failure of the
+    /// profile search ([`Error::Infeasible`]).
+    pub fn plan(start: &State, target: &State, limits: &Limits) -> Result<Self, Error> {
+        finite("start.position", start.position)?;
+        finite("start.velocity", start.velocity)?;
+        finite("start.acceleration", start.acceleration)?;
+        finite("target.position", target.position)?;
+        finite("target.velocity", target.velocity)?;
+        finite("target.acceleration", target.acceleration)?;
+        limits.validate()?;
+        let Limits {
+            v_max,
+            v_min,
+            a_max,
+            a_min,
+            j_max,
+            position_min,
+            position_max,
+        } = *limits;
+        let (pf, vf, af) = (target.position, target.velocity, target.acceleration);
+        if af > a_max || af < a_min {
+            return Err(Error::Infeasible {
+                reason: "target acceleration outside [a_min, a_max]",
+            });
+        }
+        if vf > v_max || vf < v_min {
+            return Err(Error::Infeasible {
+                reason: "target velocity outside [v_min, v_max]",
+            });
+        }
+        // A target with a != 0 must have been reached from inside the velocity limits.
+        if (af < 0.0 && v_at_a_zero(vf, af, j_max) > v_max)
+            || (af > 0.0 && v_at_a_zero(vf, af, -j_max) < v_min)
+        {
+            return Err(Error::Infeasible {
+                reason: "target state cannot be reached without exceeding the velocity limits",
+            });
+        }
+        if pf < position_min || pf > position_max {
+            return Err(Error::TargetOutsideLimits);
+        }
+
+        // Brake pre-phase, then the seven phases from the braked state.
+        let mut brake = BrakePhase::plan(
+            start.velocity,
+            start.acceleration,
+            v_max,
+            v_min,
+            a_max,
+            a_min,
+            j_max,
+        );
+        let (mut p0, mut v0, mut a0) = (start.position, start.velocity, start.acceleration);
+        brake.finalize(&mut p0, &mut v0, &mut a0);
+        let input = Profile {
+            p: [p0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            v: [v0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            a: [a0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            brake,
+            pf,
+            vf,
+            af,
+            ..Profile::default()
+        };
+
+        let mut step1 = ExtremalProfiles::default();
+        step1.reset(p0, v0, a0, pf, vf, af, v_max, v_min, a_max, a_min, j_max);
+        let mut block = Block::default();
+        if !step1.get_profile(&input, &mut block) || !block.t_min.is_finite() {
+            return Err(Error::Infeasible {
+                reason: "no time-optimal profile found (numerically degenerate request)",
+            });
+        }
+
+        let trajectory = Self {
+            profile: block.p_min,
+            start: *start,
+            duration_s: block.t_min,
+        };
+        let range = trajectory.position_range();
+        if range.lowest < position_min - POSITION_LIMIT_TOL
+            || range.highest > position_max + POSITION_LIMIT_TOL
+        {
+            return Err(Error::PositionLimitsViolated {
+                lowest: range.lowest,
+                highest: range.highest,
+            });
+        }
+        Ok(trajectory)
+    }
+
+    /// Total duration including the brake pre-phase, s.
+    pub fn duration_s(&self) -> f64 {
+        self.duration_s
+    }
+
+    /// Duration of the brake pre-phase alone, s (0 for an admissible start).
+    pub fn brake_duration_s(&self) -> f64 {
+        self.profile.brake.duration
+    }
+
+    /// Durations and jerks of the brake pre-phase and of P1..P7.
+    pub fn phases(&self) -> Phases {
+        let b = &self.profile.brake;
+        let used = |i: usize| b.duration > 0.0 && (i == 0 || b.t[1] > 0.0);
+        Phases {
+            brake_durations_s: [
+                if used(0) { b.t[0] } else { 0.0 },
+                if used(1) { b.t[1] } else { 0.0 },
+            ],
+            brake_jerks_m_s3: [
+                if used(0) { b.j[0] } else { 0.0 },
+                if used(1) { b.j[1] } else { 0.0 },
+            ],
+            durations_s: self.profile.t,
+            jerks_m_s3: self.profile.j,
+        }
+    }
+
+    /// The start state the move was planned from.
+    pub fn start(&self) -> State {
+        self.start
+    }
+
+    /// The state at the end of the move (equals the target to 1e-8).
+    pub fn end(&self) -> State {
+        State {
+            position: self.profile.p[7],
+            velocity: self.profile.v[7],
+            acceleration: self.profile.a[7],
+        }
+    }
+
+    /// Lowest and highest position over the whole move.
+    pub fn position_range(&self) -> PositionRange {
+        let b = self.profile.position_bounds();
+        PositionRange {
+            lowest: b.min.min(self.start.position),
+            highest: b.max.max(self.start.position),
+        }
+    }
+
+    /// The desired state at time `t_s` (s) after the start. Times before 0
+    /// (and NaN) give the start state; after [`Self::duration_s`] the end state
+    /// is continued with constant acceleration and zero jerk (as Ruckig does;
+    /// for a target at rest this is the target itself).
+    pub fn sample(&self, t_s: f64) -> Sample {
+        let t = if t_s > 0.0 { t_s } else { 0.0 };
+        let b = &self.profile.brake;
+        if t < b.duration {
+            let i = if t < b.t[0] || b.t[1] <= 0.0 { 0 } else { 1 };
+            let tau = if i == 0 { t } else { t - b.t[0] };
+            let k = integrate(tau, b.p[i], b.v[i], b.a[i], b.j[i]);
+            return Sample {
+                position: k.position,
+                velocity: k.velocity,
+                acceleration: k.acceleration,
+                jerk: b.j[i],
+            };
+        }
+        let p = &self.profile;
+        let tp = t - b.duration;
+        if tp >= p.t_sum[6] {
+            let k = integrate(tp - p.t_sum[6], p.p[7], p.v[7], p.a[7], 0.0);
+            return Sample {
+                position: k.position,
+                velocity: k.velocity,
+                acceleration: k.acceleration,
+                jerk: 0.0,
+            };
+        }
+        let mut i = 0;
+        while i < 6 && tp >= p.t_sum[i] {
+            i += 1;
+        }
+        let t_begin = if i > 0 { p.t_sum[i - 1] } else { 0.0 };
+        let k = integrate(tp - t_begin, p.p[i], p.v[i], p.a[i], p.j[i]);
+        Sample {
+            position: k.position,
+            velocity: k.velocity,
+            acceleration: k.acceleration,
+            jerk: p.j[i],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,342 @@
+//! The trajectory generator against the reference implementation `rsruckig`
+//! (dev-dependency only) on seeded random cases, plus the thesis case of
+//! Table A.8 against a closed-form duration.
+
+use beltune_rt::trajectory::{Limits, State, Trajectory};
+use beltune_rt::Error;
+use rand::{Rng, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rsruckig::prelude::*;
+
+/// Durations must equal the reference's to this relative tolerance (issue 3).
+const DURATION_REL_TOL: f64 = 1e-9;
+/// Absolute floor for (near-)zero durations, s.
+const DURATION_ABS_FLOOR: f64 = 1e-12;
+/// The final state must equal the target to this (issue 3).
+const FINAL_STATE_TOL: f64 = 1e-8;
+/// Slack on the limits when sampling (the brake uses 2.2e-14 s margins,
+/// Ruckig's profile check allows 1e-12 on v and a).
+const LIMIT_TOL: f64 = 1e-9;
+/// Cases per family; 6 families -> 12,000 cases.
+const CASES_PER_FAMILY: usize = 2_000;
+
+#[derive(Clone, Copy, Debug)]
+struct Case {
+    start: State,
+    target: State,
+    limits: Limits,
+}
+
+/// The reference duration, or `None` when rsruckig rejects the request.
+fn reference_duration(c: &Case) -> Option<f64> {
+    let mut otg = Ruckig::<1, ThrowErrorHandler>::new(None, 1e-4);
+    let mut input = InputParameter::new(None);
+    input.current_position[0] = c.start.position;
+    input.current_velocity[0] = c.start.velocity;
+    input.current_acceleration[0] = c.start.acceleration;
+    input.target_position[0] = c.target.position;
+    input.target_velocity[0] = c.target.velocity;
+    input.target_acceleration[0] = c.target.acceleration;
+    input.max_velocity[0] = c.limits.v_max;
+    input.max_acceleration[0] = c.limits.a_max;
+    input.max_jerk[0] = c.limits.j_max;
+    input.min_velocity = Some(DataArrayOrVec::Stack([c.limits.v_min]));
+    input.min_acceleration = Some(DataArrayOrVec::Stack([c.limits.a_min]));
+    let mut traj = rsruckig::trajectory::Trajectory::new(None);
+    match otg.calculate(&input, &mut traj) {
+        Ok(RuckigResult::Working) => Some(traj.get_duration()),
+        _ => None,
+    }
+}
+
+fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
+    (rng.random_range(lo.ln()..hi.ln())).exp()
+}
+
+fn random_limits(rng: &mut Xoshiro256PlusPlus, asymmetric: bool) -> Limits {
+    let v_max = log_uniform(rng, 0.05, 10.0);
+    let a_max = log_uniform(rng, 0.2, 100.0);
+    let j_max = log_uniform(rng, 1.0, 2000.0);
+    let (v_min, a_min) = if asymmetric {
+        (-log_uniform(rng, 0.05, 10.0), -log_uniform(rng, 0.2, 100.0))
+    } else {
+        (-v_max, -a_max)
+    };
+    Limits {
+        v_max,
+        v_min,
+        a_max,
+        a_min,
+        j_max,
+        position_min: f64::NEG_INFINITY,
+        position_max: f64::INFINITY,
+    }
+}
+
+/// A state strictly inside the limits.
+fn admissible_state(
+    rng: &mut Xoshiro256PlusPlus,
+    l: &Limits,
+    position: f64,
+    moving: bool,
+) -> State {
+    if !moving {
+        return State::at_rest(position);
+    }
+    loop {
+        let v = rng.random_range(l.v_min..l.v_max);
+        let a = rng.random_range(l.a_min..l.a_max);
+        // Admissible as a start (no brake needed) and as a target: ramping
+        // the acceleration to zero keeps the velocity inside either way.
+        let dv = a * a / (2.0 * l.j_max);
+        let ok = v + dv <= l.v_max && v - dv >= l.v_min;
+        if ok {
+            return State {
+                position,
+                velocity: v,
+                acceleration: a,
+            };
+        }
+    }
+}
+
+fn random_case(rng: &mut Xoshiro256PlusPlus, family: usize) -> Case {
+    let asymmetric = family % 2 == 1;
+    let limits = random_limits(rng, asymmetric);
+    let p0 = rng.random_range(-1.0..1.0);
+    let (distance, start_moving, target_moving) = match family {
+        // Short moves from rest to rest (limits rarely reached).
+        0 => (log_uniform(rng, 1e-6, 1e-2), false, false),
+        // Rest to rest over all scales: none, a, v, a and v limits reached.
+        1 => (log_uniform(rng, 1e-4, 100.0), false, false),
+        // Moving start and target, short.
+        2 => (log_uniform(rng, 1e-5, 0.1), true, true),
+        // Moving start and target over all scales.
+        3 => (log_uniform(rng, 1e-3, 100.0), true, true),
+        // Start violating a limit (see below), target at rest or moving.
+        _ => (log_uniform(rng, 1e-3, 50.0), true, rng.random_bool(0.5)),
+    };
+    let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+    let mut start = admissible_state(rng, &limits, p0, start_moving);
+    let target = admissible_state(rng, &limits, p0 + sign * distance, target_moving);
+    if family >= 4 {
+        // Push the start outside: velocity, acceleration, or both.
+        let factor = rng.random_range(1.01..2.5);
+        match rng.random_range(0..3) {
+            0 => {
+                start.velocity = if rng.random_bool(0.5) {
+                    limits.v_max * factor
+                } else {
+                    limits.v_min * factor
+                }
+            }
+            1 => {
+                start.acceleration = if rng.random_bool(0.5) {
+                    limits.a_max * factor
+                } else {
+                    limits.a_min * factor
+                }
+            }
+            _ => {
+                start.velocity = limits.v_max * factor * sign;
+                start.acceleration = limits.a_max * rng.random_range(0.5..2.0) * sign;
+            }
+        }
+    }
+    Case {
+        start,
+        target,
+        limits,
+    }
+}
+
+/// Sample the move and check limits after the brake pre-phase: acceleration
+/// always inside, velocity inside once it has come back inside.
+fn check_samples(c: &Case, traj: &Trajectory) {
+    let l = &c.limits;
+    let n = 200;
+    let t_brake = traj.brake_duration_s();
+    let mut velocity_inside = false;
+    let mut lowest = f64::INFINITY;
+    let mut highest = f64::NEG_INFINITY;
+    for k in 0..=n {
+        let t = traj.duration_s() * k as f64 / n as f64;
+        let s = traj.sample(t);
+        lowest = lowest.min(s.position);
+        highest = highest.max(s.position);
+        assert!(
+            s.jerk.abs() <= l.j_max * (1.0 + 1e-12),
+            "{c:?}: jerk {}",
+            s.jerk
+        );
+        if t < t_brake {
+            continue;
+        }
+        let scale = 1.0 + l.a_max.abs().max(l.a_min.abs());
+        assert!(
+            s.acceleration <= l.a_max + LIMIT_TOL * scale
+                && s.acceleration >= l.a_min - LIMIT_TOL * scale,
+            "{c:?}: a = {} at t = {t} after the brake",
+            s.acceleration
+        );
+        let v_inside = s.velocity <= l.v_max + LIMIT_TOL && s.velocity >= l.v_min - LIMIT_TOL;
+        if velocity_inside {
+            assert!(
+                v_inside,
+                "{c:?}: v = {} left the limits at t = {t}",
+                s.velocity
+            );
+        }
+        velocity_inside |= v_inside;
+    }
+    assert!(velocity_inside, "{c:?}: velocity never came back inside");
+    // The analytic position range encloses every sample.
+    let range = traj.position_range();
+    // Rounding of the position integration grows with the distance covered.
+    let tol =
+        1e-12 * (1.0 + lowest.abs().max(highest.abs()) + traj.duration_s() * l.v_max.max(-l.v_min));
+    assert!(
+        range.lowest <= lowest + tol && range.highest >= highest - tol,
+        "{c:?}: range {range:?} vs sampled {lowest} .. {highest}, brake {t_brake}, {:?}",
+        traj.phases()
+    );
+}
+
+#[test]
+fn durations_equal_rsruckig_on_12000_random_cases() {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(0xBE17_70E5);
+    let mut compared = 0;
+    let mut reference_failed = 0;
+    let mut braked = 0;
+    let mut worst_rel = 0.0_f64;
+    // Coverage: cases whose profile holds a limit in P2 (acceleration),
+    // P4 (velocity), P6 (deceleration).
+    let mut reached = [0usize; 3];
+    for family in 0..6 {
+        for _ in 0..CASES_PER_FAMILY {
+            let c = random_case(&mut rng, family);
+            let ours = Trajectory::plan(&c.start, &c.target, &c.limits);
+            let Some(t_ref) = reference_duration(&c) else {
+                reference_failed += 1;
+                continue;
+            };
+            let traj = ours.unwrap_or_else(|e| {
+                panic!("{c:?}: reference succeeded ({t_ref} s), we failed: {e}")
+            });
+            let err = (traj.duration_s() - t_ref).abs();
+            assert!(
+                err <= DURATION_REL_TOL * t_ref + DURATION_ABS_FLOOR,
+                "{c:?}: duration {} vs reference {t_ref}",
+                traj.duration_s()
+            );
+            if t_ref > 0.0 {
+                worst_rel = worst_rel.max(err / t_ref);
+            }
+            let end = traj.sample(traj.duration_s());
+            assert!(
+                (end.position - c.target.position).abs() < FINAL_STATE_TOL,
+                "{c:?}: {end:?}"
+            );
+            assert!(
+                (end.velocity - c.target.velocity).abs() < FINAL_STATE_TOL,
+                "{c:?}: {end:?}"
+            );
+            assert!(
+                (end.acceleration - c.target.acceleration).abs() < FINAL_STATE_TOL,
+                "{c:?}: {end:?}"
+            );
+            if traj.brake_duration_s() > 0.0 {
+                braked += 1;
+            }
+            let ph = traj.phases();
+            for (n, k) in reached.iter_mut().zip([1, 3, 5]) {
+                if ph.durations_s[k] > 1e-9 {
+                    *n += 1;
+                }
+            }
+            check_samples(&c, &traj);
+            compared += 1;
+        }
+    }
+    println!(
+        "compared {compared}, reference failed {reference_failed}, braked {braked}, \
+         reached a/v/a limits in P2/P4/P6 {reached:?}, worst relative duration error {worst_rel:e}"
+    );
+    assert!(
+        reached.iter().all(|&n| n >= 500),
+        "limit coverage {reached:?}"
+    );
+    assert!(compared >= 10_000, "only {compared} cases compared");
+    assert!(
+        braked >= 1_000,
+        "only {braked} cases exercised the brake pre-phase"
+    );
+}
+
+#[test]
+fn position_limits_are_enforced() {
+    // Same moves with position limits: success with the same duration when
+    // the unconstrained move stays inside, PositionLimitsViolated otherwise.
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+    let (mut inside, mut violated) = (0, 0);
+    for i in 0..2_000 {
+        let mut c = random_case(&mut rng, 2 + i % 4);
+        let Ok(free) = Trajectory::plan(&c.start, &c.target, &c.limits) else {
+            continue;
+        };
+        let range = free.position_range();
+        let lo = c.start.position.min(c.target.position);
+        let hi = c.start.position.max(c.target.position);
+        c.limits.position_min = lo - rng.random_range(0.0..(lo - range.lowest).max(1e-6) * 2.0);
+        c.limits.position_max = hi + rng.random_range(0.0..(range.highest - hi).max(1e-6) * 2.0);
+        let fits = range.lowest >= c.limits.position_min - 1e-8
+            && range.highest <= c.limits.position_max + 1e-8;
+        match Trajectory::plan(&c.start, &c.target, &c.limits) {
+            Ok(t) => {
+                assert!(fits, "{c:?}");
+                assert_eq!(t.duration_s(), free.duration_s());
+                inside += 1;
+            }
+            Err(Error::PositionLimitsViolated { lowest, highest }) => {
+                assert!(!fits, "{c:?}");
+                assert!(lowest < c.limits.position_min || highest > c.limits.position_max);
+                violated += 1;
+            }
+            Err(e) => panic!("{c:?}: unexpected {e}"),
+        }
+    }
+    assert!(
+        inside > 200 && violated > 200,
+        "inside {inside}, violated {violated}"
+    );
+}
+
+#[test]
+fn thesis_case_table_a8_matches_closed_form() {
+    // Thesis 6.3 / Table A.8: 0 -> 0.5 m, j_max 40 m/s^3, a_max 45 m/s^2,
+    // v_max 5 m/s, position limits -0.01 .. 0.57 m.
+    let limits = Limits {
+        position_min: -0.01,
+        position_max: 0.57,
+        ..Limits::symmetric(5.0, 45.0, 40.0)
+    };
+    let (d, j): (f64, f64) = (0.5, 40.0);
+    // Neither limit is reached: the four jerk phases P1, P3, P5, P7 have equal
+    // length T with d = 2 j T^3, so the duration is 4 (d / (2 j))^(1/3);
+    // peak acceleration j T and velocity j T^2 stay below 45 and 5.
+    let t_phase = (d / (2.0 * j)).cbrt();
+    assert!(j * t_phase < 45.0 && j * t_phase * t_phase < 5.0);
+    let expected = 4.0 * t_phase; // 0.7368 s
+    let traj = Trajectory::plan(&State::at_rest(0.0), &State::at_rest(d), &limits).unwrap();
+    assert!((traj.duration_s() - expected).abs() <= DURATION_REL_TOL * expected);
+    let ph = traj.phases();
+    // P3 and P5 share the jerk -j_max: the reference merges them into P3.
+    let merged = [t_phase, 0.0, 2.0 * t_phase, 0.0, 0.0, 0.0, t_phase];
+    for (got, want) in ph.durations_s.iter().zip(merged) {
+        assert!((got - want).abs() < 1e-9, "{:?}", ph.durations_s);
+    }
+    let end = traj.sample(traj.duration_s());
+    assert!((end.position - d).abs() < FINAL_STATE_TOL);
+    let r = traj.position_range();
+    assert!(r.lowest >= -1e-12 && r.highest <= d + FINAL_STATE_TOL);
+}
