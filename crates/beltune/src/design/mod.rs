@@ -27,11 +27,11 @@ pub use feedforward::{Feedforward, FrictionParams};
 pub use model_file::ModelFile;
 pub use prefilter::{Prefilter, PrefilterKind};
 pub use sampled::{DiscreteController, DiscreteLoops, DiscreteStability};
-pub use velocity::{PiGains, VelocityPlant};
+pub use velocity::{PiGains, VelocityPlant, VelocityRule};
 
 use crate::error::{require_non_negative, require_positive};
 use crate::lti::margins::StabilityMargins;
-use crate::lti::{bode, db, log_grid, BodePoint, C64};
+use crate::lti::{bode, log_grid, BodePoint, C64};
 use crate::model::TwoMassParams;
 use crate::{Error, Result};
 
@@ -159,6 +159,9 @@ pub struct ControllerDesign {
     pub position_margins: StabilityMargins,
     /// Velocity open-loop gain at `w_r`, dB (achieved `A_sup`).
     pub gain_at_resonance_db: f64,
+    /// Which condition fixed the PI gains with the phase margin ((4.7), or the
+    /// maximum-`K_I` fallback for phase-limited loops, see [`VelocityRule`]).
+    pub velocity_rule: VelocityRule,
     /// Coefficients at `T_s`.
     pub discrete: DiscreteController,
     /// Closed-loop pole radii of the discretized loops.
@@ -199,6 +202,7 @@ pub fn design(input: &DesignInput, knobs: &DesignKnobs) -> Result<ControllerDesi
         velocity_margins: v.margins,
         position_margins: p.margins,
         gain_at_resonance_db: v.gain_at_resonance_db,
+        velocity_rule: v.rule,
         discrete,
         discrete_stability,
         feedforward: Feedforward::design(model, input.friction.as_ref())?,
@@ -238,6 +242,39 @@ impl ControllerDesign {
     /// Continuous position open loop `K_PP G_w,cl(j w)`.
     pub fn position_open_loop(&self, w_rad_s: f64) -> C64 {
         self.k_pp * self.velocity_closed_loop(w_rad_s)
+    }
+
+    /// The gains for the real-time controller (`K_v = 1`, (4.17)).
+    pub fn cascade_gains(&self) -> beltune_rt::control::CascadeGains<f64> {
+        beltune_rt::control::CascadeGains::new(self.k_pp, self.k_p, self.k_i)
+    }
+
+    /// A real-time controller configuration with this design's gains, velocity
+    /// filter, prefilter (first section; the second is the identity) and nonlinear
+    /// feedforward (4.16); torque limit `torque_max_nm`. Refinements and anti-windup
+    /// keep the rt crate's defaults.
+    pub fn cascade_config(
+        &self,
+        torque_max_nm: f64,
+    ) -> Result<beltune_rt::control::CascadeConfig<f64>> {
+        let mut cfg = beltune_rt::control::CascadeConfig::new(
+            self.cascade_gains(),
+            self.input.ts_s,
+            self.input.t_r_s,
+            torque_max_nm,
+        )?;
+        cfg.velocity_filter = self.discrete.velocity_filter;
+        cfg.prefilter = [
+            self.discrete.prefilter,
+            beltune_rt::filter::SosCoeffs::IDENTITY,
+        ];
+        cfg.feedforward = beltune_rt::control::Feedforward::nonlinear(
+            self.feedforward.m_e_kg_m2,
+            self.feedforward.d_v_n_m_s_per_rad,
+            self.feedforward.tau_c_n_m,
+        );
+        cfg.validate()?;
+        Ok(cfg)
     }
 
     /// The discretized loops (state space) of this design.
@@ -283,6 +320,7 @@ impl ControllerDesign {
             phase_margin_velocity_deg: self.velocity_margins.phase_margin_deg,
             gain_margin_velocity_db: self.velocity_margins.gain_margin_db,
             gain_at_resonance_db: self.gain_at_resonance_db,
+            velocity_rule: self.velocity_rule,
             omega_c_position: self.position_margins.crossover_rad_s,
             phase_margin_position_deg: self.position_margins.phase_margin_deg,
             gain_margin_position_db: self.position_margins.gain_margin_db,
@@ -318,6 +356,8 @@ pub struct DesignSummary {
     pub gain_margin_velocity_db: f64,
     /// Velocity open-loop gain at `w_r`, dB.
     pub gain_at_resonance_db: f64,
+    /// Which condition fixed the PI gains with the phase margin.
+    pub velocity_rule: VelocityRule,
     /// Position-loop crossover, rad/s.
     pub omega_c_position: f64,
     /// Position-loop phase margin, deg.
@@ -345,11 +385,6 @@ pub struct PlotData {
     pub prefilter: Vec<BodePoint>,
     /// Model (2.42), torque to motor angle.
     pub plant: Vec<BodePoint>,
-}
-
-/// `20 log10 |x|` re-exported for callers of this module.
-pub fn gain_db(x: C64) -> f64 {
-    db(x.norm())
 }
 
 #[cfg(test)]

@@ -37,11 +37,11 @@ pub fn design_p(
     pm_deg: f64,
     grid: &[f64],
 ) -> Result<PositionDesign> {
-    if !(pm_deg > 0.0 && pm_deg < 90.0) {
+    if !(pm_deg > 0.0 && pm_deg < 180.0) {
         return Err(Error::invalid(
             "pm_position_deg",
             pm_deg,
-            "the position phase margin must lie in (0, 90) degrees: the closed velocity loop integrates (-90 deg at low frequency)",
+            "the position phase margin must lie in (0, 180) degrees",
         ));
     }
     let g = |w: f64| closed_velocity_loop(gains, plant, w);
@@ -52,7 +52,7 @@ pub fn design_p(
     if prev_phase <= target {
         return Err(Error::Infeasible {
             reason: format!(
-                "the closed velocity loop already has {prev_phase:.1} deg at {prev_w:.3} rad/s; a position phase margin of {pm_deg} deg is out of reach"
+                "the closed velocity loop integrates ({prev_phase:.1} deg at {prev_w:.3} rad/s), so a P position controller reaches at most 90 deg phase margin; {pm_deg} deg is out of reach"
             ),
         });
     }

@@ -95,6 +95,23 @@ impl PiGains {
     }
 }
 
+/// Which second condition fixed the PI gains (the first is always the phase margin (4.9)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VelocityRule {
+    /// The thesis' (4.7): `|L(j w_r)| = A_sup`.
+    ResonanceSuppression,
+    /// Fallback when the loop is phase-limited (dead time, prefilter lag): at every
+    /// crossover that the phase margin admits, `|L(j w_r)|` already stays below
+    /// `A_sup`, so (4.7) holds as the inequality it stands for ("smaller than this
+    /// factor", 4.2.2) and cannot fix a gain. The crossover is then chosen to
+    /// maximize the integral gain `K_I` (low-frequency disturbance rejection), the
+    /// criterion of Astrom and Hagglund's MIGO design; towards the upper end of the
+    /// admissible crossovers `K_I -> 0` (a P controller), towards the lower end the
+    /// loop gets slow, so the maximum is interior.
+    MaxIntegralGain,
+}
+
 /// Result of the PI design.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct VelocityDesign {
@@ -104,6 +121,8 @@ pub struct VelocityDesign {
     pub margins: StabilityMargins,
     /// `|L(j w_r)|` in dB (the achieved `A_sup` of (4.7)).
     pub gain_at_resonance_db: f64,
+    /// Which condition fixed the gains together with the phase margin.
+    pub rule: VelocityRule,
 }
 
 /// Solve (4.7)-(4.9) for `K_P`, `K_I`. `grid` is the verification grid (ascending,
@@ -115,11 +134,11 @@ pub fn design_pi(
     a_sup_db: f64,
     grid: &[f64],
 ) -> Result<VelocityDesign> {
-    if !(pm_deg > 0.0 && pm_deg < 90.0) {
+    if !(pm_deg > 0.0 && pm_deg < 180.0) {
         return Err(Error::invalid(
             "pm_velocity_deg",
             pm_deg,
-            "the velocity phase margin must lie in (0, 90) degrees",
+            "the velocity phase margin must lie in (0, 180) degrees",
         ));
     }
     if !(a_sup_db.is_finite() && a_sup_db < 0.0) {
@@ -152,71 +171,139 @@ pub fn design_pi(
         omega_r_rad_s * (1.0 - 1e-9),
         N_CANDIDATES,
     )?;
-    let mut roots = Vec::new();
-    let (mut lo_db, mut hi_db) = (f64::INFINITY, f64::NEG_INFINITY);
-    let mut prev: Option<(f64, f64)> = None;
+    // Contiguous runs of candidates with positive gains: (w_c, residual, K_I).
+    let mut runs: Vec<Vec<(f64, f64, f64)>> = Vec::new();
+    let mut open = false;
     for &w in &candidates {
         match residual(w) {
-            Some((r, _)) => {
-                lo_db = lo_db.min(r + a_sup_db);
-                hi_db = hi_db.max(r + a_sup_db);
-                if let Some((w0, r0)) = prev {
-                    if (r > 0.0) != (r0 > 0.0) {
-                        roots.push(bisect_residual(&residual, w0, r0, w));
-                    }
+            Some((r, g)) => {
+                if !open {
+                    runs.push(Vec::new());
+                    open = true;
                 }
-                prev = Some((w, r));
+                if let Some(run) = runs.last_mut() {
+                    run.push((w, r, g.k_i));
+                }
             }
-            None => prev = None,
+            None => open = false,
         }
     }
-    if lo_db > hi_db {
+    if runs.is_empty() {
         return Err(Error::Infeasible {
             reason: format!(
                 "a phase margin of {pm_deg} deg cannot be reached with positive PI gains at any crossover below the resonance {omega_r_rad_s:.1} rad/s"
             ),
         });
     }
-    if roots.is_empty() {
-        return Err(Error::Infeasible {
-            reason: format!(
-                "with a phase margin of {pm_deg} deg the open-loop gain at the resonance stays between {lo_db:.2} and {hi_db:.2} dB; A_sup = {a_sup_db} dB cannot be met"
-            ),
-        });
-    }
-    // Verify each root on the full grid; keep those with a unique crossover at w_c.
+    let verify =
+        |w_c: f64, rule: VelocityRule| -> Result<std::result::Result<VelocityDesign, String>> {
+            let Some((_, gains)) = residual(w_c) else {
+                return Ok(Err(format!("no positive gains at {w_c:.2} rad/s")));
+            };
+            let l = |w: f64| gains.freq_response(w) * plant.g_omega(w);
+            let m = margins(l, grid)?;
+            if m.gain_crossover_count != 1 || (m.crossover_rad_s / w_c - 1.0).abs() > 1e-6 {
+                return Ok(Err(format!(
+                    "crossover {w_c:.2} rad/s gives {} gain crossovers",
+                    m.gain_crossover_count
+                )));
+            }
+            Ok(Ok(VelocityDesign {
+                gains,
+                margins: m,
+                gain_at_resonance_db: db(l(omega_r_rad_s).norm()),
+                rule,
+            }))
+        };
+    // (4.7): sign changes of the residual inside each run, refined and verified.
     let mut rejected = Vec::new();
     let mut accepted: Option<VelocityDesign> = None;
-    for w_c in roots {
-        let Some((_, gains)) = residual(w_c) else {
-            continue;
-        };
-        let l = |w: f64| gains.freq_response(w) * plant.g_omega(w);
-        let m = margins(l, grid)?;
-        let unique = m.gain_crossover_count == 1 && (m.crossover_rad_s / w_c - 1.0).abs() < 1e-6;
-        if !unique {
-            rejected.push(format!(
-                "crossover {w_c:.2} rad/s gives {} gain crossovers",
-                m.gain_crossover_count
-            ));
-            continue;
-        }
-        let d = VelocityDesign {
-            gains,
-            margins: m,
-            gain_at_resonance_db: db(l(omega_r_rad_s).norm()),
-        };
-        // Several valid solutions: keep the highest bandwidth.
-        if accepted.is_none_or(|a| a.margins.crossover_rad_s < w_c) {
-            accepted = Some(d);
+    for run in &runs {
+        for pair in run.windows(2) {
+            let ((w0, r0, _), (w1, r1, _)) = (pair[0], pair[1]);
+            if (r0 > 0.0) != (r1 > 0.0) {
+                let w_c = bisect_residual(&residual, w0, r0, w1);
+                match verify(w_c, VelocityRule::ResonanceSuppression)? {
+                    // Several valid solutions: keep the highest bandwidth.
+                    Ok(d) => {
+                        if accepted.is_none_or(|a| a.margins.crossover_rad_s < w_c) {
+                            accepted = Some(d);
+                        }
+                    }
+                    Err(why) => rejected.push(why),
+                }
+            }
         }
     }
-    accepted.ok_or_else(|| Error::Infeasible {
+    if let Some(d) = accepted {
+        return Ok(d);
+    }
+    // Phase-limited fallback: runs where |L(j w_r)| < A_sup throughout; maximize K_I.
+    let mut best: Option<VelocityDesign> = None;
+    for run in runs
+        .iter()
+        .filter(|run| run.iter().all(|(_, r, _)| *r < 0.0))
+    {
+        let w_c = argmax_integral_gain(run, &residual);
+        match verify(w_c, VelocityRule::MaxIntegralGain)? {
+            Ok(d) => {
+                if best.is_none_or(|b| b.gains.k_i < d.gains.k_i) {
+                    best = Some(d);
+                }
+            }
+            Err(why) => rejected.push(why),
+        }
+    }
+    if let Some(d) = best {
+        return Ok(d);
+    }
+    let (lo_db, hi_db) = runs
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, r, _)| {
+            (lo.min(r + a_sup_db), hi.max(r + a_sup_db))
+        });
+    Err(Error::Infeasible {
         reason: format!(
-            "no solution of (4.7)-(4.9) has a unique gain crossover ({})",
+            "with a phase margin of {pm_deg} deg no PI design has a unique crossover and a gain at the resonance of at most A_sup = {a_sup_db} dB (gain at the resonance over the admissible crossovers: {lo_db:.2} to {hi_db:.2} dB{}{})",
+            if rejected.is_empty() { "" } else { "; " },
             rejected.join("; ")
         ),
     })
+}
+
+/// The crossover in `run` (candidates with positive gains) that maximizes `K_I`,
+/// refined by golden-section search in `log w_c` between the neighbours of the best
+/// candidate ([`VelocityRule::MaxIntegralGain`]).
+fn argmax_integral_gain(
+    run: &[(f64, f64, f64)],
+    residual: &impl Fn(f64) -> Option<(f64, PiGains)>,
+) -> f64 {
+    let best = run
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1 .2.total_cmp(&b.1 .2))
+        .map(|(i, _)| i)
+        .unwrap_or(0);
+    let k_i = |w: f64| residual(w).map(|(_, g)| g.k_i).unwrap_or(f64::NEG_INFINITY);
+    let (mut a, mut b) = (
+        run[best.saturating_sub(1)].0.ln(),
+        run[(best + 1).min(run.len() - 1)].0.ln(),
+    );
+    let phi = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..100 {
+        if b - a < W_C_REL_TOL {
+            break;
+        }
+        let c = b - phi * (b - a);
+        let d = a + phi * (b - a);
+        if k_i(c.exp()) > k_i(d.exp()) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    (0.5 * (a + b)).exp()
 }
 
 fn bisect_residual(
