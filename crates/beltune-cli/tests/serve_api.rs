@@ -179,7 +179,7 @@ fn malformed_json_wrong_types_and_unknown_fields_are_400_with_a_message() {
         ("{\"prefilter\": \"chebyshev\"}", "unknown variant"),
         ("{\"prefilter\": 3}", "expected value"),
         ("{\"pm_velocity\": 60}", "unknown field"),
-        ("[60, 80]", "invalid type"),
+        ("[60, 80]", "expected"),
         ("{\"pm_velocity_deg\": 1e999}", "number out of range"),
     ] {
         let (status, resp) = post_json(s.addr, "/api/design", body);
@@ -317,4 +317,214 @@ fn page_and_assets_are_embedded_and_self_contained() {
         serve::api::RANGES.len()
     );
     assert_eq!(info["defaults"]["pm_velocity_deg"], 60.0);
+}
+
+// ---------- the real backend: beltune::design on the built-in egc70 ----------
+
+use beltune::design::{self as bdesign, DesignInput, DesignKnobs, FrictionParams};
+use serve::library::{LibraryTuner, PLOT_POINTS};
+
+/// Relative agreement of numbers that went through JSON (serde_json round-trips f64 exactly;
+/// the margin allows for nothing but that).
+const JSON_REL_TOL: f64 = 1e-12;
+/// Design tolerance on achieved margins (the design library's own guarantee).
+const MARGIN_TOL_DEG: f64 = 0.01;
+
+/// The design input built independently of the server: egc70 at its worst-case
+/// position with the default payload, the plant's dead time and friction.
+fn egc70_input() -> DesignInput {
+    let plant = beltune::model::rigs::builtin("egc70", None).unwrap();
+    let mut input = DesignInput::new(plant.worst_case_two_mass().unwrap(), plant.dead_time_s());
+    let f = plant.friction_totals();
+    input.friction = Some(FrictionParams {
+        viscous_n_m_s_per_rad: f.viscous_nm_s_per_rad,
+        coulomb_n_m: f.coulomb_nm,
+    });
+    input
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= JSON_REL_TOL * a.abs().max(b.abs()).max(1e-300)
+}
+
+fn library() -> Arc<dyn Tuner> {
+    Arc::new(LibraryTuner::builtin().unwrap())
+}
+
+#[test]
+fn valid_request_returns_the_library_design_with_consistent_plot_data() {
+    let s = start(library(), "valid");
+    let (status, body) = post_json(
+        s.addr,
+        "/api/design",
+        r#"{"pm_velocity_deg": 55, "prefilter": "notch"}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let r: DesignResponse = serde_json::from_str(&body).unwrap();
+    let knobs = DesignKnobs {
+        pm_velocity_deg: 55.0,
+        prefilter: bdesign::PrefilterKind::Notch,
+        ..DesignKnobs::default()
+    };
+    let d = bdesign::design(&egc70_input(), &knobs).unwrap();
+    for (name, got, want) in [
+        ("k_p", r.gains.k_p, d.k_p),
+        ("k_i", r.gains.k_i, d.k_i),
+        ("k_pp", r.gains.k_pp, d.k_pp),
+        (
+            "w_c velocity",
+            r.velocity_loop.crossover_rad_s,
+            d.velocity_margins.crossover_rad_s,
+        ),
+        (
+            "w_c position",
+            r.position_loop.crossover_rad_s,
+            d.position_margins.crossover_rad_s,
+        ),
+        ("A at w_r", r.gain_at_resonance_db, d.gain_at_resonance_db),
+    ] {
+        assert!(close(got, want), "{name}: page {got} vs library {want}");
+    }
+    // the knobs echo what was asked, defaults filled in (notch: -6 dB, thesis 4.2.1)
+    assert_eq!(r.knobs.prefilter, PrefilterKind::Notch);
+    assert_eq!(r.knobs.pm_velocity_deg, 55.0);
+    assert_eq!(r.knobs.pm_position_deg, 80.0);
+    assert_eq!(r.knobs.filter_attenuation_db, -6.0);
+    assert!(r.prefilter.d_n.is_some() && r.prefilter.omega_bw_rad_s.is_none());
+    // achieved margins are the requested ones
+    assert!((r.velocity_loop.phase_margin_deg - 55.0).abs() < MARGIN_TOL_DEG);
+    assert!((r.position_loop.phase_margin_deg - 80.0).abs() < MARGIN_TOL_DEG);
+
+    // Plot data agree with the margins: |L_v| crosses 0 dB between the two grid
+    // points around the reported crossover, and the closed position loop is 0 dB
+    // at the lowest frequency (integral action; tolerance: 2 decades below the
+    // antiresonance the loop gain is large).
+    let b = &r.bode;
+    assert_eq!(b.omega_rad_s.len(), PLOT_POINTS);
+    for c in [
+        &b.open_loop_velocity,
+        &b.open_loop_position,
+        &b.closed_loop_position,
+    ] {
+        assert_eq!(c.magnitude_db.len(), PLOT_POINTS);
+        assert_eq!(c.phase_deg.len(), PLOT_POINTS);
+    }
+    for (curve, w_c) in [
+        (&b.open_loop_velocity, r.velocity_loop.crossover_rad_s),
+        (&b.open_loop_position, r.position_loop.crossover_rad_s),
+    ] {
+        let i = b.omega_rad_s.iter().position(|&w| w > w_c).unwrap();
+        assert!(
+            curve.magnitude_db[i - 1] >= 0.0 && curve.magnitude_db[i] <= 0.0,
+            "0 dB crossing not at w_c = {w_c}: {} / {} dB",
+            curve.magnitude_db[i - 1],
+            curve.magnitude_db[i]
+        );
+    }
+    const LOW_FREQ_TRACKING_TOL_DB: f64 = 0.1;
+    assert!(b.closed_loop_position.magnitude_db[0].abs() < LOW_FREQ_TRACKING_TOL_DB);
+    eprintln!("server compute time: {:.1} ms", r.compute_ms);
+}
+
+#[test]
+fn empty_request_gives_the_design_defaults_and_dynamics_maps_to_the_documented_margins() {
+    let s = start(library(), "defaults");
+    let (status, body) = post_json(s.addr, "/api/design", "{}");
+    assert_eq!(status, 200, "{body}");
+    let r: DesignResponse = serde_json::from_str(&body).unwrap();
+    let d = bdesign::design(&egc70_input(), &DesignKnobs::default()).unwrap();
+    assert!(close(r.gains.k_p, d.k_p) && close(r.gains.k_i, d.k_i) && close(r.gains.k_pp, d.k_pp));
+    assert_eq!(r.knobs.prefilter, PrefilterKind::Butterworth);
+    assert_eq!(
+        r.knobs.payload_kg,
+        beltune::model::rigs::EGC70_DEFAULT_PAYLOAD_KG
+    );
+
+    // One-knob mode, documented in beltune::design::dynamics: x = 0 is 70/85 deg, -14 dB.
+    let (status, body) = post_json(s.addr, "/api/design", r#"{"dynamics": 0}"#);
+    assert_eq!(status, 200, "{body}");
+    let r: DesignResponse = serde_json::from_str(&body).unwrap();
+    assert_eq!(
+        (
+            r.knobs.pm_velocity_deg,
+            r.knobs.pm_position_deg,
+            r.knobs.resonance_suppression_db
+        ),
+        (70.0, 85.0, -14.0)
+    );
+    assert_eq!(r.knobs.dynamics, Some(0.0));
+    assert!((r.velocity_loop.phase_margin_deg - 70.0).abs() < MARGIN_TOL_DEG);
+}
+
+/// Knob sets at the ends of the slider ranges; the API must answer exactly as the
+/// library does (200 with its gains, or 422 with its reason), and at least one is
+/// infeasible (a 20 deg velocity margin gives a position loop with 3 crossovers).
+const EDGE_SETTINGS: [&str; 5] = [
+    r#"{"pm_velocity_deg": 20}"#,
+    r#"{"resonance_suppression_db": -40, "pm_velocity_deg": 89}"#,
+    r#"{"prefilter": "none", "resonance_suppression_db": -0.5, "pm_velocity_deg": 20}"#,
+    r#"{"pm_position_deg": 89, "prefilter": "notch", "filter_attenuation_db": -20}"#,
+    r#"{"dynamics": 1, "payload_kg": 0}"#,
+];
+
+fn knobs_of(json: &str) -> DesignKnobs {
+    let t = LibraryTuner::builtin().unwrap();
+    let k = serve::api::DesignRequest::parse(json.as_bytes())
+        .unwrap()
+        .validate()
+        .unwrap();
+    t.design_knobs(&k).unwrap()
+}
+
+#[test]
+fn infeasible_setting_is_422_with_the_library_reason() {
+    let s = start(library(), "infeasible-lib");
+    let mut found = 0;
+    for json in EDGE_SETTINGS {
+        let lib = bdesign::design(&egc70_input(), &knobs_of(json));
+        let (status, body) = post_json(s.addr, "/api/design", json);
+        match lib {
+            Ok(d) => {
+                assert_eq!(status, 200, "{json}: {body}");
+                let r: DesignResponse = serde_json::from_str(&body).unwrap();
+                assert!(close(r.gains.k_p, d.k_p));
+            }
+            Err(e) => {
+                found += 1;
+                assert_eq!(status, 422, "{json}: {body}");
+                assert_eq!(error_message(status, &body), e.to_string());
+                eprintln!("{json}: {e}");
+            }
+        }
+    }
+    assert!(found > 0, "none of the edge settings is infeasible");
+}
+
+#[test]
+fn save_writes_controller_toml_with_the_design() {
+    let s = start(library(), "save");
+    let (status, body) = post_json(s.addr, "/api/save", r#"{"pm_position_deg": 75}"#);
+    assert_eq!(status, 200, "{body}");
+    let saved: serve::api::SaveResponse = serde_json::from_str(&body).unwrap();
+    let path = PathBuf::from(&saved.path);
+    assert_eq!(path, s.dir.join(serve::CONTROLLER_FILE));
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert_eq!(text.len(), saved.bytes);
+    let toml: toml::Value = toml::from_str(&text).unwrap();
+    let knobs = DesignKnobs {
+        pm_position_deg: 75.0,
+        ..DesignKnobs::default()
+    };
+    let d = bdesign::design(&egc70_input(), &knobs).unwrap();
+    let summary = &toml["summary"];
+    for (key, want) in [("k_p", d.k_p), ("k_i", d.k_i), ("k_pp", d.k_pp)] {
+        let got = summary[key].as_float().unwrap();
+        assert!(close(got, want), "{key}: file {got} vs library {want}");
+    }
+    // atomic write: no temporary file is left next to it
+    let names: Vec<String> = std::fs::read_dir(&s.dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec![serve::CONTROLLER_FILE.to_string()]);
 }

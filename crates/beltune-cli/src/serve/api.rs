@@ -16,6 +16,8 @@ pub enum PrefilterKind {
     Butterworth,
     /// Notch centred on the resonance (4.1)-(4.2).
     Notch,
+    /// No prefilter (the thesis' comparison in Section 5.1).
+    None,
 }
 
 /// Allowed interval of one numeric knob, sent to the page so the sliders and the

@@ -6,8 +6,18 @@ use beltune::model::TwoMassParams;
 use serde::Deserialize;
 use std::path::Path;
 
-use super::api::{DefaultAttenuation, DesignResponse, EffectiveKnobs, Knobs};
+use super::api::{
+    BodeData, Curve, DefaultAttenuation, DesignResponse, EffectiveKnobs, Gains, Knobs, LoopMargins,
+    MoveData, PrefilterInfo, PrefilterKind,
+};
 use super::tuner::{ModelSummary, TuneError, Tuner};
+use beltune::design::{
+    self, ControllerDesign, DesignInput, DesignKnobs, DesignSummary, Dynamics, FrictionParams,
+    Prefilter, PrefilterKind as DesignPrefilterKind,
+};
+use beltune::lti::{BodePoint, StabilityMargins};
+use beltune::model::rigs::{self, LinearPlant, Plant};
+use std::time::Instant;
 
 /// File read from `--commissioning DIR`.
 pub const COMMISSIONING_FILE: &str = "commissioning.json";
@@ -101,25 +111,177 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     })
 }
 
-/// The [`Tuner`] backed by the beltune library: `beltune::design` for the
-/// controller and `beltune::procedure::validation` for the simulated move.
+/// Frequency grid of the plots: from [`PLOT_DECADES_BELOW`] decades below the lowest
+/// of antiresonance and the two crossovers up to the Nyquist frequency,
+/// [`PLOT_POINTS`] log-spaced points (enough to draw the resonance; the margins
+/// come from the design's own fine grid).
+pub const PLOT_POINTS: usize = 300;
+/// Decades of the plot grid below the lowest characteristic frequency.
+pub const PLOT_DECADES_BELOW: f64 = 2.0;
+
+/// Which plant the simulated move runs on.
+#[derive(Debug, Clone)]
+enum MovePlant {
+    /// The built-in egc70 (nonlinear three-mass model) with the slider's payload.
+    Egc70,
+    /// The identified linear model with the slider's payload added to `m_c`.
+    Identified,
+}
+
+/// The [`Tuner`] backed by the beltune library: [`beltune::design::design`] for
+/// the controller (the same function `beltune design` runs). The design always
+/// uses the nominal model; only the simulated move sees the payload slider.
 pub struct LibraryTuner {
     model: DesignModel,
+    input: DesignInput,
+    nominal_payload_kg: f64,
+    move_plant: MovePlant,
 }
 
 impl LibraryTuner {
-    /// Tuner for `model`.
+    /// Tuner for an identified model (commissioning folder). The payload slider
+    /// adds mass to the identified `m_c` (default 0 kg).
     pub fn new(model: DesignModel) -> anyhow::Result<Self> {
-        anyhow::bail!(
-            "the controller design (beltune::design) is not merged yet; cannot tune {}",
-            model.source
-        )
+        let mut input = DesignInput::new(model.params, model.dead_time_s);
+        input.friction = model.friction.map(|f| FrictionParams {
+            viscous_n_m_s_per_rad: f.viscous,
+            coulomb_n_m: f.coulomb,
+        });
+        input
+            .validate()
+            .with_context(|| format!("design input from {}", model.source))?;
+        Ok(LibraryTuner {
+            model,
+            input,
+            nominal_payload_kg: 0.0,
+            move_plant: MovePlant::Identified,
+        })
     }
 
-    /// Tuner for the built-in egc70 axis.
+    /// Tuner for the built-in egc70 axis: its two-mass linearization at the
+    /// worst-case (lowest-resonance) cart position with the default payload.
     pub fn builtin() -> anyhow::Result<Self> {
-        anyhow::bail!("the built-in plants (beltune::model::rigs) are not merged yet")
+        let plant = rigs::builtin("egc70", None)?;
+        let params = plant.worst_case_two_mass()?;
+        let friction = plant.friction_totals();
+        let model = DesignModel {
+            source: format!(
+                "built-in egc70 ({} kg payload, cart at {:.3} m)",
+                rigs::EGC70_DEFAULT_PAYLOAD_KG,
+                plant.worst_case_position_m()
+            ),
+            params,
+            dead_time_s: plant.dead_time_s(),
+            friction: Some(FrictionTotals {
+                viscous: friction.viscous_nm_s_per_rad,
+                coulomb: friction.coulomb_nm,
+            }),
+        };
+        let mut tuner = LibraryTuner::new(model)?;
+        tuner.nominal_payload_kg = rigs::EGC70_DEFAULT_PAYLOAD_KG;
+        tuner.move_plant = MovePlant::Egc70;
+        Ok(tuner)
     }
+
+    /// What the design library receives for `knobs` (defaults from
+    /// [`DesignKnobs::default`], the one-knob mapping from [`Dynamics`]).
+    pub fn design_knobs(&self, knobs: &Knobs) -> Result<DesignKnobs, TuneError> {
+        let mut k = DesignKnobs::default();
+        if let Some(p) = knobs.prefilter {
+            k.prefilter = to_design_kind(p);
+        }
+        k.filter_attenuation_db = knobs.filter_attenuation_db;
+        if let Some(x) = knobs.dynamics {
+            let d = Dynamics::new(x).map_err(|e| TuneError::Infeasible(e.to_string()))?;
+            return Ok(d.knobs(&k));
+        }
+        if let Some(v) = knobs.pm_velocity_deg {
+            k.pm_velocity_deg = v;
+        }
+        if let Some(v) = knobs.pm_position_deg {
+            k.pm_position_deg = v;
+        }
+        if let Some(v) = knobs.resonance_suppression_db {
+            k.resonance_suppression_db = v;
+        }
+        Ok(k)
+    }
+
+    /// The design for `knobs`. Every library error is caused by the knobs (the
+    /// model was validated at start-up), so all are [`TuneError::Infeasible`]
+    /// with the library's message.
+    pub fn design(&self, knobs: &Knobs) -> Result<ControllerDesign, TuneError> {
+        let k = self.design_knobs(knobs)?;
+        design::design(&self.input, &k).map_err(|e| TuneError::Infeasible(e.to_string()))
+    }
+
+    /// The payload the move uses for `knobs`, kg.
+    fn payload_kg(&self, knobs: &Knobs) -> f64 {
+        knobs.payload_kg.unwrap_or(self.nominal_payload_kg)
+    }
+
+    /// The plant of the simulated move with `payload_kg`.
+    pub fn move_plant(&self, payload_kg: f64) -> beltune::Result<Plant> {
+        match self.move_plant {
+            MovePlant::Egc70 => rigs::builtin("egc70", Some(payload_kg)),
+            MovePlant::Identified => {
+                let drive = rigs::builtin("egc70", None)?.info();
+                let mut two_mass = self.model.params;
+                two_mass.m_c += payload_kg;
+                Ok(Plant::Linear(LinearPlant {
+                    two_mass,
+                    dead_time_s: self.model.dead_time_s,
+                    torque_limit_nm: drive.torque_limit_nm,
+                    motor_rad_per_count: drive.motor_rad_per_count,
+                    sample_time_s: self.input.ts_s,
+                }))
+            }
+        }
+    }
+}
+
+fn to_design_kind(p: PrefilterKind) -> DesignPrefilterKind {
+    match p {
+        PrefilterKind::Butterworth => DesignPrefilterKind::Butterworth,
+        PrefilterKind::Notch => DesignPrefilterKind::Notch,
+        PrefilterKind::None => DesignPrefilterKind::None,
+    }
+}
+
+fn from_design_kind(p: DesignPrefilterKind) -> PrefilterKind {
+    match p {
+        DesignPrefilterKind::Butterworth => PrefilterKind::Butterworth,
+        DesignPrefilterKind::Notch => PrefilterKind::Notch,
+        DesignPrefilterKind::None => PrefilterKind::None,
+    }
+}
+
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
+fn loop_margins(m: &StabilityMargins) -> LoopMargins {
+    LoopMargins {
+        phase_margin_deg: m.phase_margin_deg,
+        crossover_rad_s: m.crossover_rad_s,
+        gain_margin_db: finite(m.gain_margin_db),
+        phase_crossover_rad_s: finite(m.phase_crossover_rad_s),
+    }
+}
+
+fn curve(points: &[BodePoint]) -> Curve {
+    Curve {
+        magnitude_db: points.iter().map(|p| p.magnitude_db).collect(),
+        phase_deg: points.iter().map(|p| p.phase_deg).collect(),
+    }
+}
+
+/// `controller.toml`: the flat summary (the `beltune design --json` keys) and the
+/// complete design (gains, prefilter, discrete coefficients, feedforward).
+#[derive(serde::Serialize)]
+struct ControllerFile<'a> {
+    summary: DesignSummary,
+    design: &'a ControllerDesign,
 }
 
 impl Tuner for LibraryTuner {
@@ -128,20 +290,130 @@ impl Tuner for LibraryTuner {
             source: self.model.source.clone(),
             f_r_hz: self.model.params.f_r_hz(),
             f_z_hz: self.model.params.f_z_hz(),
-            nominal_payload_kg: 0.0,
+            nominal_payload_kg: self.nominal_payload_kg,
         }
     }
+
     fn defaults(&self) -> EffectiveKnobs {
-        unimplemented!()
+        let k = DesignKnobs::default();
+        EffectiveKnobs {
+            prefilter: from_design_kind(k.prefilter),
+            pm_velocity_deg: k.pm_velocity_deg,
+            pm_position_deg: k.pm_position_deg,
+            resonance_suppression_db: k.resonance_suppression_db,
+            filter_attenuation_db: k.attenuation_db(),
+            dynamics: None,
+            payload_kg: self.nominal_payload_kg,
+        }
     }
+
     fn default_attenuation(&self) -> DefaultAttenuation {
-        unimplemented!()
+        DefaultAttenuation {
+            butterworth: DesignPrefilterKind::Butterworth.default_attenuation_db(),
+            notch: DesignPrefilterKind::Notch.default_attenuation_db(),
+        }
     }
-    fn tune(&self, _knobs: &Knobs) -> Result<DesignResponse, TuneError> {
-        unimplemented!()
+
+    fn tune(&self, knobs: &Knobs) -> Result<DesignResponse, TuneError> {
+        let started = Instant::now();
+        let d = self.design(knobs)?;
+        let lowest = d
+            .omega_z_rad_s
+            .min(d.velocity_margins.crossover_rad_s)
+            .min(d.position_margins.crossover_rad_s);
+        let w_max = std::f64::consts::PI / d.input.ts_s;
+        let w_min = lowest * 10f64.powf(-PLOT_DECADES_BELOW);
+        let plot = d
+            .plot_data(w_min, w_max, PLOT_POINTS)
+            .map_err(|e| TuneError::Internal(format!("plot data: {e}")))?;
+        let omega_rad_s = plot
+            .velocity_open_loop
+            .iter()
+            .map(|p| p.omega_rad_s)
+            .collect();
+        let prefilter = match d.prefilter {
+            Prefilter::Butterworth { omega_bw_rad_s } => PrefilterInfo {
+                kind: PrefilterKind::Butterworth,
+                omega_bw_rad_s: Some(omega_bw_rad_s),
+                d_n: None,
+                omega_notch_rad_s: None,
+            },
+            Prefilter::Notch { omega_r_rad_s, d_n } => PrefilterInfo {
+                kind: PrefilterKind::Notch,
+                omega_bw_rad_s: None,
+                d_n: Some(d_n),
+                omega_notch_rad_s: Some(omega_r_rad_s),
+            },
+            Prefilter::None => PrefilterInfo {
+                kind: PrefilterKind::None,
+                omega_bw_rad_s: None,
+                d_n: None,
+                omega_notch_rad_s: None,
+            },
+        };
+        let payload_kg = self.payload_kg(knobs);
+        let (validation_move, move_error) = match self.simulate_move(&d, payload_kg) {
+            Ok(m) => (Some(m), None),
+            Err(e) => (None, Some(e)),
+        };
+        Ok(DesignResponse {
+            knobs: EffectiveKnobs {
+                prefilter: from_design_kind(d.knobs.prefilter),
+                pm_velocity_deg: d.knobs.pm_velocity_deg,
+                pm_position_deg: d.knobs.pm_position_deg,
+                resonance_suppression_db: d.knobs.resonance_suppression_db,
+                filter_attenuation_db: d.knobs.attenuation_db(),
+                dynamics: knobs.dynamics,
+                payload_kg,
+            },
+            gains: Gains {
+                k_p: d.k_p,
+                k_i: d.k_i,
+                k_pp: d.k_pp,
+            },
+            prefilter,
+            velocity_loop: loop_margins(&d.velocity_margins),
+            position_loop: loop_margins(&d.position_margins),
+            gain_at_resonance_db: d.gain_at_resonance_db,
+            bode: BodeData {
+                omega_rad_s,
+                open_loop_velocity: curve(&plot.velocity_open_loop),
+                open_loop_position: curve(&plot.position_open_loop),
+                closed_loop_position: curve(&plot.position_closed_loop),
+            },
+            validation_move,
+            move_error,
+            compute_ms: started.elapsed().as_secs_f64() * 1e3,
+        })
     }
-    fn controller_toml(&self, _knobs: &Knobs) -> Result<String, TuneError> {
-        unimplemented!()
+
+    fn controller_toml(&self, knobs: &Knobs) -> Result<String, TuneError> {
+        let d = self.design(knobs)?;
+        let file = ControllerFile {
+            summary: d.summary(),
+            design: &d,
+        };
+        let body = toml::to_string(&file)
+            .map_err(|e| TuneError::Internal(format!("serializing controller.toml: {e}")))?;
+        Ok(format!(
+            "# beltune controller design, saved by `beltune serve`\n# model: {}\n{body}",
+            self.model.source
+        ))
+    }
+}
+
+impl LibraryTuner {
+    /// The thesis validation move on the simulated plant with `payload_kg`.
+    fn simulate_move(
+        &self,
+        _design: &ControllerDesign,
+        payload_kg: f64,
+    ) -> Result<MoveData, String> {
+        self.move_plant(payload_kg).map_err(|e| e.to_string())?;
+        Err(
+            "the simulated validation move (beltune::procedure::validation) is not merged yet"
+                .into(),
+        )
     }
 }
 

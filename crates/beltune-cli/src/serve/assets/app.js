@@ -229,6 +229,10 @@
       $('prefilter-param-name').textContent = 'notch damping dn';
       setNumber('prefilter-param', p.d_n);
       $('prefilter-param-unit').textContent = '';
+    } else if (p.kind === 'none') {
+      $('prefilter-param-name').textContent = 'no prefilter';
+      setNumber('prefilter-param', null);
+      $('prefilter-param-unit').textContent = '';
     } else {
       $('prefilter-param-name').textContent = 'Butterworth ωbw';
       setNumber('prefilter-param', p.omega_bw_rad_s);
