@@ -21,13 +21,22 @@
 //! absolute angle (better conditioned in `f32`) and without a start transient.
 //!
 //! The integrator state `x_I` is the integral of the filtered velocity error, in rad;
-//! `K_I x_I` is a torque. The torque offset (holding torque, e.g. on a tilted axis)
-//! is treated like the feedforward in (6.26).
+//! `K_I x_I` is a torque. The error `e_omega` of (6.25)/(6.26) is the PI input of
+//! Figure 6.9, i.e. the prefiltered error `e_f`. The output uses `x_I[k]` (forward
+//! Euler, as (6.25)); the condition of (6.26) is evaluated on the tentative next
+//! torque `K_P e_f[k] + K_I (x_I[k] + T_s e_f[k]) + tau_FF[k]`, and the reset makes
+//! `K_P e_f[k] + K_I x_I[k+1] + tau_FF[k]` equal the limit exactly. The torque
+//! offset (holding torque, e.g. on a tilted axis) is treated like the feedforward
+//! in (6.26). With `K_I = 0` there is no integral action and (6.26) is skipped.
 //!
-//! Cost per sample (f64, see the crate README for measured numbers): the velocity
-//! filter and the desired-velocity low-pass (3 multiplications each), two
-//! second-order sections (5 each), feedforward (2), PI and anti-windup (about 6):
-//! about 25 multiplications, no division, no allocation, no panic.
+//! [`CascadeController::reset_to`] assumes the axis at rest (`omega_d = 0`); the
+//! desired-velocity low-pass starts from zero.
+//!
+//! Cost per sample: the velocity filter (2 multiplications), the desired-velocity
+//! low-pass (3), two second-order sections (5 each), feedforward (2), position
+//! loop, PI and anti-windup (about 8): about 25 multiplications, no division, no
+//! allocation, no panic. Measured (crate README): 140 instructions, about 80 ns
+//! per step in f64 on the development machine (137 instructions in f32).
 
 use super::feedforward::{Feedforward, FeedforwardParams};
 use super::setpoint::Setpoint;
@@ -239,8 +248,9 @@ pub struct ControlOutput<T = f64> {
     /// Feedforward torque `tau_FF` in N m (without the offset).
     pub feedforward_nm: T,
     /// `false` if an input or an intermediate value was not finite (or
-    /// overflowed); the torque is then 0, the integrator is kept and the filter
-    /// states are reset (velocity filter: at rest at the measured angle).
+    /// overflowed); the torque is then 0, the integrator is kept (zeroed if it
+    /// overflowed) and the filter states are reset (velocity filter: at rest at
+    /// the measured angle).
     pub finite: bool,
 }
 
@@ -318,6 +328,29 @@ impl<T: Real> CascadeController<T> {
     /// The configuration in use.
     pub fn config(&self) -> &CascadeConfig<T> {
         &self.config
+    }
+
+    /// Replace the configuration at run time (e.g. gains from a tuning slider).
+    /// Filter states are kept (coefficients replaced), and the integrator is
+    /// rescaled so that the integral torque `K_I x_I` is continuous: a gain change
+    /// at zero error causes no torque step. An invalid configuration is rejected
+    /// and the controller is left unchanged.
+    pub fn set_config(&mut self, config: CascadeConfig<T>) -> Result<(), Error> {
+        let mut next = Self::new(config)?;
+        next.vel_filter.last_angle_rad = self.vel_filter.last_angle_rad;
+        next.vel_filter.last_velocity_rad_s = self.vel_filter.last_velocity_rad_s;
+        let mut lp = self.desired_lp;
+        lp.coeffs = next.desired_lp.coeffs;
+        next.desired_lp = lp;
+        let mut pre = self.prefilter;
+        for (n, o) in next.prefilter.sections.iter().zip(pre.sections.iter_mut()) {
+            o.coeffs = n.coeffs;
+        }
+        next.prefilter = pre;
+        let integral_torque = self.config.gains.k_i_nm_per_rad * self.integrator_rad;
+        next.integrator_rad = integral_torque * next.inv_k_i;
+        *self = next;
+        Ok(())
     }
 
     /// Bumpless start at the current position: the velocity filter sees a
@@ -403,6 +436,9 @@ impl<T: Real> CascadeController<T> {
         if !(tau_d.is_finite() && e_f.is_finite()) {
             self.desired_lp.reset();
             self.prefilter.reset();
+            if !self.integrator_rad.is_finite() {
+                self.integrator_rad = T::ZERO;
+            }
             return self.fault();
         }
         let max = cfg.torque_max_nm;
@@ -546,5 +582,162 @@ mod tests {
         assert!(
             CascadeConfig::<f64>::new(CascadeGains::new(1.0, 1.0, 1.0), TS, -1.0, 1.0).is_err()
         );
+    }
+
+    /// (6.26): while the error keeps pushing into the limit, the integrator is
+    /// set so that the tentative next torque meets the limit exactly.
+    #[test]
+    fn conditional_integration_holds_the_torque_exactly_at_the_limit() {
+        let mut cfg = config();
+        cfg.prefilter = [SosCoeffs::IDENTITY; 2];
+        cfg.torque_offset_nm = 0.25;
+        let mut c = CascadeController::new(cfg).unwrap();
+        let g = cfg.gains;
+        for k in 0..50 {
+            let out = c.step(&Setpoint::hold(5.0), 0.0);
+            // first sample saturated, then exactly at the limit
+            assert!((out.torque_nm - 2.0).abs() < 1e-12);
+            let e_f = out.velocity_error_filtered_rad_s;
+            let next = g.k_p_nm_s_per_rad * e_f + g.k_i_nm_per_rad * out.integrator_rad + 0.25;
+            assert!((next - 2.0).abs() < 1e-12, "k {k}: {next}");
+        }
+        // plain integration (6.25) keeps integrating instead
+        cfg.anti_windup = AntiWindup::Off;
+        let mut c = CascadeController::new(cfg).unwrap();
+        let mut x = 0.0;
+        for _ in 0..50 {
+            let out = c.step(&Setpoint::hold(5.0), 0.0);
+            let expected = x + TS * out.velocity_error_filtered_rad_s;
+            assert!((out.integrator_rad - expected).abs() < 1e-15);
+            x = out.integrator_rad;
+        }
+    }
+
+    /// `step` is `step_with_velocity` fed with `G_R` of the measured angle.
+    #[test]
+    fn step_equals_step_with_velocity_from_the_velocity_filter() {
+        let cfg = config();
+        let mut a = CascadeController::new(cfg).unwrap();
+        let mut b = CascadeController::new(cfg).unwrap();
+        let mut g_r = crate::filter::FirstOrder::new(cfg.velocity_filter);
+        g_r.reset_to(0.0, 0.0);
+        for k in 0..500 {
+            let phi = libm::sin(k as f64 * 0.01);
+            let sp = Setpoint::hold(0.3);
+            let oa = a.step(&sp, phi);
+            let ob = b.step_with_velocity(&sp, phi, g_r.step(phi));
+            assert!((oa.torque_nm - ob.torque_nm).abs() < 1e-9);
+            assert!((oa.velocity_estimate_rad_s - ob.velocity_estimate_rad_s).abs() < 1e-9);
+        }
+    }
+
+    /// Refinement (a): the low-pass applied to `omega_d` gives what `G_R`
+    /// makes of `phi_d` (`G_R = L_R D` with the Tustin differentiator `D`); for
+    /// a cubic `phi_d` the two differ by the Tustin derivative error
+    /// `T_s^2 phi''' / 12` only.
+    #[test]
+    fn desired_velocity_filter_equals_g_r_of_the_desired_angle() {
+        let mut cfg = config();
+        cfg.filter_desired_velocity = true;
+        cfg.gains.k_pp_per_s = 0.0; // omega_ref = L(omega_d) exactly
+        let mut c = CascadeController::new(cfg).unwrap();
+        let mut g_r = crate::filter::FirstOrder::new(cfg.velocity_filter);
+        g_r.reset_to(0.0, 0.0);
+        let j = 3000.0;
+        for k in 0..3000 {
+            let t = k as f64 * TS;
+            let sp = Setpoint::at(MotionSample {
+                angle_rad: j * t * t * t / 6.0,
+                velocity_rad_s: j * t * t / 2.0,
+                acceleration_rad_s2: j * t,
+            });
+            let out = c.step(&sp, 0.0);
+            let via_g_r = g_r.step(sp.now.angle_rad);
+            let tol = TS * TS * j / 12.0 * 1.01 + 1e-12 * sp.now.velocity_rad_s;
+            let diff = (out.velocity_reference_rad_s - via_g_r).abs();
+            assert!(diff <= tol, "k {k}: {diff} > {tol}");
+        }
+    }
+
+    /// Seeded sweep: for random valid configurations and random finite inputs
+    /// over 60 decades (including overflow in f32), the command is finite and
+    /// within the torque limit, and the controller keeps working.
+    fn sweep_invariants<T: Real>(seed: u64) {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        let big = |rng: &mut rand_xoshiro::Xoshiro256PlusPlus| {
+            let mag = libm::pow(10.0, rng.random_range(-10.0..50.0));
+            if rng.random::<bool>() {
+                mag
+            } else {
+                -mag
+            }
+        };
+        for _ in 0..200 {
+            let gains = CascadeGains::new(
+                rng.random_range(0.0..100.0),
+                rng.random_range(0.0..1.0),
+                rng.random_range(0.0..10.0),
+            );
+            let max = rng.random_range(0.01..10.0);
+            let mut cfg = CascadeConfig::new(gains, TS, rng.random_range(1e-4..1e-2), max).unwrap();
+            if rng.random::<bool>() {
+                cfg.prefilter[0] = butterworth_lowpass(rng.random_range(50.0..3000.0), TS).unwrap();
+            }
+            if rng.random::<bool>() {
+                cfg.prefilter[1] =
+                    crate::filter::notch(rng.random_range(100.0..3000.0), 4.6, TS).unwrap();
+            }
+            cfg.feedforward = Feedforward::nonlinear(1e-3, 1e-3, 0.1);
+            cfg.feedforward_preview = rng.random::<bool>();
+            cfg.filter_desired_velocity = rng.random::<bool>();
+            if rng.random::<bool>() {
+                cfg.anti_windup = AntiWindup::Off;
+            }
+            let mut c = CascadeController::<T>::new(cfg.cast()).unwrap();
+            let lim = T::from_f64(max);
+            for _ in 0..100 {
+                let m = MotionSample {
+                    angle_rad: T::from_f64(big(&mut rng)),
+                    velocity_rad_s: T::from_f64(big(&mut rng)),
+                    acceleration_rad_s2: T::from_f64(big(&mut rng)),
+                };
+                let out = c.step(&Setpoint::at(m), T::from_f64(big(&mut rng)));
+                assert!(out.torque_nm.is_finite());
+                assert!(out.torque_nm <= lim && out.torque_nm >= -lim);
+            }
+            c.reset_to(T::ZERO);
+            let out = c.step(&Setpoint::hold(T::ZERO), T::ZERO);
+            assert!(out.finite && out.torque_nm == T::ZERO);
+        }
+    }
+
+    #[test]
+    fn random_finite_inputs_give_bounded_finite_torque_f64() {
+        sweep_invariants::<f64>(1);
+    }
+
+    #[test]
+    fn random_finite_inputs_give_bounded_finite_torque_f32() {
+        sweep_invariants::<f32>(2);
+    }
+
+    #[test]
+    fn set_config_changes_gains_without_a_torque_step() {
+        let mut c = CascadeController::new(config()).unwrap();
+        c.reset_to_holding(0.0, 0.7);
+        for _ in 0..10 {
+            c.step(&Setpoint::hold(0.0), 0.0);
+        }
+        let before = c.step(&Setpoint::hold(0.0), 0.0).torque_nm;
+        let mut cfg = config();
+        cfg.gains.k_i_nm_per_rad *= 3.0;
+        cfg.gains.k_p_nm_s_per_rad *= 2.0;
+        c.set_config(cfg).unwrap();
+        let after = c.step(&Setpoint::hold(0.0), 0.0).torque_nm;
+        assert!((before - 0.7).abs() < 1e-12 && (after - before).abs() < 1e-12);
+        cfg.torque_max_nm = -1.0;
+        assert!(c.set_config(cfg).is_err());
+        assert_eq!(c.config().gains.k_i_nm_per_rad, 3.0 * 1.39);
     }
 }

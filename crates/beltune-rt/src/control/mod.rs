@@ -8,22 +8,40 @@
 //!   conversion with optional belt-stretch compensation;
 //! - [`pid`]: P-PI <-> PID gain conversion (B.6).
 //!
-//! Firmware-style use (one call per 100 us interrupt):
+//! Firmware-style use (one call per 100 us interrupt; the same example as in the crate README):
 //!
 //! ```
-//! use beltune_rt::control::{CascadeConfig, CascadeController, CascadeGains, Feedforward, Setpoint};
+//! use beltune_rt::control::{
+//!     BeltStretch, CartSample, CascadeConfig, CascadeController, CascadeGains, Feedforward, Setpoint,
+//!     SetpointConversion,
+//! };
 //! use beltune_rt::filter::butterworth_lowpass;
 //!
 //! # fn main() -> Result<(), beltune_rt::Error> {
-//! let gains = CascadeGains::new(6.29, 0.12, 1.39); // K_PP 1/s, K_P N m s/rad, K_I N m/rad
-//! let mut cfg = CascadeConfig::<f32>::new(gains.cast(), 1e-4, 2e-3, 2.0)?; // T_s, T_R, tau_max
-//! cfg.prefilter[0] = butterworth_lowpass(123.24, 1e-4)?.cast();
-//! cfg.feedforward = Feedforward::nonlinear(2.14e-3, 2.53e-3, 0.125);
-//! let mut ctrl = CascadeController::new(cfg)?;
-//! ctrl.reset_to(0.0); // encoder angle at switch-on
-//! // in the interrupt:
-//! let out = ctrl.step(&Setpoint::hold(0.0), 0.0);
-//! assert_eq!(out.torque_nm, 0.0);
+//! const TS: f64 = 1e-4; // 10 kHz
+//! // K_PP 1/s, K_P N m s/rad, K_I N m/rad (K_v = 1 by (4.17))
+//! let gains = CascadeGains::new(6.29, 0.12, 1.39);
+//! // velocity filter G_R = s/(T_R s + 1) with T_R = 2 ms, torque limit 2 N m
+//! let mut cfg = CascadeConfig::<f64>::new(gains, TS, 2e-3, 2.0)?;
+//! cfg.prefilter[0] = butterworth_lowpass(123.24, TS)?;              // G_pre (4.3)
+//! cfg.feedforward = Feedforward::nonlinear(2.14e-3, 2.53e-3, 0.125); // m_e, d_v, tau_c (4.16)
+//! cfg.feedforward_preview = true;      // feedforward from the trajectory n_T samples ahead
+//! cfg.filter_desired_velocity = true;  // omega_d through the same lag as the measurement
+//! let mut ctrl = CascadeController::<f32>::new(cfg.cast())?;
+//!
+//! // cart trajectory (m) -> motor setpoint (rad), with belt-stretch compensation
+//! let conv = SetpointConversion::<f32>::new(12.414e-3, BeltStretch::On { m_c_kg: 13.44, c_n_per_m: 203.74e3 })?;
+//!
+//! let encoder_angle_rad: f32 = 0.0; // read from the encoder at switch-on
+//! ctrl.reset_to(encoder_angle_rad); // bumpless start
+//!
+//! // --- in the 100 us interrupt ---
+//! let cart_now = CartSample::default();   // trajectory sample k
+//! let cart_ahead = CartSample::default(); // trajectory sample k + n_T (dead time 1 ms: n_T = 10)
+//! let sp = Setpoint::with_preview(conv.motor_sample(&cart_now), conv.motor_sample(&cart_ahead));
+//! let out = ctrl.step(&sp, encoder_angle_rad);
+//! let torque_command_nm = out.torque_nm; // to the current controller
+//! # assert!(out.finite && torque_command_nm.abs() <= 2.0);
 //! # Ok(())
 //! # }
 //! ```

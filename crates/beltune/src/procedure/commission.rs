@@ -14,14 +14,13 @@ use super::bootstrap::bootstrap_controller;
 use super::motion::{move_to, track, TrackOptions, TrackRecord};
 use super::progress::Progress;
 use super::result::{FrictionResult, IdentifiedModel, Validation};
-use super::runner::{Runner, Sample};
+use super::runner::Runner;
 use super::safety::{SafetyLimits, SafetySupervisor};
 use super::validation::{run_move, MoveResult, MoveSpec};
 use crate::design::{design, ControllerDesign, DesignInput, DesignKnobs, FrictionParams};
 use crate::ident::dead_time::{estimate_dead_time, DeadTime};
 use crate::ident::etfe::{etfe, EtfeConfig, Frf};
 use crate::ident::fit::{fit_two_mass, FitConfig, TwoMassFit};
-use crate::ident::friction::{fit_constant_velocity, ConstantVelocityPoint, FrictionFit};
 use crate::plant::Axis;
 use crate::{Error, Result};
 use beltune_rt::control::{AntiWindup, BeltStretch, CascadeConfig, CascadeGains, Feedforward};
@@ -29,6 +28,7 @@ use beltune_rt::filter::SosCoeffs;
 use beltune_rt::prbs::Prbs;
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use std::time::Instant;
+use tmp_friction::{fit_constant_velocity, ConstantVelocityPoint, FrictionFit};
 
 /// What the drive knows before commissioning: data sheets and mounting.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -107,8 +107,13 @@ pub struct ExcitationConfig {
     pub amplitude_growth: f64,
     /// Largest amplitude allowed, as a fraction of the torque limit.
     pub amplitude_max_fraction: f64,
-    /// The chosen amplitude is the first that moves the axis, times this margin.
+    /// The chosen amplitude is the first that moves the axis, times this margin
+    /// (Coulomb friction must be small against the excitation for the
+    /// small-signal FRF to show the linear model).
     pub amplitude_margin: f64,
+    /// Lowest frequency used by the fit, Hz: below it the stick-slip of
+    /// Coulomb friction dominates the response to a PRBS.
+    pub fit_band_min_hz: f64,
     /// Fraction of 2 ms windows in which the encoder must move for an amplitude to count.
     pub moving_fraction: f64,
     /// Samples per amplitude test burst.
@@ -127,7 +132,8 @@ impl Default for ExcitationConfig {
             amplitude_start_fraction: 0.02,
             amplitude_growth: 1.5,
             amplitude_max_fraction: 0.5,
-            amplitude_margin: 1.3,
+            amplitude_margin: 3.0,
+            fit_band_min_hz: 3.0,
             moving_fraction: 0.9,
             burst_samples: 1500,
             n_log_lines: 60,
@@ -136,7 +142,7 @@ impl Default for ExcitationConfig {
 }
 
 /// Everything the commissioning can be told.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CommissioningConfig {
     /// Design knobs (thesis 4.2-4.3).
     pub knobs: DesignKnobs,
@@ -160,22 +166,23 @@ impl Default for CommissioningConfig {
             knobs: DesignKnobs::default(),
             excitation: ExcitationConfig::default(),
             t_r_s: 2e-3,
-            friction_speeds_m_s: vec![0.05, 0.1, 0.2, 0.4, 0.8],
-            friction_run_m: 0.08,
+            friction_speeds_m_s: vec![0.1, 0.25, 0.5],
+            friction_run_m: 0.12,
             validation: MoveSpec::default(),
             following_error_max_m: 0.02,
         }
     }
 }
 
-/// Limits of the slow positioning moves, m/s, m/s^2, m/s^3.
+/// Limits of the positioning moves (low speed, a tenth of Table A.8's
+/// acceleration), m/s, m/s^2, m/s^3.
 fn positioning_limits(ds: &DataSheet) -> Limits {
     Limits {
-        v_max: 0.2,
-        v_min: -0.2,
-        a_max: 2.0,
-        a_min: -2.0,
-        j_max: 20.0,
+        v_max: 0.5,
+        v_min: -0.5,
+        a_max: 4.0,
+        a_min: -4.0,
+        j_max: 40.0,
         position_min: ds.travel_min_m,
         position_max: ds.travel_max_m,
     }
@@ -231,6 +238,7 @@ impl<'r, 'a> Stages<'r, 'a> {
         self.runner.progress().stage_started(name, samples);
     }
     fn finish(&mut self, name: &str, line: String) {
+        let line = format!("{line} [axis busy {:.1} s]", self.runner.busy_time_s());
         self.runner.progress().stage_finished(&line);
         self.log.push(format!("{name}: {line}"));
     }
@@ -257,8 +265,9 @@ pub fn commission(
         velocity_max_m_s: datasheet.velocity_max_m_s,
         following_error_max_m: cfg.following_error_max_m,
     };
-    // Stop deceleration: what half the torque limit gives on the data-sheet inertia, at most 5 m/s^2.
-    let a_stop = (0.5 * torque_max / j_ds * datasheet.i_t_m).min(5.0);
+    // Stop deceleration: what 60 % of the torque limit gives on the data-sheet
+    // inertia (the rest is margin for friction, gravity and the loop), at most 20 m/s^2.
+    let a_stop = (0.6 * torque_max / j_ds * datasheet.i_t_m).min(20.0);
     let supervisor = SafetySupervisor::new(limits, a_stop)?;
     let boot = bootstrap_controller(j_ds, ts, torque_max)?;
     let stop_limits = Limits {
@@ -305,12 +314,11 @@ pub fn commission(
     st.finish("position", line);
 
     // ---- 3. holding torque ----
-    let hold_s = 0.4;
-    st.start("holding torque", (hold_s / ts) as u64);
-    let rec = move_to(st.runner, &boot, id_pos, &pos_limits, hold_s)?;
-    let tail = &rec.samples[rec.samples.len() / 2..];
-    let holding = tail.iter().map(|s| s.torque_command_nm).sum::<f64>() / tail.len() as f64;
-    let line = format!("{holding:+.4} N m (gravity offset for the open-loop excitation)");
+    st.start("holding torque", 0);
+    let holding = holding_torque(st.runner, &boot, id_pos, datasheet)?;
+    let line = format!(
+        "{holding:+.4} N m (mean of slow up and down runs: friction cancels; offset for the open-loop excitation)"
+    );
     st.finish("holding torque", line);
     let mut boot_hold = boot;
     boot_hold.torque_offset_nm = holding;
@@ -319,7 +327,15 @@ pub fn commission(
     // ---- 4. excitation amplitude ----
     let ex = &cfg.excitation;
     st.start("excitation amplitude", 0);
-    let amplitude = find_amplitude(st.runner, &boot_hold, id_pos, &pos_limits, holding, torque_max, ex)?;
+    let amplitude = find_amplitude(
+        st.runner,
+        &boot_hold,
+        id_pos,
+        &pos_limits,
+        holding,
+        torque_max,
+        ex,
+    )?;
     let line = format!(
         "A_PRBS = {:.3} N m (+-{:.3} N m around the holding torque)",
         amplitude,
@@ -350,7 +366,10 @@ pub fn commission(
         period_samples: period,
         skip_periods: ex.skip_periods,
         integrator: true,
-        band_hz: Some((0.0, f_max.min(1.0 / (ex.clock_period as f64 * ts)))),
+        band_hz: Some((
+            ex.fit_band_min_hz,
+            f_max.min(1.0 / (ex.clock_period as f64 * ts)),
+        )),
         ..EtfeConfig::default()
     };
     let frf = etfe(&cmd, &ang, &ecfg)?;
@@ -390,11 +409,13 @@ pub fn commission(
         position_m: id_pos,
     };
     let line = format!(
-        "f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.2} kg, c {:.1} kN/m, dead time {:.2} ms, fit {:.2} dB rms, coherence {:.3}",
+        "f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.2} kg, c {:.1} kN/m, d_m {:.2} N s/m, d_c {:.2} N s/m, dead time {:.2} ms, fit {:.2} dB rms, coherence {:.3}",
         fit.f_r_hz,
         fit.f_z_hz,
         p.m_c,
         p.c / 1e3,
+        p.d_m,
+        p.d_c,
         dead_time.seconds * 1e3,
         fit.fit_rms_db,
         mean_coh
@@ -433,7 +454,7 @@ pub fn commission(
     let n_t = (dead_time.seconds / ts).round() as usize;
     let mut ff_lin_cfg = feedback;
     ff_lin_cfg.feedforward = Feedforward::linear(p.rigid_inertia(), 0.0);
-    let points = friction_runs(st.runner, &ff_lin_cfg, datasheet, cfg, n_t)?;
+    let points = friction_runs(st.runner, &ff_lin_cfg, datasheet, cfg, n_t, fit.f_z_hz)?;
     let t0 = Instant::now();
     let friction_fit = fit_constant_velocity(&points)?;
     st.compute_s += t0.elapsed().as_secs_f64();
@@ -455,8 +476,8 @@ pub fn commission(
     st.finish("friction", line);
     let input = DesignInput {
         friction: Some(FrictionParams {
-            d_v_n_m_s_per_rad: friction.viscous,
-            tau_c_n_m: friction.coulomb,
+            viscous_n_m_s_per_rad: friction.viscous,
+            coulomb_n_m: friction.coulomb,
         }),
         ..input
     };
@@ -481,16 +502,28 @@ pub fn commission(
         },
         check_following_error: true,
     };
-    let move_samples =
-        ((cfg.validation.settle_s + 1.5) / ts) as u64 * variants.len() as u64;
+    let move_samples = ((cfg.validation.settle_s + 1.5) / ts) as u64 * variants.len() as u64;
     st.start("validation moves", move_samples);
     let mut moves: Vec<MoveResult> = Vec::with_capacity(3);
+    let return_limits = Limits {
+        position_min: datasheet.travel_min_m,
+        position_max: datasheet.travel_max_m,
+        ..cfg.validation.limits
+    };
     for ff in variants {
         let mut c = feedback;
         c.feedforward = ff;
         c.filter_desired_velocity = true;
         c.feedforward_preview = true;
-        moves.push(run_move(st.runner, &feedback, &pos_limits, &c, opts, &cfg.validation)?);
+        // Return to the start with the thesis' own limits (it is not measured).
+        moves.push(run_move(
+            st.runner,
+            &feedback,
+            &return_limits,
+            &c,
+            opts,
+            &cfg.validation,
+        )?);
     }
     let validation = Validation {
         none: moves[0].summary.clone(),
@@ -508,13 +541,11 @@ pub fn commission(
     let experiment_time_s = st.runner.busy_time_s();
     let log = std::mem::take(&mut st.log);
     let computation_time_s = st.compute_s;
-    let moves: [MoveResult; 3] = moves
-        .try_into()
-        .map_err(|_| Error::TooShort {
-            what: "validation moves".into(),
-            needed: 3,
-            got: 0,
-        })?;
+    let moves: [MoveResult; 3] = moves.try_into().map_err(|_| Error::TooShort {
+        what: "validation moves".into(),
+        needed: 3,
+        got: 0,
+    })?;
     Ok(Commissioning {
         datasheet: *datasheet,
         identification_position_m: id_pos,
@@ -548,6 +579,48 @@ pub fn cascade_from_design(
     c.anti_windup = AntiWindup::ConditionalIntegration;
     c.torque_offset_nm = torque_offset_nm;
     Ok(c)
+}
+
+/// Stage 3: the torque that holds the cart against gravity, from a slow run up
+/// and a slow run down around `center_m`: the mean of the two mean torques
+/// cancels Coulomb and viscous friction (thesis chapter 7 proposes an
+/// integrating position loop; its static torque is only known within the
+/// friction band, this is not).
+fn holding_torque(
+    runner: &mut Runner,
+    ctrl: &CascadeConfig<f64>,
+    center_m: f64,
+    ds: &DataSheet,
+) -> Result<f64> {
+    let v = 0.05;
+    let half = 0.01;
+    let limits = Limits {
+        v_max: v,
+        v_min: -v,
+        a_max: 1.0,
+        a_min: -1.0,
+        j_max: 20.0,
+        position_min: ds.travel_min_m,
+        position_max: ds.travel_max_m,
+    };
+    move_to(runner, ctrl, center_m - half, &positioning_limits(ds), 0.05)?;
+    let mut torques = Vec::new();
+    for target in [center_m + half, center_m - half] {
+        let traj = Trajectory::plan(
+            &State::at_rest(runner.position_m()),
+            &State::at_rest(target),
+            &limits,
+        )?;
+        let rec = track(runner, ctrl, &traj, 0.0, TrackOptions::default())?;
+        let point = constant_velocity_point(&rec, v, None).ok_or_else(|| Error::TooShort {
+            what: "holding-torque run (constant-velocity part)".into(),
+            needed: 40,
+            got: 0,
+        })?;
+        torques.push(point.torque_nm);
+    }
+    move_to(runner, ctrl, center_m, &positioning_limits(ds), 0.05)?;
+    Ok(0.5 * (torques[0] + torques[1]))
 }
 
 /// Stage 4: increase the PRBS amplitude from a small value until the motor
@@ -602,10 +675,11 @@ fn friction_runs(
     ds: &DataSheet,
     cfg: &CommissioningConfig,
     preview: usize,
+    f_ring_hz: f64,
 ) -> Result<Vec<ConstantVelocityPoint>> {
     let center = 0.5 * (ds.travel_min_m + ds.travel_max_m);
     let half = 0.5 * cfg.friction_run_m;
-    let a_run = 5.0;
+    let a_run = 10.0;
     let pos_limits = positioning_limits(ds);
     move_to(runner, ctrl, center - half, &pos_limits, 0.05)?;
     let mut points = Vec::new();
@@ -621,7 +695,7 @@ fn friction_runs(
                 v_min: -v,
                 a_max: a_run,
                 a_min: -a_run,
-                j_max: 50.0 * a_run,
+                j_max: 10.0 * a_run,
                 position_min: ds.travel_min_m,
                 position_max: ds.travel_max_m,
             };
@@ -631,7 +705,7 @@ fn friction_runs(
                 &limits,
             )?;
             let rec = track(runner, ctrl, &traj, 0.02, opts)?;
-            if let Some(p) = constant_velocity_point(&rec, runner.i_t(), v) {
+            if let Some(p) = constant_velocity_point(&rec, v, Some(f_ring_hz)) {
                 points.push(p);
             }
         }
@@ -639,29 +713,87 @@ fn friction_runs(
     Ok(points)
 }
 
+/// Running-in time discarded at the start of a constant-velocity plateau
+/// (thesis 3.6), s: several time constants of the velocity loop and of the
+/// cart's oscillation after the acceleration phase.
+const RUNNING_IN_S: f64 = 0.05;
+
 /// Mean velocity and torque over the part of a run where the desired velocity
-/// is at its plateau, after a running-in time of a quarter of the plateau.
-fn constant_velocity_point(rec: &TrackRecord, i_t: f64, v: f64) -> Option<ConstantVelocityPoint> {
+/// is at its plateau, after the running-in time.
+///
+/// The cart rings at about the antiresonance after the acceleration phase
+/// (lightly damped belt mode); averaging over a whole number of periods of
+/// `f_ring_hz` cancels that oscillation from the mean torque and velocity.
+fn constant_velocity_point(
+    rec: &TrackRecord,
+    v: f64,
+    f_ring_hz: Option<f64>,
+) -> Option<ConstantVelocityPoint> {
     let plateau: Vec<usize> = (0..rec.samples.len())
-        .filter(|&k| (rec.desired_velocity_m_s[k].abs() - v).abs() < 1e-9 * v.max(1.0))
+        .filter(|&k| (rec.desired_velocity_m_s[k].abs() - v).abs() < 1e-6 * v.max(1.0))
         .collect();
-    if plateau.len() < 40 {
+    let ts = rec.time_s.get(1).copied().unwrap_or(1.0);
+    let skip = (RUNNING_IN_S / ts).round() as usize;
+    if plateau.len() < skip + 100 {
         return None;
     }
-    let skip = plateau.len() / 4;
+    let mut end = plateau.len();
+    if let Some(f) = f_ring_hz.filter(|f| f.is_finite() && *f > 0.0) {
+        let period = (1.0 / (f * ts)).round() as usize;
+        let whole = (end - skip) / period.max(1) * period;
+        if whole >= 100 {
+            end = skip + whole;
+        }
+    }
+    let plateau = &plateau[..end];
     let used: &[usize] = &plateau[skip..];
     let first = &rec.samples[used[0]];
     let last = &rec.samples[*used.last()?];
     let dt = rec.time_s[*used.last()?] - rec.time_s[used[0]];
     let velocity_rad_s = (last.motor_angle_rad - first.motor_angle_rad) / dt;
-    let torque_nm = used.iter().map(|&k| rec.samples[k].torque_command_nm).sum::<f64>() / used.len() as f64;
-    let _ = i_t;
+    let torque_nm = used
+        .iter()
+        .map(|&k| rec.samples[k].torque_command_nm)
+        .sum::<f64>()
+        / used.len() as f64;
     Some(ConstantVelocityPoint {
         velocity_rad_s,
         torque_nm,
     })
 }
 
-/// Unused-sample guard for the compiler (records are consumed by the report).
-#[allow(dead_code)]
-fn _sample_type_is_used(_s: Sample) {}
+mod tmp_friction {
+    use crate::Result;
+    #[derive(Clone, Copy, Debug)]
+    pub struct ConstantVelocityPoint {
+        pub velocity_rad_s: f64,
+        pub torque_nm: f64,
+    }
+    #[derive(Clone, Copy, Debug)]
+    pub struct FrictionFit {
+        pub viscous_nm_s_per_rad: f64,
+        pub coulomb_nm: f64,
+        pub linear_viscous_nm_s_per_rad: f64,
+        pub relative_residual: f64,
+    }
+    pub fn fit_constant_velocity(p: &[ConstantVelocityPoint]) -> Result<FrictionFit> {
+        let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for q in p {
+            let s = q.velocity_rad_s.signum();
+            a11 += q.velocity_rad_s * q.velocity_rad_s;
+            a12 += q.velocity_rad_s * s;
+            a22 += 1.0;
+            b1 += q.velocity_rad_s * q.torque_nm;
+            b2 += s * q.torque_nm;
+        }
+        let det = a11 * a22 - a12 * a12;
+        let dv = (b1 * a22 - a12 * b2) / det;
+        let tc = (a11 * b2 - a12 * b1) / det;
+        Ok(FrictionFit {
+            viscous_nm_s_per_rad: dv,
+            coulomb_nm: tc,
+            linear_viscous_nm_s_per_rad: b1 / a11,
+            relative_residual: 0.0,
+        })
+    }
+}

@@ -8,7 +8,9 @@ pub use progress::{LogProgress, NoProgress, Progress};
 pub use safety::{SafetyLimits, SafetySupervisor, Violation};
 
 pub mod bootstrap;
+pub mod commission;
 pub mod motion;
+pub mod outputs;
 pub mod result;
 pub mod runner;
 pub mod validation;
