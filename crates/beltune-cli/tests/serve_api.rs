@@ -423,7 +423,87 @@ fn valid_request_returns_the_library_design_with_consistent_plot_data() {
     }
     const LOW_FREQ_TRACKING_TOL_DB: f64 = 0.1;
     assert!(b.closed_loop_position.magnitude_db[0].abs() < LOW_FREQ_TRACKING_TOL_DB);
-    eprintln!("server compute time: {:.1} ms", r.compute_ms);
+
+    // The simulated move: decimated traces consistent with its summary.
+    let m = r
+        .validation_move
+        .as_ref()
+        .unwrap_or_else(|| panic!("no move: {:?}", r.move_error));
+    check_move(m);
+    eprintln!(
+        "server compute time: {:.1} ms; move max error {:.3} mm, static {:.2} um, settling {:?} s",
+        r.compute_ms,
+        m.max_error_m * 1e3,
+        m.static_error_m * 1e6,
+        m.settling_time_s
+    );
+}
+
+/// Relative tolerance of `error = desired - actual` recomputed from the traces.
+const TRACE_ERROR_TOL_M: f64 = 1e-12;
+
+fn check_move(m: &serve::api::MoveData) {
+    let n = m.t_s.len();
+    assert!(
+        n > 10 && n <= serve::library::MOVE_TRACE_POINTS,
+        "{n} points"
+    );
+    for v in [&m.desired_m, &m.actual_m, &m.error_m, &m.torque_nm] {
+        assert_eq!(v.len(), n);
+    }
+    assert!(m.t_s.windows(2).all(|w| w[1] > w[0]), "time not increasing");
+    // the thesis move 0 -> 0.5 m (MoveSpec::default)
+    assert!(m.desired_m[0].abs() < 1e-9 && (m.desired_m[n - 1] - 0.5).abs() < 1e-9);
+    for i in 0..n {
+        let e = m.desired_m[i] - m.actual_m[i];
+        assert!(
+            (e - m.error_m[i]).abs() <= TRACE_ERROR_TOL_M,
+            "error trace at {i}"
+        );
+        // the summary's maximum is over all samples, the trace is a subset
+        assert!(m.error_m[i].abs() <= m.max_error_m * (1.0 + 1e-12));
+    }
+    assert!(m.static_error_m <= m.max_error_m);
+}
+
+#[test]
+fn payload_changes_the_move_but_not_the_design() {
+    let s = start(library(), "payload");
+    let mut runs = Vec::new();
+    for payload in [0.0, 11.2] {
+        let (status, body) = post_json(
+            s.addr,
+            "/api/design",
+            &format!("{{\"payload_kg\": {payload}}}"),
+        );
+        assert_eq!(status, 200, "{body}");
+        let r: DesignResponse = serde_json::from_str(&body).unwrap();
+        let m = r
+            .validation_move
+            .unwrap_or_else(|| panic!("{:?}", r.move_error));
+        check_move(&m);
+        assert_eq!(m.payload_kg, payload);
+        runs.push((r.gains.k_p, m.max_error_m, m.torque_nm));
+    }
+    // the design uses the nominal model only
+    assert_eq!(runs[0].0, runs[1].0);
+    // a heavier cart needs more torque to follow the same trajectory
+    let peak = |t: &Vec<f64>| t.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
+    assert!(peak(&runs[0].2) < peak(&runs[1].2));
+    // and a payload the design did not assume changes the tracking error
+    assert_ne!(runs[0].1, runs[1].1);
+
+    // 30 kg on a design for 11.2 kg: whatever the simulation does (the supervisor
+    // may stop it), the answer is still the design, with a move or the reason.
+    let (status, body) = post_json(s.addr, "/api/design", r#"{"payload_kg": 30}"#);
+    assert_eq!(status, 200, "{body}");
+    let r: DesignResponse = serde_json::from_str(&body).unwrap();
+    assert_eq!(r.gains.k_p, runs[0].0);
+    match (&r.validation_move, &r.move_error) {
+        (Some(m), None) => check_move(m),
+        (None, Some(e)) => assert!(e.contains("30 kg"), "{e}"),
+        other => panic!("inconsistent move result {other:?}"),
+    }
 }
 
 #[test]
@@ -516,9 +596,13 @@ fn save_writes_controller_toml_with_the_design() {
         ..DesignKnobs::default()
     };
     let d = bdesign::design(&egc70_input(), &knobs).unwrap();
-    let summary = &toml["summary"];
-    for (key, want) in [("k_p", d.k_p), ("k_i", d.k_i), ("k_pp", d.k_pp)] {
-        let got = summary[key].as_float().unwrap();
+    let gains = &toml["gains"];
+    for (key, want) in [
+        ("k_p_nm_s_per_rad", d.k_p),
+        ("k_i_nm_per_rad", d.k_i),
+        ("k_pp_per_s", d.k_pp),
+    ] {
+        let got = gains[key].as_float().unwrap();
         assert!(close(got, want), "{key}: file {got} vs library {want}");
     }
     // atomic write: no temporary file is left next to it

@@ -341,8 +341,10 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         let path = PathBuf::from(path.as_str().unwrap());
         assert_eq!(path, save_dir.join(serve::CONTROLLER_FILE));
         let saved: toml::Value = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-        assert_close("saved K_P", saved["summary"]["k_p"].as_float().unwrap(), d0.k_p);
-        assert_close("saved K_PP", saved["summary"]["k_pp"].as_float().unwrap(), d0.k_pp);
+        let gains = &saved["gains"];
+        assert_close("saved K_P", gains["k_p_nm_s_per_rad"].as_float().unwrap(), d0.k_p);
+        assert_close("saved K_I", gains["k_i_nm_per_rad"].as_float().unwrap(), d0.k_i);
+        assert_close("saved K_PP", gains["k_pp_per_s"].as_float().unwrap(), d0.k_pp);
         let shown = js(&c, "document.getElementById('save-result').textContent").await;
         assert!(shown.as_str().unwrap().contains(&path.display().to_string()));
     })

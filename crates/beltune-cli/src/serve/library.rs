@@ -12,11 +12,21 @@ use super::api::{
 };
 use super::tuner::{ModelSummary, TuneError, Tuner};
 use beltune::design::{
-    self, ControllerDesign, DesignInput, DesignKnobs, DesignSummary, Dynamics, FrictionParams,
-    Prefilter, PrefilterKind as DesignPrefilterKind,
+    self, ControllerDesign, DesignInput, DesignKnobs, Dynamics, FrictionParams, Prefilter,
+    PrefilterKind as DesignPrefilterKind,
 };
 use beltune::lti::{BodePoint, StabilityMargins};
 use beltune::model::rigs::{self, LinearPlant, Plant};
+use beltune::procedure::commission::cascade_from_design;
+use beltune::procedure::motion::TrackOptions;
+use beltune::procedure::outputs;
+use beltune::procedure::result::FrictionResult;
+use beltune::procedure::runner::Runner;
+use beltune::procedure::validation::{run_move, MoveResult, MoveSpec};
+use beltune::procedure::{NoProgress, SafetyLimits, SafetySupervisor};
+use beltune::sim::{SimAxis, SimConfig};
+use beltune_rt::control::{BeltStretch, Feedforward as RtFeedforward};
+use beltune_rt::trajectory::Limits;
 use std::time::Instant;
 
 /// File read from `--commissioning DIR`.
@@ -51,6 +61,12 @@ pub struct FrictionTotals {
     pub viscous: f64,
     /// Coulomb friction tau_c, N m.
     pub coulomb: f64,
+    /// Viscous-only fit (linear feedforward), N m s/rad; absent: `viscous`.
+    #[serde(default)]
+    pub linear_viscous: Option<f64>,
+    /// Holding torque (tilted axis), N m; absent: 0.
+    #[serde(default)]
+    pub holding_torque_nm: Option<f64>,
 }
 
 /// The parts of `commissioning.json` the tuning page needs.
@@ -136,6 +152,9 @@ pub struct LibraryTuner {
     input: DesignInput,
     nominal_payload_kg: f64,
     move_plant: MovePlant,
+    /// Torque limit written to controller.toml and used in the move: the egc70
+    /// drive's (a commissioning.json does not record it), N m.
+    torque_limit_nm: f64,
 }
 
 impl LibraryTuner {
@@ -150,11 +169,13 @@ impl LibraryTuner {
         input
             .validate()
             .with_context(|| format!("design input from {}", model.source))?;
+        let torque_limit_nm = rigs::builtin("egc70", None)?.info().torque_limit_nm;
         Ok(LibraryTuner {
             model,
             input,
             nominal_payload_kg: 0.0,
             move_plant: MovePlant::Identified,
+            torque_limit_nm,
         })
     }
 
@@ -175,6 +196,8 @@ impl LibraryTuner {
             friction: Some(FrictionTotals {
                 viscous: friction.viscous_nm_s_per_rad,
                 coulomb: friction.coulomb_nm,
+                linear_viscous: None,
+                holding_torque_nm: None,
             }),
         };
         let mut tuner = LibraryTuner::new(model)?;
@@ -274,14 +297,6 @@ fn curve(points: &[BodePoint]) -> Curve {
         magnitude_db: points.iter().map(|p| p.magnitude_db).collect(),
         phase_deg: points.iter().map(|p| p.phase_deg).collect(),
     }
-}
-
-/// `controller.toml`: the flat summary (the `beltune design --json` keys) and the
-/// complete design (gains, prefilter, discrete coefficients, feedforward).
-#[derive(serde::Serialize)]
-struct ControllerFile<'a> {
-    summary: DesignSummary,
-    design: &'a ControllerDesign,
 }
 
 impl Tuner for LibraryTuner {
@@ -389,31 +404,155 @@ impl Tuner for LibraryTuner {
 
     fn controller_toml(&self, knobs: &Knobs) -> Result<String, TuneError> {
         let d = self.design(knobs)?;
-        let file = ControllerFile {
-            summary: d.summary(),
-            design: &d,
+        let friction = self.model.friction.unwrap_or(FrictionTotals {
+            viscous: 0.0,
+            coulomb: 0.0,
+            linear_viscous: None,
+            holding_torque_nm: None,
+        });
+        let friction = FrictionResult {
+            viscous: friction.viscous,
+            coulomb: friction.coulomb,
+            linear_viscous: friction.linear_viscous.unwrap_or(friction.viscous),
+            relative_residual: 0.0,
+            holding_torque_nm: friction.holding_torque_nm.unwrap_or(0.0),
         };
-        let body = toml::to_string(&file)
-            .map_err(|e| TuneError::Internal(format!("serializing controller.toml: {e}")))?;
+        let body = outputs::controller_toml(&d, &friction, self.torque_limit_nm)
+            .map_err(|e| TuneError::Internal(e.to_string()))?;
+        let k = &d.knobs;
         Ok(format!(
-            "# beltune controller design, saved by `beltune serve`\n# model: {}\n{body}",
-            self.model.source
+            "# beltune controller, saved by `beltune serve` (same layout as `beltune commission`)\n\
+             # model: {}\n\
+             # knobs: prefilter {:?}, velocity PM {} deg, position PM {} deg, \
+             A_sup {} dB, filter attenuation {} dB\n\
+             # achieved: velocity PM {:.2} deg at {:.2} rad/s, position PM {:.2} deg at {:.2} rad/s\n\n{body}",
+            self.model.source,
+            k.prefilter,
+            k.pm_velocity_deg,
+            k.pm_position_deg,
+            k.resonance_suppression_db,
+            k.attenuation_db(),
+            d.velocity_margins.phase_margin_deg,
+            d.velocity_margins.crossover_rad_s,
+            d.position_margins.phase_margin_deg,
+            d.position_margins.crossover_rad_s,
         ))
     }
 }
 
+/// Largest number of points of each move trace sent to the page.
+pub const MOVE_TRACE_POINTS: usize = 400;
+/// Following error at which the simulated move is aborted (a badly damped or
+/// unstable design under a payload the design did not assume), m.
+pub const MOVE_FOLLOWING_ERROR_MAX_M: f64 = 0.1;
+/// Deceleration of the supervisor's jerk-limited stop, m/s^2.
+pub const MOVE_STOP_DECELERATION_M_S2: f64 = 20.0;
+
 impl LibraryTuner {
-    /// The thesis validation move on the simulated plant with `payload_kg`.
-    fn simulate_move(
+    /// The thesis validation move (0 -> 0.5 m, Table A.8 limits,
+    /// [`MoveSpec::default`]) on the simulated plant with `payload_kg`, with the
+    /// nonlinear feedforward and the refinements `beltune commission` validates
+    /// with (filtered desired velocity, dead-time preview, belt-stretch
+    /// compensation from the design model). Composed from the library's
+    /// [`SimAxis`], [`Runner`] and [`run_move`]; a safety stop is reported as text.
+    fn simulate_move(&self, d: &ControllerDesign, payload_kg: f64) -> Result<MoveData, String> {
+        self.run_validation_move(d, payload_kg)
+            .map_err(|e| format!("simulated move with {payload_kg} kg payload: {e}"))
+    }
+
+    fn run_validation_move(
         &self,
-        _design: &ControllerDesign,
+        d: &ControllerDesign,
         payload_kg: f64,
-    ) -> Result<MoveData, String> {
-        self.move_plant(payload_kg).map_err(|e| e.to_string())?;
-        Err(
-            "the simulated validation move (beltune::procedure::validation) is not merged yet"
-                .into(),
-        )
+    ) -> beltune::Result<MoveData> {
+        let plant = self.move_plant(payload_kg)?;
+        let info = plant.info();
+        let spec = MoveSpec::default();
+        let config = SimConfig {
+            initial_cart_position_m: Some(spec.start_m),
+            ..SimConfig::default()
+        };
+        let mut axis = SimAxis::new(&plant, config)?;
+        let torque_max = info.torque_limit_nm;
+        let feedback = cascade_from_design(d, torque_max, 0.0)?;
+        let a_stop = MOVE_STOP_DECELERATION_M_S2;
+        let supervisor = SafetySupervisor::new(
+            SafetyLimits {
+                travel_min_m: spec.limits.position_min,
+                travel_max_m: spec.limits.position_max,
+                torque_max_nm: torque_max,
+                velocity_max_m_s: spec.limits.v_max,
+                following_error_max_m: MOVE_FOLLOWING_ERROR_MAX_M,
+            },
+            a_stop,
+        )?;
+        let stop_limits = Limits {
+            a_max: a_stop,
+            a_min: -a_stop,
+            j_max: 20.0 * a_stop,
+            ..spec.limits
+        };
+        let mut progress = NoProgress;
+        let mut runner = Runner::new(
+            &mut axis,
+            &mut progress,
+            supervisor,
+            d.input.model.i_t,
+            spec.start_m,
+            feedback,
+            stop_limits,
+        )?;
+        let ff = &d.feedforward;
+        let mut controller = feedback;
+        controller.feedforward =
+            RtFeedforward::nonlinear(ff.m_e_kg_m2, ff.d_v_n_m_s_per_rad, ff.tau_c_n_m);
+        controller.filter_desired_velocity = true;
+        controller.feedforward_preview = true;
+        let opts = TrackOptions {
+            preview_samples: (d.input.dead_time_s / d.input.ts_s).round() as usize,
+            belt_stretch: BeltStretch::On {
+                m_c_kg: d.input.model.m_c,
+                c_n_per_m: d.input.model.c,
+            },
+            check_following_error: true,
+        };
+        let result = run_move(
+            &mut runner,
+            &feedback,
+            &spec.limits,
+            &controller,
+            opts,
+            &spec,
+        )?;
+        Ok(move_data(&result, payload_kg))
+    }
+}
+
+/// Summary and traces (every k-th sample, at most [`MOVE_TRACE_POINTS`]) of a move.
+fn move_data(r: &MoveResult, payload_kg: f64) -> MoveData {
+    let rec = &r.record;
+    let n = rec.samples.len();
+    let stride = n.div_ceil(MOVE_TRACE_POINTS).max(1);
+    let error = if r.cart_error_m.len() == n {
+        &r.cart_error_m
+    } else {
+        &r.motor_error_m
+    };
+    let pick = |f: &dyn Fn(usize) -> f64| (0..n).step_by(stride).map(f).collect::<Vec<f64>>();
+    let s = &r.summary;
+    MoveData {
+        payload_kg,
+        max_error_m: s.max_tracking_error_m,
+        static_error_m: s.static_error_m,
+        settling_time_s: finite(s.settling_time_s),
+        t_s: pick(&|i| rec.time_s[i]),
+        desired_m: pick(&|i| rec.desired_m[i]),
+        actual_m: pick(&|i| {
+            let sample = &rec.samples[i];
+            sample.cart_position_m.unwrap_or(sample.position_m)
+        }),
+        error_m: pick(&|i| error[i]),
+        torque_nm: pick(&|i| rec.samples[i].torque_command_nm),
     }
 }
 
