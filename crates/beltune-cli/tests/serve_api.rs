@@ -612,3 +612,106 @@ fn save_writes_controller_toml_with_the_design() {
         .collect();
     assert_eq!(names, vec![serve::CONTROLLER_FILE.to_string()]);
 }
+
+// ---------- a commissioning folder and the command line ----------
+
+/// Thesis Table A.4 (11.2 kg) and Table A.10 friction, as `beltune commission`
+/// writes them (extra keys included, which must be ignored).
+const COMMISSIONING_JSON: &str = r#"{
+  "plant": "test",
+  "identified": {"f_r_hz": 107.1, "f_z_hz": 19.6, "theta_e": 7.173e-5, "m_c": 13.44,
+    "c": 203740.0, "d_m": 33.17, "d_c": 226.42, "i_t": 0.012414085561167691,
+    "dead_time_s": 0.001, "fit_rms_db": 0.3},
+  "friction": {"viscous": 0.00253, "coulomb": 0.125, "linear_viscous": 0.004,
+    "relative_residual": 0.01, "holding_torque_nm": 0.0},
+  "log": []
+}"#;
+/// THESIS-NOTES: (2.44) with Table A.4 gives f_r = 107.1 Hz (printed precision).
+const TABLE_A4_F_R_HZ: f64 = 107.1;
+const PRINTED_PRECISION_HZ: f64 = 0.05;
+
+#[test]
+fn commissioning_folder_model_is_designed_and_simulated() {
+    let dir = std::env::temp_dir().join(format!("beltune-serve-comm-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join(serve::library::COMMISSIONING_FILE),
+        COMMISSIONING_JSON,
+    )
+    .unwrap();
+    let model = serve::library::load_commissioning(&dir).unwrap();
+    let tuner = LibraryTuner::new(model).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let s = start(Arc::new(tuner), "comm");
+    let (status, info) = http(s.addr, "GET", "/api/info", None, b"");
+    assert_eq!(status, 200);
+    let info: serde_json::Value = serde_json::from_str(&info).unwrap();
+    let f_r = info["f_r_hz"].as_f64().unwrap();
+    assert!(
+        (f_r - TABLE_A4_F_R_HZ).abs() < PRINTED_PRECISION_HZ,
+        "f_r = {f_r}"
+    );
+    assert_eq!(info["nominal_payload_kg"], 0.0);
+
+    let (status, body) = post_json(s.addr, "/api/design", r#"{"payload_kg": 0}"#);
+    assert_eq!(status, 200, "{body}");
+    let r: DesignResponse = serde_json::from_str(&body).unwrap();
+    let mut input = DesignInput::new(beltune::model::TwoMassParams::thesis_table_a4(), 1e-3);
+    input.friction = Some(FrictionParams {
+        viscous_n_m_s_per_rad: 0.00253,
+        coulomb_n_m: 0.125,
+    });
+    let d = bdesign::design(&input, &DesignKnobs::default()).unwrap();
+    // i_t in the file is 78 mm / 2 pi to 17 digits, as in thesis_table_a4()
+    const I_T_ROUNDING_REL: f64 = 1e-9;
+    for (got, want) in [
+        (r.gains.k_p, d.k_p),
+        (r.gains.k_i, d.k_i),
+        (r.gains.k_pp, d.k_pp),
+    ] {
+        assert!(
+            (got - want).abs() <= I_T_ROUNDING_REL * want.abs(),
+            "{got} vs {want}"
+        );
+    }
+    let m = r
+        .validation_move
+        .unwrap_or_else(|| panic!("{:?}", r.move_error));
+    check_move(&m);
+}
+
+fn beltune_cli(args: &[&str]) -> (i32, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_beltune"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn cli_refuses_remote_bind_without_the_flag_and_a_missing_folder() {
+    let (code, err) = beltune_cli(&["serve", "--bind", "0.0.0.0", "--port", "0"]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: ") && err.contains("--allow-remote"),
+        "{err}"
+    );
+
+    let (code, err) = beltune_cli(&[
+        "serve",
+        "--commissioning",
+        "/nonexistent-beltune",
+        "--port",
+        "0",
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("commissioning.json"), "{err}");
+
+    let (code, err) = beltune_cli(&["serve", "--bind", "localhost"]);
+    assert_eq!(code, 2, "clap rejects a non-IP bind address: {err}");
+}

@@ -287,7 +287,10 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         for _ in 0..LEFT_PRESSES {
             slider.send_keys("\u{E012}").await.unwrap(); // ArrowLeft
             seq = wait_render(&c, seq).await;
-            times.push(js(&c, "document.body.dataset.totalMs").await);
+            let total = js(&c, "Number(document.body.dataset.totalMs)").await;
+            let request = js(&c, "Number(document.body.dataset.requestMs)").await;
+            let server = js(&c, "Number(document.body.dataset.serverMs)").await;
+            times.push([total, request, server].map(|v| v.as_f64().unwrap_or(f64::NAN)));
         }
         let value: f64 = js(&c, "document.getElementById('pm_velocity_deg').value")
             .await
@@ -308,9 +311,15 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         check_against(&c, &d1).await;
         let path1 = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "d").await;
         assert_ne!(path0, path1, "the open-loop curve was not redrawn");
-        let server_ms = js(&c, "document.body.dataset.serverMs").await;
+        let stats = |k: usize| {
+            let mut v: Vec<f64> = times.iter().map(|t| t[k]).collect();
+            v.sort_by(f64::total_cmp);
+            (v[v.len() / 2], v[v.len() - 1])
+        };
+        let ((tm, tx), (rm, rx), (sm, sx)) = (stats(0), stats(1), stats(2));
         eprintln!(
-            "slider change -> redrawn page (incl. 30 ms debounce), ms: {times:?}; last server time {server_ms} ms"
+            "{LEFT_PRESSES} slider steps, median / max ms: change -> redrawn page (incl. 30 ms debounce) \
+             {tm:.1} / {tx:.1}; request + draw {rm:.1} / {rx:.1}; server design + move {sm:.1} / {sx:.1}"
         );
 
         // Infeasible: the velocity phase margin at the slider's lower end (Home key).
