@@ -91,6 +91,7 @@ fn start(tuner: Arc<dyn Tuner>, tag: &str) -> Server {
     let state = AppState {
         tuner,
         save_dir: dir.clone(),
+        loopback_only: true,
     };
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
@@ -117,9 +118,21 @@ fn http(
     content_type: Option<&str>,
     body: &[u8],
 ) -> (u16, String) {
+    http_host(addr, &addr.to_string(), method, path, content_type, body)
+}
+
+/// [`http`] with an explicit `Host` header.
+fn http_host(
+    addr: SocketAddr,
+    host: &str,
+    method: &str,
+    path: &str,
+    content_type: Option<&str>,
+    body: &[u8],
+) -> (u16, String) {
     let mut stream = std::net::TcpStream::connect(addr).unwrap();
     let mut head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Length: {}\r\n",
+        "{method} {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\nContent-Length: {}\r\n",
         body.len()
     );
     if let Some(ct) = content_type {
@@ -714,4 +727,37 @@ fn cli_refuses_remote_bind_without_the_flag_and_a_missing_folder() {
 
     let (code, err) = beltune_cli(&["serve", "--bind", "localhost"]);
     assert_eq!(code, 2, "clap rejects a non-IP bind address: {err}");
+}
+
+#[test]
+fn foreign_host_names_are_refused_dns_rebinding() {
+    let tuner = counting();
+    let s = start(tuner.clone(), "host");
+    for host in [
+        "evil.example",
+        "evil.example:8080",
+        "127.0.0.1.evil.example",
+        "10.0.0.1:80",
+    ] {
+        for (method, path, ct) in [
+            ("GET", "/", None),
+            ("POST", "/api/save", Some("application/json")),
+        ] {
+            let (status, body) = http_host(s.addr, host, method, path, ct, b"{}");
+            assert_eq!(status, 403, "{host} {path}: {body}");
+            assert!(error_message(status, &body).contains("loopback"));
+        }
+    }
+    for host in [
+        "localhost",
+        "localhost:8080",
+        "127.0.0.1:1",
+        "[::1]:8080",
+        "127.1.2.3",
+    ] {
+        let (status, body) = http_host(s.addr, host, "GET", "/api/info", None, b"");
+        assert_eq!(status, 200, "{host}: {body}");
+    }
+    assert_eq!(tuner.calls.load(Ordering::SeqCst), 0);
+    assert!(!s.dir.join(serve::CONTROLLER_FILE).exists());
 }

@@ -80,6 +80,7 @@ async fn start_server(dir: &Path) -> SocketAddr {
     let state = AppState {
         tuner: Arc::new(LibraryTuner::builtin().unwrap()),
         save_dir: dir.to_path_buf(),
+        loopback_only: true,
     };
     tokio::spawn(serve::serve(listener, state));
     addr

@@ -61,6 +61,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let state = AppState {
         tuner: Arc::new(tuner),
         save_dir,
+        loopback_only: args.bind.is_loopback(),
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)

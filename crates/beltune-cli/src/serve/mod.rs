@@ -19,8 +19,9 @@ pub mod tuner;
 use api::{ApiError, DesignRequest, ErrorBody, InfoResponse, SaveResponse};
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
-use axum::extract::{DefaultBodyLimit, State};
+use axum::extract::{DefaultBodyLimit, Request, State};
 use axum::http::{header, HeaderMap, StatusCode};
+use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
@@ -46,6 +47,10 @@ pub struct AppState {
     pub tuner: Arc<dyn Tuner>,
     /// Folder `controller.toml` is saved into.
     pub save_dir: PathBuf,
+    /// Answer only requests whose `Host` is a loopback name (`localhost`,
+    /// `127.0.0.1`, `[::1]`, any port): a web page from elsewhere that re-binds
+    /// its own domain name to 127.0.0.1 (DNS rebinding) cannot use the API.
+    pub loopback_only: bool,
 }
 
 /// The page and the API, ready for `axum::serve`.
@@ -59,7 +64,37 @@ pub fn router(state: AppState) -> Router {
         .route("/api/save", post(save))
         .fallback(not_found)
         .layer(DefaultBodyLimit::max(api::MAX_BODY_BYTES))
+        .layer(middleware::from_fn_with_state(state.clone(), check_host))
         .with_state(state)
+}
+
+/// `true` for `localhost`, a loopback IP literal, with or without a port.
+pub fn is_loopback_host(host: &str) -> bool {
+    let name = match host.strip_prefix('[') {
+        Some(rest) => rest.split(']').next().unwrap_or(""),
+        None => host.rsplit_once(':').map_or(host, |(h, _)| h),
+    };
+    name.eq_ignore_ascii_case("localhost")
+        || name
+            .parse::<std::net::IpAddr>()
+            .is_ok_and(|ip| ip.is_loopback())
+}
+
+async fn check_host(State(state): State<AppState>, req: Request, next: Next) -> Response {
+    if state.loopback_only {
+        if let Some(host) = req.headers().get(header::HOST) {
+            let host = host.to_str().unwrap_or("");
+            if !is_loopback_host(host) {
+                return error_response(ApiError {
+                    status: 403,
+                    message: format!(
+                        "Host `{host}` is not a loopback name; open the page as http://127.0.0.1:PORT/"
+                    ),
+                });
+            }
+        }
+    }
+    next.run(req).await
 }
 
 /// Serve `router(state)` on an already bound listener until the process ends.
