@@ -55,6 +55,9 @@ pub struct Args {
     /// Cart position at start (the homing result), m.
     #[arg(long, default_value_t = 0.05)]
     pub start_position: f64,
+    /// Fixed PRBS amplitude A_PRBS in N m (values +-A/2) instead of the automatic search.
+    #[arg(long)]
+    pub excitation_amplitude: Option<f64>,
     /// No progress bars or log lines.
     #[arg(long)]
     pub quiet: bool,
@@ -98,30 +101,10 @@ fn load_plant(args: &Args) -> anyhow::Result<Plant> {
     Ok(plant)
 }
 
-/// The data sheet the commissioning may use: what a technician would enter.
-fn datasheet(plant: &Plant, args: &Args) -> anyhow::Result<DataSheet> {
-    let info = plant.info();
-    let (theta_e, i_t, mass, stroke) = match plant {
-        Plant::Physical(p) => (p.theta_e(), p.i_t(), p.m_c(), p.stroke_m),
-        Plant::Linear(l) => (l.two_mass.theta_e, l.two_mass.i_t, l.two_mass.m_c, 0.6),
-    };
-    let (lo, hi) = args.travel_window.unwrap_or((-0.01, stroke - 0.03));
-    Ok(DataSheet {
-        theta_e_kg_m2: theta_e,
-        i_t_m: i_t,
-        moving_mass_kg: mass,
-        origin_m: args.start_position,
-        travel_min_m: lo,
-        travel_max_m: hi,
-        torque_max_nm: info.torque_limit_nm,
-        velocity_max_m_s: 2.5,
-    })
-}
-
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let plant = load_plant(&args)?;
-    let ds = datasheet(&plant, &args)?;
+    let ds = DataSheet::for_plant(&plant, args.start_position, args.travel_window);
     let mut cfg = CommissioningConfig {
         knobs: DesignKnobs {
             prefilter: match args.prefilter {
@@ -142,6 +125,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         cfg.knobs.resonance_suppression_db = v;
     }
     cfg.knobs.filter_attenuation_db = args.filter_attenuation_db;
+    cfg.excitation.fixed_amplitude_nm = args.excitation_amplitude;
     let sim_cfg = SimConfig {
         seed: args.seed,
         initial_cart_position_m: Some(args.start_position),

@@ -1,10 +1,277 @@
-//! `beltune identify` (being written).
+//! `beltune identify`: a two-mass model from a recorded periodic excitation
+//! (CSV): ETFE with Clary's method II and coherence, LM fit of the two-mass
+//! model, optional current-loop dead time. Thesis chapter 3.
+
+use super::util::write_atomic;
+use anyhow::Context;
+use beltune::ident::{
+    estimate_dead_time, etfe, fit::model_magnitude_db, fit_two_mass, read_csv_columns,
+    record::check_uniform_time, DeadTime, EtfeConfig, FitConfig, ModelUnits, TwoMassFit,
+};
+use std::fmt::Write as _;
+use std::path::PathBuf;
 
 /// Arguments of `beltune identify`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// CSV file with a header row.
+    #[arg(long)]
+    pub csv: PathBuf,
+    /// Time column, s.
+    #[arg(long)]
+    pub time: String,
+    /// Input column: torque in N m (or motor current with --current-units).
+    #[arg(long)]
+    pub input: String,
+    /// Output column: motor angle, rad.
+    #[arg(long)]
+    pub output: String,
+    /// Samples per excitation period (default: detected from an exactly periodic input).
+    #[arg(long)]
+    pub period_samples: Option<usize>,
+    /// Leading periods discarded as transient.
+    #[arg(long, default_value_t = 1)]
+    pub skip_periods: usize,
+    /// Known motor-side inertia Theta_e (kg m^2, or A s^2/rad in current units); without it, it is fitted.
+    #[arg(long)]
+    pub inertia: Option<f64>,
+    /// Transmission i_t = r / i_g in m/rad (1 for a rotary two-mass system).
+    #[arg(long, default_value_t = 1.0)]
+    pub transmission: f64,
+    /// Fit Theta_e too (starting from --inertia if given).
+    #[arg(long)]
+    pub free_inertia: bool,
+    /// The input is a motor current in A (torque constant unknown): parameters in current units.
+    #[arg(long)]
+    pub current_units: bool,
+    /// Actual-torque column: estimate the current-loop dead time (3.27) against --input as desired torque.
+    #[arg(long)]
+    pub actual_torque: Option<String>,
+    /// Lowest frequency used, Hz.
+    #[arg(long)]
+    pub min_freq_hz: Option<f64>,
+    /// Highest frequency used, Hz.
+    #[arg(long)]
+    pub max_freq_hz: Option<f64>,
+    /// Lines with a lower magnitude-squared coherence are not fitted.
+    #[arg(long, default_value_t = 0.5)]
+    pub min_coherence: f64,
+    /// Lines whose input power is this many dB below the strongest are "not excited".
+    #[arg(long, default_value_t = -40.0, allow_hyphen_values = true)]
+    pub excitation_floor_db: f64,
+    /// Write the FRF with coherence and line status here (CSV).
+    #[arg(long)]
+    pub frf_csv: Option<PathBuf>,
+    /// Write the fitted model here (JSON; the model file of `beltune design`).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// The model file: flat keys that `beltune design` reads, plus details.
+#[derive(serde::Serialize)]
+struct ModelJson {
+    f_r_hz: f64,
+    f_z_hz: f64,
+    theta_e: f64,
+    m_c: f64,
+    c: f64,
+    d: f64,
+    d_m: f64,
+    d_c: f64,
+    i_t: f64,
+    fit_rms_db: f64,
+    /// Current-loop dead time, s; null when no actual-torque column was given.
+    dead_time_s: Option<f64>,
+    dead_time_samples: Option<usize>,
+    sample_time_s: f64,
+    units: ModelUnits,
+    free_inertia: bool,
+    n_lines: usize,
+    n_periods: usize,
+    uncertainty: Option<beltune::ident::ParamUncertainty>,
+    features: beltune::ident::FrfFeatures,
+}
 
 /// Run the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`beltune identify` is not available yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let mut names = vec![
+        args.time.as_str(),
+        args.input.as_str(),
+        args.output.as_str(),
+    ];
+    if let Some(a) = &args.actual_torque {
+        names.push(a.as_str());
+    }
+    let cols = read_csv_columns(&args.csv, &names)?;
+    beltune::ident::record::check_not_constant(&cols, &args.input)?;
+    let input = cols.column(&args.input).expect("read");
+    let period = match args.period_samples {
+        Some(p) => p,
+        None => detect_period(input).with_context(|| {
+            format!(
+                "{}: cannot detect the period of `{}`; give --period-samples",
+                args.csv.display(),
+                args.input
+            )
+        })?,
+    };
+    let needed = period * (args.skip_periods + 2);
+    if cols.rows() < needed {
+        anyhow::bail!(
+            "{}: too few samples: {} data rows, but {} skipped + 2 averaged periods of {} samples need {}",
+            args.csv.display(),
+            cols.rows(),
+            args.skip_periods,
+            period,
+            needed
+        );
+    }
+    let sampling = check_uniform_time(&cols, &args.time, needed, 0.01)?;
+    let band = match (args.min_freq_hz, args.max_freq_hz) {
+        (None, None) => None,
+        (lo, hi) => Some((lo.unwrap_or(0.0), hi.unwrap_or(f64::MAX))),
+    };
+    let cfg = EtfeConfig {
+        sample_time_s: sampling.sample_time_s,
+        period_samples: period,
+        skip_periods: args.skip_periods,
+        integrator: true,
+        excitation_floor_db: args.excitation_floor_db,
+        min_coherence: args.min_coherence,
+        band_hz: band,
+    };
+    let output = cols.column(&args.output).expect("read");
+    let frf = etfe(input, output, &cfg)?;
+    let fit = fit_two_mass(
+        &frf,
+        &FitConfig {
+            theta_e: args.inertia,
+            free_inertia: args.free_inertia || args.inertia.is_none(),
+            i_t: args.transmission,
+            units: if args.current_units {
+                ModelUnits::Current
+            } else {
+                ModelUnits::Torque
+            },
+            ..Default::default()
+        },
+    )?;
+    let dead_time = match &args.actual_torque {
+        Some(col) => {
+            let actual = etfe(cols.column(col).expect("read"), output, &cfg)?;
+            let max_samples = period / 4;
+            Some(estimate_dead_time(&frf, &actual, fit.f_r_hz, max_samples)?)
+        }
+        None => None,
+    };
+
+    print_summary(&fit, dead_time.as_ref(), frf.n_periods);
+    if let Some(path) = &args.frf_csv {
+        write_atomic(path, frf_csv(&frf, &fit).as_bytes())?;
+    }
+    if let Some(path) = &args.json {
+        let p = fit.params;
+        let json = ModelJson {
+            f_r_hz: fit.f_r_hz,
+            f_z_hz: fit.f_z_hz,
+            theta_e: p.theta_e,
+            m_c: p.m_c,
+            c: p.c,
+            d: p.d,
+            d_m: p.d_m,
+            d_c: p.d_c,
+            i_t: p.i_t,
+            fit_rms_db: fit.fit_rms_db,
+            dead_time_s: dead_time.map(|d| d.seconds),
+            dead_time_samples: dead_time.map(|d| d.samples),
+            sample_time_s: sampling.sample_time_s,
+            units: fit.units,
+            free_inertia: fit.free_inertia,
+            n_lines: fit.n_lines,
+            n_periods: frf.n_periods,
+            uncertainty: fit.uncertainty,
+            features: fit.features,
+        };
+        let mut text = serde_json::to_string_pretty(&json)?;
+        text.push('\n');
+        write_atomic(path, text.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// The smallest `P` (at least 8) with `|x[k + P] - x[k]|` below 1 % of the
+/// signal's range for `k < P` (the first two periods): the period of a
+/// generated periodic excitation.
+fn detect_period(x: &[f64]) -> anyhow::Result<usize> {
+    let lo = x.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = x.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    let tol = 0.01 * (hi - lo);
+    (8..=x.len() / 2)
+        .find(|&p| (0..p).all(|k| (x[k + p] - x[k]).abs() <= tol))
+        .context("the input is not periodic")
+}
+
+fn print_summary(fit: &TwoMassFit, dead_time: Option<&DeadTime>, n_periods: usize) {
+    let p = fit.params;
+    let u = if fit.units == ModelUnits::Current {
+        " (current units: N m read as A)"
+    } else {
+        ""
+    };
+    println!(
+        "two-mass model{u}, {n_periods} periods averaged, {} lines fitted",
+        fit.n_lines
+    );
+    println!(
+        "  f_r = {:.3} Hz, f_z = {:.3} Hz, fit RMS {:.3} dB",
+        fit.f_r_hz, fit.f_z_hz, fit.fit_rms_db
+    );
+    let sig = |f: fn(&beltune::ident::ParamUncertainty) -> f64| {
+        fit.uncertainty
+            .map_or(String::from("?"), |s| format!("{:.3e}", f(&s)))
+    };
+    println!("  theta_e = {:.6e} +- {}", p.theta_e, sig(|s| s.theta_e));
+    println!("  m_c     = {:.6e} +- {}", p.m_c, sig(|s| s.m_c));
+    println!("  c       = {:.6e} +- {}", p.c, sig(|s| s.c));
+    println!("  d_m     = {:.6e} +- {}", p.d_m, sig(|s| s.d_m));
+    println!("  d_c     = {:.6e} +- {}", p.d_c, sig(|s| s.d_c));
+    println!("  i_t     = {:.6e}", p.i_t);
+    if let Some(d) = dead_time {
+        println!("  dead time {} samples = {:.6e} s", d.samples, d.seconds);
+    }
+}
+
+fn frf_csv(frf: &beltune::ident::Frf, fit: &TwoMassFit) -> String {
+    let mut s =
+        String::from("freq_hz,magnitude_db,phase_deg,re,im,coherence,status,model_magnitude_db\n");
+    for i in 0..frf.freq_hz.len() {
+        let g = frf.response[i];
+        let w = frf.omega_rad_s(i);
+        let (mag, model) = if i == 0 {
+            (String::new(), String::new())
+        } else {
+            let m = if g.norm() > 0.0 {
+                format!("{}", frf.magnitude_db(i))
+            } else {
+                String::new()
+            };
+            (
+                m,
+                format!("{}", model_magnitude_db(&fit.params, fit.model, w)),
+            )
+        };
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{}",
+            frf.freq_hz[i],
+            mag,
+            g.arg().to_degrees(),
+            g.re,
+            g.im,
+            frf.coherence[i],
+            frf.line_status[i].label(),
+            model
+        );
+    }
+    s
 }

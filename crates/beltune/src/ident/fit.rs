@@ -123,6 +123,8 @@ pub struct TwoMassFit {
     pub free_inertia: bool,
     /// Unit label.
     pub units: ModelUnits,
+    /// The fitted model structure.
+    pub model: FitModel,
 }
 
 /// Fit (2.42) to the usable lines of `frf` (torque or current -> motor angle).
@@ -213,6 +215,7 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
         n_lines: n,
         free_inertia: free,
         units: cfg.units,
+        model: cfg.model,
     })
 }
 
@@ -263,9 +266,13 @@ pub fn start_values(f: &FrfFeatures, theta_e: Option<f64>, i_t: f64) -> Result<T
     Ok(p)
 }
 
-/// `20 log10 |G(j w; p)|` of (2.42).
-pub fn model_magnitude_db(p: &TwoMassParams, w_rad_s: f64) -> f64 {
-    20.0 * p.tf_rigid_flexible().freq_response(w_rad_s).norm().log10()
+/// `20 log10 |G(j w; p)|` of the fitted model structure.
+pub fn model_magnitude_db(p: &TwoMassParams, model: FitModel, w_rad_s: f64) -> f64 {
+    let g = match model {
+        FitModel::RigidFlexible => p.tf_rigid_flexible(),
+        FitModel::Exact => p.tf_torque_to_motor_angle_undamped_belt(),
+    };
+    20.0 * g.freq_response(w_rad_s).norm().log10()
 }
 
 /// The residuals (3.33) as a `levenberg-marquardt` problem in `q = ln p`.

@@ -6,6 +6,7 @@
 //! - [`etfe`]: (3.7)-(3.15), averaging (Figure 3.7), coherence, log-spaced subset (Figure 3.9)
 //! - [`features`]: resonance peak, antiresonance dip, rigid-body asymptote (start values)
 //! - [`fit`]: Levenberg-Marquardt fit of (2.42), (3.32)-(3.34), with uncertainties
+//! - [`friction`]: constant-velocity runs (3.35)-(3.36) and regression on any motion
 //! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24)
 //! - [`dead_time`]: current-loop dead time (3.25)-(3.30)
 //! - [`record`]: CSV records with validation
@@ -14,6 +15,7 @@ pub mod dead_time;
 pub mod etfe;
 pub mod features;
 pub mod fit;
+pub mod friction;
 pub mod record;
 pub mod strategy;
 
@@ -26,5 +28,9 @@ pub use dead_time::{estimate_dead_time, DeadTime};
 pub use etfe::{etfe, log_spaced_subset, EtfeConfig, Frf, LineStatus};
 pub use features::{frf_features, FrfFeatures};
 pub use fit::{fit_two_mass, FitConfig, FitModel, ModelUnits, ParamUncertainty, TwoMassFit};
+pub use friction::{
+    fit_constant_velocity, fit_viscous_only, identify_from_motion, run_means, ConstantVelocityRun,
+    FrictionFit, MotionFriction, MotionFrictionConfig, THESIS_VELOCITY_SEQUENCE_M_S,
+};
 pub use record::{read_csv_columns, CsvColumns, Sampling};
 pub use strategy::{direct_closed_loop, indirect_closed_loop, open_loop};

@@ -14,7 +14,7 @@ use super::bootstrap::bootstrap_controller;
 use super::motion::{move_to, track, TrackOptions, TrackRecord};
 use super::progress::Progress;
 use super::result::{FrictionResult, IdentifiedModel, Validation};
-use super::runner::Runner;
+use super::runner::{Runner, Sample};
 use super::safety::{SafetyLimits, SafetySupervisor};
 use super::validation::{run_move, MoveResult, MoveSpec};
 use crate::design::{design, ControllerDesign, DesignInput, DesignKnobs, FrictionParams};
@@ -23,7 +23,9 @@ use crate::ident::etfe::{etfe, EtfeConfig, Frf};
 use crate::ident::fit::{fit_two_mass, FitConfig, TwoMassFit};
 use crate::plant::Axis;
 use crate::{Error, Result};
-use beltune_rt::control::{AntiWindup, BeltStretch, CascadeConfig, CascadeGains, Feedforward};
+use beltune_rt::control::{
+    AntiWindup, BeltStretch, CascadeConfig, CascadeController, CascadeGains, Feedforward, Setpoint,
+};
 use beltune_rt::filter::SosCoeffs;
 use beltune_rt::prbs::Prbs;
 use beltune_rt::trajectory::{Limits, State, Trajectory};
@@ -84,6 +86,34 @@ impl DataSheet {
         Ok(())
     }
 
+    /// What a technician enters for a plant: its data-sheet inertia,
+    /// transmission, moving mass (cart plus stated payload), torque limit, and a
+    /// travel window inside the stroke (Table A.8: -10 mm to stroke - 30 mm;
+    /// a linear set without stroke gets 0.6 m). `origin_m` is the homing result,
+    /// `travel_window_m` overrides the window.
+    pub fn for_plant(
+        plant: &crate::model::rigs::Plant,
+        origin_m: f64,
+        travel_window_m: Option<(f64, f64)>,
+    ) -> Self {
+        use crate::model::rigs::Plant;
+        let (theta_e, i_t, mass, stroke) = match plant {
+            Plant::Physical(p) => (p.theta_e(), p.i_t(), p.m_c(), p.stroke_m),
+            Plant::Linear(l) => (l.two_mass.theta_e, l.two_mass.i_t, l.two_mass.m_c, 0.6),
+        };
+        let (lo, hi) = travel_window_m.unwrap_or((-0.01, stroke - 0.03));
+        DataSheet {
+            theta_e_kg_m2: theta_e,
+            i_t_m: i_t,
+            moving_mass_kg: mass,
+            origin_m,
+            travel_min_m: lo,
+            travel_max_m: hi,
+            torque_max_nm: plant.info().torque_limit_nm,
+            velocity_max_m_s: 2.5,
+        }
+    }
+
     /// Rigid-body inertia from the data sheet, `Theta_e + i_t^2 m`, kg m^2.
     pub fn rigid_inertia(&self) -> f64 {
         self.theta_e_kg_m2 + self.i_t_m * self.i_t_m * self.moving_mass_kg
@@ -101,6 +131,8 @@ pub struct ExcitationConfig {
     pub periods: usize,
     /// Leading periods discarded as transient.
     pub skip_periods: usize,
+    /// A fixed amplitude `A_PRBS` in N m instead of the search (expert use).
+    pub fixed_amplitude_nm: Option<f64>,
     /// First amplitude tried, as a fraction of the torque limit.
     pub amplitude_start_fraction: f64,
     /// Factor between successive amplitudes.
@@ -127,12 +159,13 @@ impl Default for ExcitationConfig {
         ExcitationConfig {
             prbs_order: 9,
             clock_period: 16,
-            periods: 4,
+            periods: 3,
             skip_periods: 1,
+            fixed_amplitude_nm: None,
             amplitude_start_fraction: 0.02,
             amplitude_growth: 1.5,
             amplitude_max_fraction: 0.5,
-            amplitude_margin: 3.0,
+            amplitude_margin: 6.0,
             fit_band_min_hz: 3.0,
             moving_fraction: 0.9,
             burst_samples: 1500,
@@ -167,9 +200,9 @@ impl Default for CommissioningConfig {
             excitation: ExcitationConfig::default(),
             t_r_s: 2e-3,
             friction_speeds_m_s: vec![0.1, 0.25, 0.5],
-            friction_run_m: 0.12,
+            friction_run_m: 0.1,
             validation: MoveSpec::default(),
-            following_error_max_m: 0.02,
+            following_error_max_m: 0.05,
         }
     }
 }
@@ -269,7 +302,7 @@ pub fn commission(
     // inertia (the rest is margin for friction, gravity and the loop), at most 20 m/s^2.
     let a_stop = (0.6 * torque_max / j_ds * datasheet.i_t_m).min(20.0);
     let supervisor = SafetySupervisor::new(limits, a_stop)?;
-    let boot = bootstrap_controller(j_ds, ts, torque_max)?;
+    let boot = bootstrap_controller(j_ds, datasheet.i_t_m, ts, torque_max)?;
     let stop_limits = Limits {
         a_max: a_stop,
         a_min: -a_stop,
@@ -302,6 +335,24 @@ pub fn commission(
     };
     let pos_limits = positioning_limits(datasheet);
 
+    // ---- 2a. take the axis: hold it where it is until the integrator carries
+    // the load (a vertical axis sags first), for a first holding torque ----
+    st.start("take axis", 0);
+    let start = st.runner.position_m();
+    let catch_s = 0.4;
+    let rec = hold(st.runner, &boot, catch_s)?;
+    let tail = &rec[rec.len() / 2..];
+    let first_hold = tail.iter().map(|s| s.torque_command_nm).sum::<f64>() / tail.len() as f64;
+    let mut boot = boot;
+    boot.torque_offset_nm = first_hold;
+    st.runner.set_stop_controller(boot);
+    let line = format!(
+        "held at {:.1} mm (sag {:.2} mm) with {first_hold:+.3} N m",
+        st.runner.position_m() * 1e3,
+        (st.runner.position_m() - start) * 1e3
+    );
+    st.finish("take axis", line);
+
     // ---- 2. identification position ----
     let width = datasheet.travel_max_m - datasheet.travel_min_m;
     let id_pos = datasheet.travel_max_m - (0.12 * width).max(0.05);
@@ -327,15 +378,18 @@ pub fn commission(
     // ---- 4. excitation amplitude ----
     let ex = &cfg.excitation;
     st.start("excitation amplitude", 0);
-    let amplitude = find_amplitude(
-        st.runner,
-        &boot_hold,
-        id_pos,
-        &pos_limits,
-        holding,
-        torque_max,
-        ex,
-    )?;
+    let amplitude = match ex.fixed_amplitude_nm {
+        Some(a) => crate::error::require_positive("excitation amplitude [N m]", a)?.min(torque_max),
+        None => find_amplitude(
+            st.runner,
+            &boot_hold,
+            id_pos,
+            &pos_limits,
+            holding,
+            torque_max,
+            ex,
+        )?,
+    };
     let line = format!(
         "A_PRBS = {:.3} N m (+-{:.3} N m around the holding torque)",
         amplitude,
@@ -501,6 +555,7 @@ pub fn commission(
             c_n_per_m: p.c,
         },
         check_following_error: true,
+        static_stretch_m: holding / (p.i_t * p.c),
     };
     let move_samples = ((cfg.validation.settle_s + 1.5) / ts) as u64 * variants.len() as u64;
     st.start("validation moves", move_samples);
@@ -579,6 +634,22 @@ pub fn cascade_from_design(
     c.anti_windup = AntiWindup::ConditionalIntegration;
     c.torque_offset_nm = torque_offset_nm;
     Ok(c)
+}
+
+/// Hold the current position with `ctrl` for `duration_s` (no following-error
+/// check: the load may sag while the integrator takes it).
+fn hold(runner: &mut Runner, ctrl: &CascadeConfig<f64>, duration_s: f64) -> Result<Vec<Sample>> {
+    let ts = runner.info().sample_time_s;
+    let mut c = CascadeController::new(*ctrl)?;
+    let target = runner.motor_angle_rad();
+    c.reset_to(target);
+    let n = (duration_s / ts).ceil() as usize;
+    let mut out = Vec::with_capacity(n);
+    for _ in 0..n {
+        let o = c.step(&Setpoint::hold(target), runner.motor_angle_rad());
+        out.push(runner.step(o.torque_nm, None)?);
+    }
+    Ok(out)
 }
 
 /// Stage 3: the torque that holds the cart against gravity, from a slow run up
@@ -706,7 +777,11 @@ fn friction_runs(
             )?;
             let rec = track(runner, ctrl, &traj, 0.02, opts)?;
             if let Some(p) = constant_velocity_point(&rec, v, Some(f_ring_hz)) {
-                points.push(p);
+                // The torque offset (holding torque) is gravity, not friction (3.35).
+                points.push(ConstantVelocityPoint {
+                    torque_nm: p.torque_nm - ctrl.torque_offset_nm,
+                    ..p
+                });
             }
         }
     }

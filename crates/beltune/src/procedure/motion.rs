@@ -18,6 +18,11 @@ pub struct TrackOptions {
     pub belt_stretch: BeltStretch<f64>,
     /// Check the following error against the supervisor's limit.
     pub check_following_error: bool,
+    /// Static belt stretch under a constant load, m: the cart hangs `F / c`
+    /// behind the motor when a constant force `F` (gravity on a tilted axis)
+    /// acts on it; the motor setpoint leads by this much. `F / c` with
+    /// `F = tau_hold / i_t` from the holding torque and the identified `c`.
+    pub static_stretch_m: f64,
 }
 
 /// A recorded closed-loop run.
@@ -65,7 +70,8 @@ pub fn track(
     let mut ctrl = CascadeController::new(*config)?;
     ctrl.reset_to(runner.motor_angle_rad());
     let conv = SetpointConversion::new(runner.i_t(), opts.belt_stretch)?;
-    let origin = runner.origin_m();
+    // A lead of the motor by the static stretch is an origin shifted back by it.
+    let origin = runner.origin_m() - opts.static_stretch_m;
     let duration = traj.duration_s();
     let n = ((duration + settle_s.max(0.0)) / ts).ceil() as usize;
     let mut rec = TrackRecord {

@@ -118,6 +118,9 @@ pub struct FeedforwardToml {
     pub preview_samples: usize,
     /// Belt-stretch compensation `m_c / c`, s^2.
     pub belt_stretch_s2: f64,
+    /// Static belt stretch under the holding force, `tau_hold / (i_t c)`, m:
+    /// the motor setpoint leads the cart by this much.
+    pub static_stretch_m: f64,
     /// Desired velocity through `G_R` before the velocity loop.
     pub filter_desired_velocity: bool,
 }
@@ -167,6 +170,7 @@ pub fn controller_toml(
             linear_viscous_nm_s_per_rad: friction.linear_viscous,
             preview_samples: (des.input.dead_time_s / des.input.ts_s).round() as usize,
             belt_stretch_s2: model.m_c / model.c,
+            static_stretch_m: friction.holding_torque_nm / (model.i_t * model.c),
             filter_desired_velocity: true,
         },
     };

@@ -36,7 +36,7 @@ impl Default for MoveSpec {
             start_m: 0.0,
             target_m: 0.5,
             limits: table_a8_limits(),
-            settle_s: 0.4,
+            settle_s: 1.0,
         }
     }
 }
