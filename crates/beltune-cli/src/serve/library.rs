@@ -515,6 +515,8 @@ impl LibraryTuner {
                 c_n_per_m: d.input.model.c,
             },
             check_following_error: true,
+            // The simulated plants are horizontal: no holding force, no static stretch.
+            static_stretch_m: 0.0,
         };
         let result = run_move(
             &mut runner,
