@@ -251,6 +251,14 @@ impl LibraryTuner {
                 let drive = rigs::builtin("egc70", None)?.info();
                 let mut two_mass = self.model.params;
                 two_mass.m_c += payload_kg;
+                // THESIS-NOTES: the FRF fit's d_m, d_c contain Coulomb friction seen as
+                // small-signal damping; over a 0.5 m move the axis sees the friction of
+                // Section 3.6. So the linear move plant takes its viscous friction
+                // (translational equivalent on the motor side) and no cart damping.
+                if let Some(f) = self.model.friction {
+                    two_mass.d_m = f.viscous / (two_mass.i_t * two_mass.i_t);
+                    two_mass.d_c = 0.0;
+                }
                 Ok(Plant::Linear(LinearPlant {
                     two_mass,
                     dead_time_s: self.model.dead_time_s,
@@ -451,8 +459,9 @@ pub const MOVE_STOP_DECELERATION_M_S2: f64 = 20.0;
 impl LibraryTuner {
     /// The thesis validation move (0 -> 0.5 m, Table A.8 limits,
     /// [`MoveSpec::default`]) on the simulated plant with `payload_kg`, with the
-    /// nonlinear feedforward and the refinements `beltune commission` validates
-    /// with (filtered desired velocity, dead-time preview, belt-stretch
+    /// nonlinear feedforward (egc70; linear inertia + viscous for the linear
+    /// identified plant, which has no Coulomb friction) and the refinements
+    /// `beltune commission` validates with (filtered desired velocity, dead-time preview, belt-stretch
     /// compensation from the design model). Composed from the library's
     /// [`SimAxis`], [`Runner`] and [`run_move`]; a safety stop is reported as text.
     fn simulate_move(&self, d: &ControllerDesign, payload_kg: f64) -> Result<MoveData, String> {
@@ -504,8 +513,13 @@ impl LibraryTuner {
         )?;
         let ff = &d.feedforward;
         let mut controller = feedback;
-        controller.feedforward =
-            RtFeedforward::nonlinear(ff.m_e_kg_m2, ff.d_v_n_m_s_per_rad, ff.tau_c_n_m);
+        controller.feedforward = match self.move_plant {
+            MovePlant::Egc70 => {
+                RtFeedforward::nonlinear(ff.m_e_kg_m2, ff.d_v_n_m_s_per_rad, ff.tau_c_n_m)
+            }
+            // the linear move plant has no Coulomb friction to compensate
+            MovePlant::Identified => RtFeedforward::linear(ff.m_e_kg_m2, ff.d_v_n_m_s_per_rad),
+        };
         controller.filter_desired_velocity = true;
         controller.feedforward_preview = true;
         let opts = TrackOptions {
