@@ -1,10 +1,140 @@
-//! `beltune design` (being written).
+//! `beltune design`: the cascaded P-PI controller with prefilter and feedforward
+//! from an identified model (thesis chapter 4).
+//!
+//! Knob precedence: defaults (thesis: Butterworth, 60 deg / 80 deg, -10 dB), then
+//! `--dynamics` (one-knob mode), then the explicit expert flags.
+
+use anyhow::Context;
+use beltune::design::{
+    self, ControllerDesign, DesignKnobs, DesignSummary, Dynamics, ModelFile, PrefilterKind,
+};
+use std::path::PathBuf;
 
 /// Arguments of `beltune design`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Identified model: TOML (theta_e, m_c, c, d_m, d_c, i_t, dead_time_s, t_r_s, optional d, viscous,
+    /// coulomb) or the JSON written by `beltune identify`.
+    #[arg(long)]
+    model: PathBuf,
+    /// Prefilter in the velocity loop: butterworth, notch or none.
+    #[arg(long, default_value = "butterworth")]
+    prefilter: String,
+    /// Velocity-loop phase margin in degrees (default 60, or from --dynamics).
+    #[arg(long, allow_negative_numbers = true)]
+    pm_velocity: Option<f64>,
+    /// Position-loop phase margin in degrees (default 80, or from --dynamics).
+    #[arg(long, allow_negative_numbers = true)]
+    pm_position: Option<f64>,
+    /// Open-loop gain at the resonance A_sup in dB (default -10, or from --dynamics).
+    #[arg(long, allow_negative_numbers = true)]
+    resonance_suppression_db: Option<f64>,
+    /// Prefilter gain at the antiresonance in dB (default -3 Butterworth, -6 notch).
+    #[arg(long, allow_negative_numbers = true)]
+    filter_attenuation_db: Option<f64>,
+    /// One-knob mode: conservative, standard, dynamic, or a number in [0, 1].
+    #[arg(long)]
+    dynamics: Option<String>,
+    /// Sampling time of the controller in s.
+    #[arg(long, default_value_t = design::DEFAULT_TS_S)]
+    ts: f64,
+    /// Write the design as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+/// The JSON document: the flat summary keys, the discrete coefficients and the full design.
+#[derive(serde::Serialize)]
+struct JsonOut<'a> {
+    #[serde(flatten)]
+    summary: DesignSummary,
+    discrete: &'a design::DiscreteController,
+    feedforward: &'a design::Feedforward,
+    design: &'a ControllerDesign,
+}
 
 /// Run the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`beltune design` is not available yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let model = ModelFile::load(&args.model)?;
+    let input = model.design_input(args.ts)?;
+    let kind: PrefilterKind = args.prefilter.parse()?;
+    let mut knobs = DesignKnobs {
+        prefilter: kind,
+        ..DesignKnobs::default()
+    };
+    if let Some(d) = &args.dynamics {
+        knobs = d.parse::<Dynamics>()?.knobs(&knobs);
+    }
+    if let Some(v) = args.pm_velocity {
+        knobs.pm_velocity_deg = v;
+    }
+    if let Some(v) = args.pm_position {
+        knobs.pm_position_deg = v;
+    }
+    if let Some(v) = args.resonance_suppression_db {
+        knobs.resonance_suppression_db = v;
+    }
+    knobs.filter_attenuation_db = args.filter_attenuation_db;
+    let d = design::design(&input, &knobs)?;
+    print!("{}", human_summary(&d));
+    if let Some(path) = &args.json {
+        let doc = JsonOut {
+            summary: d.summary(),
+            discrete: &d.discrete,
+            feedforward: &d.feedforward,
+            design: &d,
+        };
+        let text = serde_json::to_string_pretty(&doc).context("serializing the design")?;
+        super::util::write_atomic(path, text.as_bytes())?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn human_summary(d: &ControllerDesign) -> String {
+    let s = d.summary();
+    let filter = match d.prefilter {
+        design::Prefilter::Butterworth { omega_bw_rad_s } => {
+            format!("Butterworth, w_bw = {omega_bw_rad_s:.2} rad/s")
+        }
+        design::Prefilter::Notch { omega_r_rad_s, d_n } => {
+            format!("notch at w_r = {omega_r_rad_s:.2} rad/s, d_n = {d_n:.3}")
+        }
+        design::Prefilter::None => "none".to_string(),
+    };
+    let rule = match d.velocity_rule {
+        design::VelocityRule::ResonanceSuppression => "resonance suppression (4.7) met",
+        design::VelocityRule::MaxIntegralGain => {
+            "phase-limited loop: resonance below A_sup everywhere, K_I maximized"
+        }
+    };
+    format!(
+        "model:      w_r = {:.2} rad/s ({:.2} Hz), w_z = {:.2} rad/s ({:.2} Hz)\n\
+         prefilter:  {filter}\n\
+         velocity:   K_P = {:.5} N m s/rad, K_I = {:.5} N m/rad\n\
+         \x20           w_c = {:.2} rad/s, PM = {:.2} deg, GM = {:.2} dB, |L(j w_r)| = {:.2} dB ({rule})\n\
+         position:   K_PP = {:.4} 1/s, w_c = {:.2} rad/s, PM = {:.2} deg, GM = {:.2} dB\n\
+         feedforward: m_e = {:.4e} kg m^2, d_v = {:.4e} N m s/rad, tau_c = {:.4} N m, K_v = 1\n\
+         discrete:   T_s = {} s, closed-loop pole radius {:.6} (velocity), {:.6} (position)\n",
+        d.omega_r_rad_s,
+        d.omega_r_rad_s / std::f64::consts::TAU,
+        d.omega_z_rad_s,
+        d.omega_z_rad_s / std::f64::consts::TAU,
+        s.k_p,
+        s.k_i,
+        s.omega_c_velocity,
+        s.phase_margin_velocity_deg,
+        s.gain_margin_velocity_db,
+        s.gain_at_resonance_db,
+        s.k_pp,
+        s.omega_c_position,
+        s.phase_margin_position_deg,
+        s.gain_margin_position_db,
+        d.feedforward.m_e_kg_m2,
+        d.feedforward.d_v_n_m_s_per_rad,
+        d.feedforward.tau_c_n_m,
+        s.ts_s,
+        d.discrete_stability.velocity_max_pole_magnitude,
+        d.discrete_stability.position_max_pole_magnitude,
+    )
 }

@@ -21,6 +21,9 @@ use crate::design::{design, ControllerDesign, DesignInput, DesignKnobs, Friction
 use crate::ident::dead_time::{estimate_dead_time, DeadTime};
 use crate::ident::etfe::{etfe, EtfeConfig, Frf};
 use crate::ident::fit::{fit_two_mass, FitConfig, TwoMassFit};
+use crate::ident::friction::{
+    fit_constant_velocity, fit_viscous_only, ConstantVelocityRun, FrictionFit,
+};
 use crate::plant::Axis;
 use crate::{Error, Result};
 use beltune_rt::control::{
@@ -30,7 +33,6 @@ use beltune_rt::filter::SosCoeffs;
 use beltune_rt::prbs::Prbs;
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use std::time::Instant;
-use tmp_friction::{fit_constant_velocity, ConstantVelocityPoint, FrictionFit};
 
 /// What the drive knows before commissioning: data sheets and mounting.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -243,7 +245,7 @@ pub struct Commissioning {
     /// The controller design.
     pub design: ControllerDesign,
     /// Friction points (motor velocity rad/s, torque N m).
-    pub friction_points: Vec<ConstantVelocityPoint>,
+    pub friction_points: Vec<ConstantVelocityRun>,
     /// Friction fit.
     pub friction_fit: FrictionFit,
     /// Friction summary.
@@ -510,13 +512,25 @@ pub fn commission(
     ff_lin_cfg.feedforward = Feedforward::linear(p.rigid_inertia(), 0.0);
     let points = friction_runs(st.runner, &ff_lin_cfg, datasheet, cfg, n_t, fit.f_z_hz)?;
     let t0 = Instant::now();
-    let friction_fit = fit_constant_velocity(&points)?;
+    let mut friction_fit = fit_constant_velocity(&points)?;
+    let linear_fit = fit_viscous_only(&points)?;
+    if friction_fit.coulomb_nm < 0.0 || friction_fit.viscous_nms_per_rad < 0.0 {
+        // A physical friction model has both terms >= 0; a negative Coulomb
+        // term means the runs show none (a purely viscous axis).
+        friction_fit = FrictionFit {
+            coulomb_nm: 0.0,
+            ..linear_fit
+        };
+    }
     st.compute_s += t0.elapsed().as_secs_f64();
+    let torque_rms = (points.iter().map(|r| r.mean_torque_nm.powi(2)).sum::<f64>()
+        / points.len().max(1) as f64)
+        .sqrt();
     let friction = FrictionResult {
-        viscous: friction_fit.viscous_nm_s_per_rad,
+        viscous: friction_fit.viscous_nms_per_rad.max(0.0),
         coulomb: friction_fit.coulomb_nm,
-        linear_viscous: friction_fit.linear_viscous_nm_s_per_rad,
-        relative_residual: friction_fit.relative_residual,
+        linear_viscous: linear_fit.viscous_nms_per_rad.max(0.0),
+        relative_residual: friction_fit.rms_residual_nm / torque_rms.max(f64::MIN_POSITIVE),
         holding_torque_nm: holding,
     };
     let line = format!(
@@ -688,7 +702,7 @@ fn holding_torque(
             needed: 40,
             got: 0,
         })?;
-        torques.push(point.torque_nm);
+        torques.push(point.mean_torque_nm);
     }
     move_to(runner, ctrl, center_m, &positioning_limits(ds), 0.05)?;
     Ok(0.5 * (torques[0] + torques[1]))
@@ -747,7 +761,7 @@ fn friction_runs(
     cfg: &CommissioningConfig,
     preview: usize,
     f_ring_hz: f64,
-) -> Result<Vec<ConstantVelocityPoint>> {
+) -> Result<Vec<ConstantVelocityRun>> {
     let center = 0.5 * (ds.travel_min_m + ds.travel_max_m);
     let half = 0.5 * cfg.friction_run_m;
     let a_run = 10.0;
@@ -778,8 +792,8 @@ fn friction_runs(
             let rec = track(runner, ctrl, &traj, 0.02, opts)?;
             if let Some(p) = constant_velocity_point(&rec, v, Some(f_ring_hz)) {
                 // The torque offset (holding torque) is gravity, not friction (3.35).
-                points.push(ConstantVelocityPoint {
-                    torque_nm: p.torque_nm - ctrl.torque_offset_nm,
+                points.push(ConstantVelocityRun {
+                    mean_torque_nm: p.mean_torque_nm - ctrl.torque_offset_nm,
                     ..p
                 });
             }
@@ -803,7 +817,7 @@ fn constant_velocity_point(
     rec: &TrackRecord,
     v: f64,
     f_ring_hz: Option<f64>,
-) -> Option<ConstantVelocityPoint> {
+) -> Option<ConstantVelocityRun> {
     let plateau: Vec<usize> = (0..rec.samples.len())
         .filter(|&k| (rec.desired_velocity_m_s[k].abs() - v).abs() < 1e-6 * v.max(1.0))
         .collect();
@@ -831,44 +845,8 @@ fn constant_velocity_point(
         .map(|&k| rec.samples[k].torque_command_nm)
         .sum::<f64>()
         / used.len() as f64;
-    Some(ConstantVelocityPoint {
+    Some(ConstantVelocityRun {
         velocity_rad_s,
-        torque_nm,
+        mean_torque_nm: torque_nm,
     })
-}
-
-mod tmp_friction {
-    use crate::Result;
-    #[derive(Clone, Copy, Debug)]
-    pub struct ConstantVelocityPoint {
-        pub velocity_rad_s: f64,
-        pub torque_nm: f64,
-    }
-    #[derive(Clone, Copy, Debug)]
-    pub struct FrictionFit {
-        pub viscous_nm_s_per_rad: f64,
-        pub coulomb_nm: f64,
-        pub linear_viscous_nm_s_per_rad: f64,
-        pub relative_residual: f64,
-    }
-    pub fn fit_constant_velocity(p: &[ConstantVelocityPoint]) -> Result<FrictionFit> {
-        let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for q in p {
-            let s = q.velocity_rad_s.signum();
-            a11 += q.velocity_rad_s * q.velocity_rad_s;
-            a12 += q.velocity_rad_s * s;
-            a22 += 1.0;
-            b1 += q.velocity_rad_s * q.torque_nm;
-            b2 += s * q.torque_nm;
-        }
-        let det = a11 * a22 - a12 * a12;
-        let dv = (b1 * a22 - a12 * b2) / det;
-        let tc = (a11 * b2 - a12 * b1) / det;
-        Ok(FrictionFit {
-            viscous_nm_s_per_rad: dv,
-            coulomb_nm: tc,
-            linear_viscous_nm_s_per_rad: b1 / a11,
-            relative_residual: 0.0,
-        })
-    }
 }

@@ -362,7 +362,11 @@ pub fn build_report(
             .iter()
             .map(|p| p.velocity_rad_s)
             .collect(),
-        torque_nm: run.friction_points.iter().map(|p| p.torque_nm).collect(),
+        torque_nm: run
+            .friction_points
+            .iter()
+            .map(|p| p.mean_torque_nm)
+            .collect(),
         viscous_nm_s_per_rad: run.friction.viscous,
         coulomb_nm: run.friction.coulomb,
     };
