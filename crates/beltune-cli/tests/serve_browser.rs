@@ -5,8 +5,8 @@
 //!
 //! It loads the page, moves the velocity phase-margin slider with the keyboard,
 //! checks that the displayed gains and the plotted curves change and equal what
-//! `beltune::design::design` (the function behind `beltune design`) computes for
-//! the same knobs, selects an infeasible setting and checks the message, recovers,
+//! `beltune::design::design` computes and what the `beltune design` command
+//! prints for the same knobs, selects an infeasible setting and checks the message, recovers,
 //! and saves `controller.toml`. It prints the measured slider-to-redraw times
 //! (reported in the README; not asserted: no wall-clock assertions in tests).
 
@@ -72,6 +72,48 @@ fn egc70_input() -> DesignInput {
         coulomb_n_m: f.coulomb_nm,
     });
     input
+}
+
+/// `input` as a `beltune design --model` TOML file (`{:?}` prints the shortest
+/// representation that parses back to the same f64).
+fn write_model_toml(input: &DesignInput, path: &Path) {
+    let m = input.model;
+    let f = input.friction.unwrap();
+    let text = format!(
+        "theta_e = {:?}\nm_c = {:?}\nc = {:?}\nd = {:?}\nd_m = {:?}\nd_c = {:?}\ni_t = {:?}\n\
+         dead_time_s = {:?}\nt_r_s = {:?}\nviscous = {:?}\ncoulomb = {:?}\n",
+        m.theta_e,
+        m.m_c,
+        m.c,
+        m.d,
+        m.d_m,
+        m.d_c,
+        m.i_t,
+        input.dead_time_s,
+        input.t_r_s,
+        f.viscous_n_m_s_per_rad,
+        f.coulomb_n_m
+    );
+    std::fs::write(path, text).unwrap();
+}
+
+/// Run `beltune design --model MODEL --pm-velocity PM --json OUT`: its JSON (the
+/// summary keys at the top level), or the one-line error on stderr.
+fn beltune_design(model: &Path, pm_velocity_deg: f64, out: &Path) -> Result<Value, String> {
+    let o = Command::new(env!("CARGO_BIN_EXE_beltune"))
+        .arg("design")
+        .arg("--model")
+        .arg(model)
+        .arg("--pm-velocity")
+        .arg(pm_velocity_deg.to_string())
+        .arg("--json")
+        .arg(out)
+        .output()
+        .expect("running beltune design");
+    if !o.status.success() {
+        return Err(String::from_utf8_lossy(&o.stderr).trim_end().to_string());
+    }
+    Ok(serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap())
 }
 
 async fn start_server(dir: &Path) -> SocketAddr {
@@ -267,6 +309,7 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
     let (_driver, c) = start_browser(&profile).await;
 
     let client = c.clone();
+    let root_dir = root.clone();
     let body = tokio::spawn(async move {
         let c = client;
         c.goto(&format!("http://{addr}/")).await.unwrap();
@@ -310,6 +353,29 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         .unwrap();
         assert!(d1.k_p != d0.k_p, "the design did not change");
         check_against(&c, &d1).await;
+        // ... and what `beltune design` prints for the same knobs
+        let model_toml = root_dir.join("egc70-model.toml");
+        write_model_toml(&input, &model_toml);
+        let cli = beltune_design(&model_toml, PM_AFTER_DEG, &root_dir.join("design.json"))
+            .expect("beltune design failed");
+        for (id, key) in [
+            ("k_p", "k_p"),
+            ("k_i", "k_i"),
+            ("k_pp", "k_pp"),
+            ("crossover_velocity", "omega_c_velocity"),
+            ("pm_velocity", "phase_margin_velocity_deg"),
+            ("crossover_position", "omega_c_position"),
+            ("pm_position", "phase_margin_position_deg"),
+            ("gain_at_resonance", "gain_at_resonance_db"),
+        ] {
+            assert_close(
+                &format!("{id} vs beltune design {key}"),
+                number(&c, id).await,
+                cli[key]
+                    .as_f64()
+                    .unwrap_or_else(|| panic!("beltune design JSON lacks {key}")),
+            );
+        }
         let path1 = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "d").await;
         assert_ne!(path0, path1, "the open-loop curve was not redrawn");
         let stats = |k: usize| {
@@ -336,6 +402,8 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         seq = wait_render(&c, seq).await;
         let shown = js(&c, "document.getElementById('error').hidden ? '' : document.getElementById('error').textContent").await;
         assert_eq!(shown.as_str().unwrap(), reason, "the page does not show the library's reason");
+        let cli = beltune_design(&model_toml, INFEASIBLE_PM_VELOCITY_DEG, &root_dir.join("x.json"));
+        assert_eq!(cli.unwrap_err(), format!("error: {reason}"), "beltune design says otherwise");
         // the page still shows the last good design
         check_against(&c, &d1).await;
 
