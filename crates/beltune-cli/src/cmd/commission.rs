@@ -58,6 +58,12 @@ pub struct Args {
     /// Fixed PRBS amplitude A_PRBS in N m (values +-A/2) instead of the automatic search.
     #[arg(long)]
     pub excitation_amplitude: Option<f64>,
+    /// PRBS order n_PRBS (default 9).
+    #[arg(long)]
+    pub prbs_order: Option<u32>,
+    /// PRBS clock period P_PRBS in samples (default 16).
+    #[arg(long)]
+    pub prbs_clock: Option<u32>,
     /// No progress bars or log lines.
     #[arg(long)]
     pub quiet: bool,
@@ -126,6 +132,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     cfg.knobs.filter_attenuation_db = args.filter_attenuation_db;
     cfg.excitation.fixed_amplitude_nm = args.excitation_amplitude;
+    if let Some(n) = args.prbs_order {
+        cfg.excitation.prbs_order = n;
+    }
+    if let Some(p) = args.prbs_clock {
+        cfg.excitation.clock_period = p;
+    }
     let sim_cfg = SimConfig {
         seed: args.seed,
         initial_cart_position_m: Some(args.start_position),

@@ -155,6 +155,140 @@ impl Plant {
     }
 }
 
+/// Derived quantities of a plant at its worst-case position, for display
+/// (`beltune plant show`). Field names carry their units.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct PlantSummary {
+    /// `physical` or `linear`.
+    pub kind: String,
+    /// Resonance `f_r` (2.44) at the worst-case position, Hz.
+    pub f_r_hz: f64,
+    /// Antiresonance `f_z` (2.45) at the worst-case position, Hz.
+    pub f_z_hz: f64,
+    /// `Theta_e`, kg m^2.
+    pub theta_e_kg_m2: f64,
+    /// `m_c`, kg.
+    pub m_c_kg: f64,
+    /// Replacement stiffness `c` (2.26) at the worst-case position, N/m.
+    pub c_n_per_m: f64,
+    /// Replacement belt damping `d` (2.27), N s/m.
+    pub d_n_s_per_m: f64,
+    /// Motor viscous damping (translational equivalent), N s/m.
+    pub d_m_n_s_per_m: f64,
+    /// Cart viscous damping, N s/m.
+    pub d_c_n_s_per_m: f64,
+    /// `i_t = r / i_g`, m/rad.
+    pub i_t_m: f64,
+    /// Inertia ratio `kappa` (2.46).
+    pub kappa: f64,
+    /// Resonance ratio `R = f_r / f_z` (2.47).
+    pub resonance_ratio: f64,
+    /// Rigid-body inertia `Theta_e + i_t^2 m_c`, kg m^2.
+    pub rigid_inertia_kg_m2: f64,
+    /// Worst-case cart position, m.
+    pub worst_case_position_m: f64,
+    /// Friction totals (3.36) seen at the motor.
+    pub friction: FrictionTotals,
+    /// Current-loop dead time, s.
+    pub dead_time_s: f64,
+    /// Torque limit, N m.
+    pub torque_limit_nm: f64,
+    /// Encoder resolution, rad per count.
+    pub motor_rad_per_count: f64,
+    /// Belt travel per encoder count, m.
+    pub belt_travel_per_count_m: f64,
+    /// Sampling time, s.
+    pub sample_time_s: f64,
+    /// Usable stroke, m (physical plants).
+    pub stroke_m: Option<f64>,
+    /// `f_r`, `f_z` and `c` over the stroke (physical plants; thesis Figure 2.9).
+    pub position_sweep: Vec<PositionPoint>,
+    /// The physical parameters (physical plants).
+    pub physical: Option<PhysicalParams>,
+}
+
+/// The linearized model at one cart position.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct PositionPoint {
+    /// Cart position `xi`, m.
+    pub xi_m: f64,
+    /// Resonance, Hz.
+    pub f_r_hz: f64,
+    /// Antiresonance, Hz.
+    pub f_z_hz: f64,
+    /// Replacement stiffness (2.26), N/m.
+    pub c_n_per_m: f64,
+}
+
+impl Plant {
+    /// The derived quantities (worst case, friction, drive data, position sweep).
+    pub fn summary(&self) -> Result<PlantSummary> {
+        let wc = self.worst_case_two_mass()?;
+        let info = self.info();
+        let (kind, position_sweep, physical) = match self {
+            Plant::Physical(p) => {
+                let sweep = (0..=6)
+                    .map(|k| {
+                        let xi = p.stroke_m * k as f64 / 6.0;
+                        p.linearize(xi).map(|t| PositionPoint {
+                            xi_m: xi,
+                            f_r_hz: t.f_r_hz(),
+                            f_z_hz: t.f_z_hz(),
+                            c_n_per_m: t.c,
+                        })
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                ("physical", sweep, Some(p.clone()))
+            }
+            Plant::Linear(_) => ("linear", Vec::new(), None),
+        };
+        Ok(PlantSummary {
+            kind: kind.to_string(),
+            f_r_hz: wc.f_r_hz(),
+            f_z_hz: wc.f_z_hz(),
+            theta_e_kg_m2: wc.theta_e,
+            m_c_kg: wc.m_c,
+            c_n_per_m: wc.c,
+            d_n_s_per_m: wc.d,
+            d_m_n_s_per_m: wc.d_m,
+            d_c_n_s_per_m: wc.d_c,
+            i_t_m: wc.i_t,
+            kappa: wc.inertia_ratio(),
+            resonance_ratio: wc.resonance_ratio(),
+            rigid_inertia_kg_m2: wc.rigid_inertia(),
+            worst_case_position_m: self.worst_case_position_m(),
+            friction: self.friction_totals(),
+            dead_time_s: self.dead_time_s(),
+            torque_limit_nm: info.torque_limit_nm,
+            motor_rad_per_count: info.motor_rad_per_count,
+            belt_travel_per_count_m: info.motor_rad_per_count * wc.i_t,
+            sample_time_s: info.sample_time_s,
+            stroke_m: self.stroke_m(),
+            position_sweep,
+            physical,
+        })
+    }
+
+    /// A physical plant with another payload; an error for a linear set.
+    pub fn with_payload(&self, payload_kg: f64) -> Result<Plant> {
+        match self {
+            Plant::Physical(p) => {
+                let q = PhysicalParams {
+                    payload_kg,
+                    ..p.clone()
+                };
+                q.validate()?;
+                Ok(Plant::Physical(q))
+            }
+            Plant::Linear(_) => Err(Error::invalid(
+                "payload_kg",
+                payload_kg,
+                "a linear simulation set has a fixed moving mass; a payload applies to physical plants only",
+            )),
+        }
+    }
+}
+
 /// The built-in plant `name` (one of [`BUILTIN_NAMES`]). `payload_kg` applies
 /// to `egc70` only (`None`: 11.2 kg); the linear sets are fixed and reject it.
 pub fn builtin(name: &str, payload_kg: Option<f64>) -> Result<Plant> {
@@ -189,11 +323,13 @@ pub fn builtin(name: &str, payload_kg: Option<f64>) -> Result<Plant> {
 /// [`PhysicalParams`], or `kind = "linear"` with those of [`LinearPlant`]
 /// (`[two_mass]` table). Errors name the file and the field.
 pub fn load_toml(path: &Path) -> Result<Plant> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
     let file = path.display().to_string();
+    // `Error::Parse` rather than `Error::Io`: the CLI prints the cause chain,
+    // and `Io` would repeat its source.
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Parse {
+        path: file.clone(),
+        message: format!("cannot read the plant file: {e}"),
+    })?;
     let plant: Plant = toml::from_str(&text).map_err(|e| Error::Parse {
         path: file.clone(),
         message: e.message().to_string()

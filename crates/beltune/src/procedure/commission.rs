@@ -26,10 +26,7 @@ use crate::ident::friction::{
 };
 use crate::plant::Axis;
 use crate::{Error, Result};
-use beltune_rt::control::{
-    AntiWindup, BeltStretch, CascadeConfig, CascadeController, CascadeGains, Feedforward, Setpoint,
-};
-use beltune_rt::filter::SosCoeffs;
+use beltune_rt::control::{BeltStretch, CascadeConfig, CascadeController, Feedforward, Setpoint};
 use beltune_rt::prbs::Prbs;
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use std::time::Instant;
@@ -201,7 +198,7 @@ impl Default for CommissioningConfig {
             knobs: DesignKnobs::default(),
             excitation: ExcitationConfig::default(),
             t_r_s: 2e-3,
-            friction_speeds_m_s: vec![0.1, 0.25, 0.5],
+            friction_speeds_m_s: vec![0.1, 0.25, 0.4],
             friction_run_m: 0.1,
             validation: MoveSpec::default(),
             following_error_max_m: 0.05,
@@ -303,7 +300,9 @@ pub fn commission(
     // Stop deceleration: what 60 % of the torque limit gives on the data-sheet
     // inertia (the rest is margin for friction, gravity and the loop), at most 20 m/s^2.
     let a_stop = (0.6 * torque_max / j_ds * datasheet.i_t_m).min(20.0);
-    let supervisor = SafetySupervisor::new(limits, a_stop)?;
+    // The look-ahead assumes half the deceleration the stop uses: a factor 2
+    // for the dead time, the stop controller's lag and the torque still queued.
+    let supervisor = SafetySupervisor::new(limits, 0.5 * a_stop)?;
     let boot = bootstrap_controller(j_ds, datasheet.i_t_m, ts, torque_max)?;
     let stop_limits = Limits {
         a_max: a_stop,
@@ -341,7 +340,7 @@ pub fn commission(
     // the load (a vertical axis sags first), for a first holding torque ----
     st.start("take axis", 0);
     let start = st.runner.position_m();
-    let catch_s = 0.4;
+    let catch_s = 0.3;
     let rec = hold(st.runner, &boot, catch_s)?;
     let tail = &rec[rec.len() / 2..];
     let first_hold = tail.iter().map(|s| s.torque_command_nm).sum::<f64>() / tail.len() as f64;
@@ -437,6 +436,19 @@ pub fn commission(
         ..FitConfig::default()
     };
     let fit = fit_two_mass(&frf, &fcfg)?;
+    let f_band = ecfg.band_hz.map(|b| b.1).unwrap_or(0.5 / ts);
+    if !(fit.f_z_hz.is_finite()
+        && fit.f_r_hz.is_finite()
+        && fit.f_r_hz < f_band
+        && fit.f_z_hz > 0.0)
+    {
+        return Err(Error::FitFailed {
+            reason: format!(
+                "the fitted model (f_r {:.3e} Hz, f_z {:.3e} Hz) has no resonance inside the measured band up to {:.0} Hz; check the excitation and the data sheet",
+                fit.f_r_hz, fit.f_z_hz, f_band
+            ),
+        });
+    }
     let max_dt = (10e-3 / ts) as usize;
     let dead_time = estimate_dead_time(&frf, &frf_actual, fit.f_r_hz, max_dt)?;
     st.compute_s += t0.elapsed().as_secs_f64();
@@ -636,16 +648,15 @@ pub fn commission(
     })
 }
 
-/// The real-time cascade configuration for a design (no feedforward yet).
+/// The real-time cascade for a design, without feedforward (the validation
+/// adds each variant), with a constant torque offset.
 pub fn cascade_from_design(
     des: &ControllerDesign,
     torque_max_nm: f64,
     torque_offset_nm: f64,
 ) -> Result<CascadeConfig<f64>> {
-    let gains = CascadeGains::new(des.k_pp, des.k_p, des.k_i);
-    let mut c = CascadeConfig::new(gains, des.input.ts_s, des.input.t_r_s, torque_max_nm)?;
-    c.prefilter = [des.discrete.prefilter, SosCoeffs::IDENTITY];
-    c.anti_windup = AntiWindup::ConditionalIntegration;
+    let mut c = des.cascade_config(torque_max_nm)?;
+    c.feedforward = Feedforward::none();
     c.torque_offset_nm = torque_offset_nm;
     Ok(c)
 }
@@ -780,7 +791,7 @@ fn friction_runs(
                 v_min: -v,
                 a_max: a_run,
                 a_min: -a_run,
-                j_max: 10.0 * a_run,
+                j_max: 20.0 * a_run,
                 position_min: ds.travel_min_m,
                 position_max: ds.travel_max_m,
             };

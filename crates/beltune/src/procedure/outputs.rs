@@ -404,7 +404,13 @@ pub fn build_report(
                 label.to_string(),
                 format!("{:.3} mm", m.summary.max_tracking_error_m * 1e3),
                 format!("{:.1} um", m.summary.static_error_m * 1e6),
-                format!("{:.3} s", m.summary.settling_time_s),
+                match m.summary.settling_time_s {
+                    Some(t) => format!("{t:.3} s"),
+                    None => format!(
+                        "not within {:.0} um",
+                        super::validation::SETTLING_BAND_M * 1e6
+                    ),
+                },
             ]
         })
         .collect();

@@ -60,8 +60,9 @@ pub struct MoveSummary {
     pub max_tracking_error_m: f64,
     /// Mean `|xi_d - xi|` over the last 100 ms of the record, m.
     pub static_error_m: f64,
-    /// Time from the end of the trajectory until the error stays within the settling band, s.
-    pub settling_time_s: f64,
+    /// Time from the end of the trajectory until the error stays within the
+    /// settling band, s; `None` (JSON `null`) if it never settles within the record.
+    pub settling_time_s: Option<f64>,
     /// Largest motor-side error `|xi_d - i_t phi_m|`, m.
     pub max_motor_error_m: f64,
     /// Largest torque command magnitude, N m.

@@ -110,9 +110,9 @@ pub fn summarize(record: TrackRecord) -> Result<MoveResult> {
     // Last sample outside the band; settled from the next one on.
     let last_out = judged.iter().rposition(|e| e.abs() > SETTLING_BAND_M);
     let settling_time_s = match last_out {
-        None => 0.0,
-        Some(i) if i + 1 >= n => f64::INFINITY,
-        Some(i) => (record.time_s[i + 1] - end).max(0.0),
+        None => Some(0.0),
+        Some(i) if i + 1 >= n => None,
+        Some(i) => Some((record.time_s[i + 1] - end).max(0.0)),
     };
     let summary = MoveSummary {
         max_tracking_error_m: max_abs(judged),

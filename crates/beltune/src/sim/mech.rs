@@ -52,8 +52,10 @@ fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
 }
 
 impl<const N: usize, const S: usize> Mech<N, S> {
-    /// Smooth accelerations (everything but Coulomb friction).
-    #[inline(always)]
+    /// Smooth accelerations (everything but Coulomb friction), from the
+    /// segment springs directly (reference form; the integrator uses the
+    /// assembled matrices of [`Self::assemble`], which are equal).
+    #[cfg(test)]
     pub fn accel(&self, q: &[f64; N], v: &[f64; N], u: f64) -> [f64; N] {
         let mut f = [0.0; N];
         for i in 0..N {
@@ -71,11 +73,39 @@ impl<const N: usize, const S: usize> Mech<N, S> {
         f
     }
 
+    /// `M^-1 K`, `M^-1 (D + V)` and `M^-1 (B u + f_const)` for the current
+    /// segment coefficients: the accelerations become two small mat-vecs.
+    #[inline(always)]
+    fn assemble(&self, u: f64) -> Assembled<N> {
+        let mut kq = [[0.0; N]; N];
+        let mut kv = [[0.0; N]; N];
+        for i in 0..N {
+            for j in 0..N {
+                let mut k = 0.0;
+                let mut d = 0.0;
+                for s in 0..S {
+                    let gg = self.g[s][i] * self.g[s][j];
+                    k += self.c[s] * gg;
+                    d += self.d[s] * gg;
+                }
+                kq[i][j] = k * self.inv_mass[i];
+                kv[i][j] = d * self.inv_mass[i];
+            }
+            kv[i][i] += self.viscous[i] * self.inv_mass[i];
+        }
+        let mut f = [0.0; N];
+        for i in 0..N {
+            f[i] = (self.input[i] * u + self.constant[i]) * self.inv_mass[i];
+        }
+        Assembled { kq, kv, f }
+    }
+
     /// One step of length `h` with constant input `u`.
     #[inline]
     pub fn step(&mut self, u: f64, h: f64) {
+        let asm = self.assemble(u);
         let (q0, v0) = (self.q, self.v);
-        let a1 = self.accel(&q0, &v0, u);
+        let a1 = asm.accel(&q0, &v0);
         let mut q = [0.0; N];
         let mut v = [0.0; N];
         for i in 0..N {
@@ -83,19 +113,19 @@ impl<const N: usize, const S: usize> Mech<N, S> {
             v[i] = v0[i] + 0.5 * h * a1[i];
         }
         let v2 = v;
-        let a2 = self.accel(&q, &v2, u);
+        let a2 = asm.accel(&q, &v2);
         for i in 0..N {
             q[i] = q0[i] + 0.5 * h * v2[i];
             v[i] = v0[i] + 0.5 * h * a2[i];
         }
         let v3 = v;
-        let a3 = self.accel(&q, &v3, u);
+        let a3 = asm.accel(&q, &v3);
         for i in 0..N {
             q[i] = q0[i] + h * v3[i];
             v[i] = v0[i] + h * a3[i];
         }
         let v4 = v;
-        let a4 = self.accel(&q, &v4, u);
+        let a4 = asm.accel(&q, &v4);
         for i in 0..N {
             self.q[i] = q0[i] + h / 6.0 * (v0[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]);
             self.v[i] = v0[i] + h / 6.0 * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i]);
@@ -143,5 +173,58 @@ impl<const N: usize, const S: usize> Mech<N, S> {
             dmax = dmax.max(ds);
         }
         (kmax.sqrt(), dmax)
+    }
+}
+
+/// The assembled linear part of one step.
+struct Assembled<const N: usize> {
+    kq: [[f64; N]; N],
+    kv: [[f64; N]; N],
+    f: [f64; N],
+}
+
+impl<const N: usize> Assembled<N> {
+    #[inline(always)]
+    fn accel(&self, q: &[f64; N], v: &[f64; N]) -> [f64; N] {
+        let mut a = self.f;
+        for i in 0..N {
+            a[i] -= dot(&self.kq[i], q) + dot(&self.kv[i], v);
+        }
+        a
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The assembled matrices give the accelerations of the spring form.
+    #[test]
+    fn assembled_equals_spring_form() {
+        let m = Mech::<3, 3> {
+            q: [0.0; 3],
+            v: [0.0; 3],
+            inv_mass: [1.0 / 7e-5, 1.0 / 2e-5, 1.0 / 12.0],
+            viscous: [1e-3, 2e-4, 20.0],
+            coulomb: [0.0; 3],
+            input: [1.0, 0.0, 0.0],
+            constant: [0.0, 0.0, -3.0],
+            g: [
+                [0.0124, 0.0, -1.0],
+                [0.0, 0.0124, -1.0],
+                [0.0124, -0.0124, 0.0],
+            ],
+            c: [3e5, 4e5, 1e5],
+            d: [30.0, 40.0, 10.0],
+        };
+        let (q, v, u) = ([40.0, 41.0, 0.5], [3.0, -2.0, 0.04], 0.7);
+        let a = m.accel(&q, &v, u);
+        let b = m.assemble(u).accel(&q, &v);
+        for i in 0..3 {
+            assert!(
+                (a[i] - b[i]).abs() <= 1e-9 * a[i].abs().max(1.0),
+                "{a:?} {b:?}"
+            );
+        }
     }
 }

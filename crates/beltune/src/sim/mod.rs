@@ -283,6 +283,16 @@ impl SimAxis {
         }
     }
 
+    /// Whether the cart is outside the usable stroke `[0, stroke]` (a real
+    /// axis would hit its end stop; the simulation has none and keeps the belt
+    /// stiffness of the nearest stroke end). Always `false` for a linear set.
+    pub fn cart_outside_stroke(&self) -> bool {
+        match self.plant.stroke_m() {
+            Some(stroke) => !(0.0..=stroke).contains(&self.cart_position_m()),
+            None => false,
+        }
+    }
+
     /// The full three-mass state (2.18), if the three-mass model runs.
     pub fn three_mass_state(&self) -> Option<ThreeMassState> {
         match &self.dynamics {
@@ -376,7 +386,10 @@ impl Axis for SimAxis {
         } else {
             let out = self.delay[self.delay_pos];
             self.delay[self.delay_pos] = sat;
-            self.delay_pos = (self.delay_pos + 1) % self.delay.len();
+            self.delay_pos += 1;
+            if self.delay_pos == self.delay.len() {
+                self.delay_pos = 0;
+            }
             out
         };
         self.applied_torque_nm = tau;
@@ -388,16 +401,28 @@ impl Axis for SimAxis {
         } else {
             0.0
         };
-        let counts = ((self.motor_angle_rad() - self.phi_m_zero_rad)
-            / self.info.motor_rad_per_count)
-            .floor();
-        let cart = (self.cart_position_m() / self.config.cart_encoder_resolution_m).floor()
+        let counts = floor_i64(
+            (self.motor_angle_rad() - self.phi_m_zero_rad) / self.info.motor_rad_per_count,
+        );
+        let cart = floor_i64(self.cart_position_m() / self.config.cart_encoder_resolution_m) as f64
             * self.config.cart_encoder_resolution_m;
         Measurement {
-            motor_counts: counts as i64,
+            motor_counts: counts,
             torque_actual_nm: tau + noise,
             cart_position_m: Some(cart),
         }
+    }
+}
+
+/// `floor(x)` as an integer without a libm call (x86-64 without SSE4.1 has no
+/// floor instruction); saturates like `as` for huge values.
+#[inline(always)]
+fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x {
+        t - 1
+    } else {
+        t
     }
 }
 
@@ -431,11 +456,18 @@ fn three_mass_mech(p: &PhysicalParams, xi_m: f64) -> Mech<3, 3> {
     m
 }
 
+/// Segment stiffness/damping at the current cart position: (2.10) as in
+/// [`PhysicalParams::belt_segments`], written out for speed (two divisions).
 #[inline]
 fn set_three_mass_segments(m: &mut Mech<3, 3>, p: &PhysicalParams) {
-    let s = p.belt_segments(m.q[2]);
-    m.c = [s.c_1_n_per_m, s.c_2_n_per_m, s.c_3_n_per_m];
-    m.d = [s.d_1_n_s_per_m, s.d_2_n_s_per_m, s.d_3_n_s_per_m];
+    let xi = m.q[2].clamp(0.0, p.stroke_m);
+    let half = 0.5 * p.cart_belt_span_m;
+    let le = p.end_compliance_length_m;
+    let inv1 = 1.0 / (p.l_xi_m + xi - half + le);
+    let inv2 = 1.0 / (p.pulley_distance_m - p.l_xi_m - xi - half + le);
+    let inv3 = 1.0 / (p.pulley_distance_m + le);
+    m.c = [p.c_b_n * inv1, p.c_b_n * inv2, p.c_b_n * inv3];
+    m.d = [p.d_b_n_s * inv1, p.d_b_n_s * inv2, p.d_b_n_s * inv3];
 }
 
 /// Two-mass model (2.30), `q = [phi_m, xi]`, one replacement spring (2.26)/(2.27)
@@ -464,11 +496,18 @@ fn two_mass_mech(p: &PhysicalParams, xi_m: f64) -> Mech<2, 1> {
     m
 }
 
+/// (2.26)/(2.27) at the current cart position, written out for speed:
+/// `c = c_b (1/e_1 + 1/(e_2 + e_3))`, the same for `d` with `d_b`.
 #[inline]
 fn set_two_mass_segments(m: &mut Mech<2, 1>, p: &PhysicalParams) {
-    let s = p.belt_segments(m.q[1]);
-    m.c = [s.replacement_stiffness_n_per_m()];
-    m.d = [s.replacement_damping_n_s_per_m()];
+    let xi = m.q[1].clamp(0.0, p.stroke_m);
+    let half = 0.5 * p.cart_belt_span_m;
+    let le = p.end_compliance_length_m;
+    let e1 = p.l_xi_m + xi - half + le;
+    let e23 = (p.pulley_distance_m - p.l_xi_m - xi - half + le) + (p.pulley_distance_m + le);
+    let k = 1.0 / e1 + 1.0 / e23;
+    m.c = [p.c_b_n * k];
+    m.d = [p.d_b_n_s * k];
 }
 
 #[cfg(test)]

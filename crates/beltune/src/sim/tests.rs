@@ -159,6 +159,69 @@ fn three_mass_simulation_frf_matches_its_linearization() {
     });
 }
 
+/// The same for the nonlinear two-mass model (2.30) against the transfer
+/// function (2.38) of `PhysicalParams::linearize` (Coulomb friction off).
+#[test]
+fn two_mass_simulation_frf_matches_2_38() {
+    let p = PhysicalParams {
+        tau_c_motor_nm: 0.0,
+        f_c_cart_n: 0.0,
+        tau_c_end_pulley_nm: 0.0,
+        ..egc70_params(0.0)
+    };
+    let xi = 0.5;
+    let cfg = SimConfig {
+        torque_noise_nm: 0.0,
+        initial_cart_position_m: Some(xi),
+        model: SimModel::TwoMass,
+        ..SimConfig::default()
+    };
+    let plant = Plant::Physical(p.clone());
+    let mut axis = SimAxis::new(&plant, cfg).unwrap();
+    let (td, ts) = (axis.dead_time_s(), axis.info().sample_time_s);
+    let sim = simulated_frf(&mut axis, 0.01, 8, 2);
+    assert!(
+        (axis.cart_position_m() - xi).abs() < 0.02,
+        "cart drifted to {}",
+        axis.cart_position_m()
+    );
+    let g = p.linearize(xi).unwrap().tf_torque_to_motor_angle();
+    assert_frf_close("egc70 two-mass", &sim, |w| {
+        expected(g.freq_response(w), w, td, ts)
+    });
+}
+
+/// The simulator's fast segment updates equal (2.10)/(2.26)/(2.27).
+#[test]
+fn fast_segment_updates_equal_the_model() {
+    let p = egc70_params(4.0);
+    for k in 0..=20 {
+        let xi = -0.05 + 0.7 * k as f64 / 20.0; // also outside the stroke (clamped)
+        let seg = p.belt_segments(xi);
+        let mut m3 = three_mass_mech(&p, 0.3);
+        m3.q[2] = xi;
+        set_three_mass_segments(&mut m3, &p);
+        let want3 = [
+            (seg.c_1_n_per_m, m3.c[0]),
+            (seg.c_2_n_per_m, m3.c[1]),
+            (seg.c_3_n_per_m, m3.c[2]),
+            (seg.d_1_n_s_per_m, m3.d[0]),
+            (seg.d_2_n_s_per_m, m3.d[1]),
+            (seg.d_3_n_s_per_m, m3.d[2]),
+        ];
+        let mut m2 = two_mass_mech(&p, 0.3);
+        m2.q[1] = xi;
+        set_two_mass_segments(&mut m2, &p);
+        let want2 = [
+            (seg.replacement_stiffness_n_per_m(), m2.c[0]),
+            (seg.replacement_damping_n_s_per_m(), m2.d[0]),
+        ];
+        for (a, b) in want3.iter().chain(want2.iter()) {
+            assert!((a - b).abs() <= 1e-12 * a.abs(), "xi {xi}: {a} vs {b}");
+        }
+    }
+}
+
 /// The generalized form the simulator integrates is (2.20): compare the
 /// accelerations with `ThreeMass::derivative` at seeded random states
 /// (Coulomb friction off: the simulator treats it in the stick-slip step).
@@ -557,6 +620,12 @@ fn invalid_configurations_are_errors() {
     let mut axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
     assert!(axis.set_cart_position(-0.1).is_err());
     assert!(axis.set_cart_position(0.6).is_ok());
+    assert!(!axis.cart_outside_stroke());
+    // pushing beyond the end of the stroke is reported, not a panic
+    run_constant(&mut axis, 1.0, 0.05);
+    assert!(axis.cart_outside_stroke());
+    assert!(axis.cart_position_m().is_finite());
+    axis.set_cart_position(0.6).unwrap();
     assert_eq!(
         axis.linearized_truth(),
         plant.worst_case_two_mass().unwrap()

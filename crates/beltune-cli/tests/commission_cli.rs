@@ -1,0 +1,181 @@
+//! Issue 6 through the command line: outputs are complete and atomic, a safety
+//! stop leaves nothing behind, and the report renders in headless Chromium
+//! with every plot present and non-empty.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn beltune() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_beltune"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("beltune-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    match std::fs::read_dir(dir) {
+        Ok(rd) => rd
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect(),
+        Err(_) => Vec::new(),
+    }
+}
+
+/// Figures the report must show (ids in `report::html`).
+const FIGURES: [&str; 6] = [
+    "frf",
+    "controller",
+    "open-loop-0",
+    "open-loop-1",
+    "friction",
+    "moves",
+];
+
+#[test]
+fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
+    let dir = temp_dir("commission");
+    let out = dir.join("out");
+    let o = beltune()
+        .args(["commission", "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut names = files_in(&out);
+    names.sort();
+    assert_eq!(
+        names,
+        ["commissioning.json", "controller.toml", "report.html"]
+    );
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("commissioning.json")).unwrap())
+            .unwrap();
+    for key in [
+        "f_r_hz",
+        "f_z_hz",
+        "theta_e",
+        "m_c",
+        "c",
+        "d_m",
+        "d_c",
+        "dead_time_s",
+        "fit_rms_db",
+    ] {
+        assert!(json["identified"][key].is_number(), "identified.{key}");
+    }
+    for key in ["viscous", "coulomb"] {
+        assert!(json["friction"][key].is_number(), "friction.{key}");
+    }
+    for key in [
+        "k_p",
+        "k_i",
+        "k_pp",
+        "phase_margin_velocity_deg",
+        "phase_margin_position_deg",
+    ] {
+        assert!(json["controller"][key].is_number(), "controller.{key}");
+    }
+    for variant in ["none", "linear", "nonlinear"] {
+        let v = &json["validation"][variant];
+        assert!(v["max_tracking_error_m"].is_number(), "{variant}");
+        assert!(v["static_error_m"].is_number(), "{variant}");
+        // null means "did not settle within the record"; the key must be there
+        assert!(v.get("settling_time_s").is_some(), "{variant}");
+    }
+    assert!(json["validation"]["nonlinear"]["settling_time_s"].is_number());
+    assert!(json["experiment_time_s"].as_f64().unwrap() > 0.0);
+    assert!(json["truth"]["f_r_hz"].is_number());
+    let toml_text = std::fs::read_to_string(out.join("controller.toml")).unwrap();
+    let toml: toml::Table = toml::from_str(&toml_text).unwrap();
+    assert!(toml["gains"]["k_p_nm_s_per_rad"].as_float().unwrap() > 0.0);
+    assert_eq!(toml["prefilter"]["sos"].as_array().unwrap().len(), 5);
+
+    // The report in a real browser.
+    let html = out.join("report.html");
+    let profile = dir.join("chromium-profile");
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    rt.block_on(async {
+        let (client, _driver) = common::headless_chromium(&profile).await;
+        client
+            .goto(&format!("file://{}", html.display()))
+            .await
+            .unwrap();
+        let title = client.title().await.unwrap();
+        assert!(title.contains("beltune commissioning report"), "{title}");
+        for id in FIGURES {
+            // Each figure holds one SVG with drawn content and a non-zero rendered size.
+            let script = format!(
+                "const f = document.getElementById('{id}'); if (!f) return null; \
+                 const s = f.querySelector('svg'); if (!s) return null; \
+                 const r = s.getBoundingClientRect(); \
+                 return [r.width, r.height, s.querySelectorAll('polyline, path, circle, line').length];"
+            );
+            let v = client.execute(&script, vec![]).await.unwrap();
+            let a = v.as_array().unwrap_or_else(|| panic!("figure {id} missing"));
+            let (w, h, n) = (a[0].as_f64().unwrap(), a[1].as_f64().unwrap(), a[2].as_u64().unwrap());
+            assert!(w > 100.0 && h > 100.0, "figure {id} rendered {w} x {h}");
+            assert!(n > 5, "figure {id} has {n} drawn elements");
+        }
+        client.close().await.unwrap();
+    });
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn safety_stop_exits_non_zero_and_writes_nothing() {
+    let dir = temp_dir("safety");
+    let out = dir.join("out");
+    let o = beltune()
+        .args([
+            "commission",
+            "--plant",
+            "sim-b",
+            "--excitation-amplitude",
+            "1.5",
+            "--prbs-order",
+            "7",
+            "--prbs-clock",
+            "512",
+            "--travel-window",
+            "0.0,0.12",
+            "--start-position",
+            "0.05",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("safety stop") && err.contains("travel window"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
+    assert!(
+        files_in(&out).is_empty(),
+        "left behind: {:?}",
+        files_in(&out)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn unknown_plant_is_one_clear_line() {
+    let o = beltune()
+        .args(["commission", "--plant", "no-such-axis", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no-such-axis"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1);
+}

@@ -1,0 +1,166 @@
+//! Issue 6: the one-command self-commissioning on the simulated EGC-70 axis.
+//!
+//! Reference values: thesis chapter 5 (0 -> 500 mm move with nonlinear
+//! feedforward: dynamic error below 1 mm, static error below 100 um) and the
+//! simulator's own linearization at the identification position (truth).
+
+use beltune::model::rigs::{self, Plant};
+use beltune::procedure::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
+use beltune::procedure::NoProgress;
+use beltune::sim::{SimAxis, SimConfig};
+use beltune::Error;
+
+/// Issue 6: identified resonance and antiresonance within 2 % of the truth.
+const FREQUENCY_TOLERANCE: f64 = 0.02;
+/// Thesis chapter 5: maximum cart tracking error with nonlinear feedforward.
+const MAX_TRACKING_ERROR_M: f64 = 1e-3;
+/// Thesis chapter 5: static positioning error.
+const STATIC_ERROR_M: f64 = 100e-6;
+/// Issue 6 aims for under 20 s of axis time; a regression guard with 10 % slack.
+const EXPERIMENT_TIME_GUARD_S: f64 = 22.0;
+/// Issue 6: computation below 5 % of the axis busy time (in a release build;
+/// the test profile is optimized too). Not a wall-clock test of the machine:
+/// it checks that no stage computes for seconds.
+const COMPUTE_FRACTION: f64 = 0.05;
+
+fn run(payload_kg: Option<f64>, tilt_deg: Option<f64>) -> (Plant, Commissioning) {
+    let mut plant = rigs::builtin("egc70", payload_kg).unwrap();
+    if let (Some(t), Plant::Physical(p)) = (tilt_deg, &mut plant) {
+        p.tilt_rad = t.to_radians();
+    }
+    let start = 0.05;
+    let mut axis = SimAxis::new(
+        &plant,
+        SimConfig {
+            seed: 1,
+            initial_cart_position_m: Some(start),
+            ..SimConfig::default()
+        },
+    )
+    .unwrap();
+    let ds = DataSheet::for_plant(&plant, start, None);
+    let run = commission(
+        &mut axis,
+        &ds,
+        &CommissioningConfig::default(),
+        &mut NoProgress,
+    )
+    .unwrap_or_else(|e| panic!("commissioning failed: {e}"));
+    (plant, run)
+}
+
+fn assert_validation_meets_thesis(run: &Commissioning) {
+    let nl = &run.validation.nonlinear;
+    assert!(
+        nl.max_tracking_error_m < MAX_TRACKING_ERROR_M,
+        "max cart error {:.3} mm",
+        nl.max_tracking_error_m * 1e3
+    );
+    assert!(
+        nl.static_error_m < STATIC_ERROR_M,
+        "static error {:.1} um",
+        nl.static_error_m * 1e6
+    );
+}
+
+#[test]
+fn egc70_with_payload_identifies_within_2_percent_and_tracks_like_the_thesis() {
+    let (plant, run) = run(None, None);
+    let truth = plant.linearize(run.identification_position_m).unwrap();
+    let rel = |a: f64, b: f64| (a - b).abs() / b;
+    assert!(
+        rel(run.identified.f_r_hz, truth.f_r_hz()) < FREQUENCY_TOLERANCE,
+        "f_r {} vs {}",
+        run.identified.f_r_hz,
+        truth.f_r_hz()
+    );
+    assert!(
+        rel(run.identified.f_z_hz, truth.f_z_hz()) < FREQUENCY_TOLERANCE,
+        "f_z {} vs {}",
+        run.identified.f_z_hz,
+        truth.f_z_hz()
+    );
+    assert!((run.identified.dead_time_s - plant.dead_time_s()).abs() <= 1e-4 + 1e-12);
+    assert_validation_meets_thesis(&run);
+    let v = &run.validation;
+    assert!(
+        v.nonlinear.max_tracking_error_m < v.linear.max_tracking_error_m
+            && v.linear.max_tracking_error_m < v.none.max_tracking_error_m,
+        "expected nonlinear < linear < none: {:?}",
+        v
+    );
+    assert!(
+        run.experiment_time_s < EXPERIMENT_TIME_GUARD_S,
+        "{}",
+        run.experiment_time_s
+    );
+    assert!(run.computation_time_s < COMPUTE_FRACTION * run.experiment_time_s);
+    // the design met its own conditions
+    assert!((run.design.velocity_margins.phase_margin_deg - 60.0).abs() < 0.01);
+    assert!((run.design.position_margins.phase_margin_deg - 80.0).abs() < 0.01);
+}
+
+#[test]
+fn egc70_without_payload_meets_the_same_limits() {
+    let (_, run) = run(Some(0.0), None);
+    assert_validation_meets_thesis(&run);
+}
+
+#[test]
+fn egc70_tilted_30_degrees_meets_the_same_limits() {
+    let (plant, run) = run(None, Some(30.0));
+    // holding torque = i_t m g sin(alpha) within the friction (Coulomb) band
+    let Plant::Physical(p) = &plant else {
+        unreachable!()
+    };
+    let expected = p.i_t() * p.m_c() * 9.81 * 30f64.to_radians().sin();
+    assert!(
+        (run.holding_torque_nm - expected).abs() < plant.friction_totals().coulomb_nm,
+        "holding {} vs {}",
+        run.holding_torque_nm,
+        expected
+    );
+    assert_validation_meets_thesis(&run);
+}
+
+#[test]
+fn egc70_vertical_meets_the_same_limits() {
+    let (_, run) = run(None, Some(90.0));
+    assert_validation_meets_thesis(&run);
+}
+
+/// A light cart excited with a generous fixed amplitude in a narrow window:
+/// the supervisor must stop it inside the window with a clear message.
+#[test]
+fn excitation_that_would_leave_the_travel_window_is_stopped_inside_it() {
+    let plant = rigs::builtin("sim-b", None).unwrap();
+    let start = 0.05;
+    let mut axis = SimAxis::new(
+        &plant,
+        SimConfig {
+            initial_cart_position_m: Some(start),
+            ..SimConfig::default()
+        },
+    )
+    .unwrap();
+    let window = (0.0, 0.12);
+    let ds = DataSheet::for_plant(&plant, start, Some(window));
+    let mut cfg = CommissioningConfig::default();
+    cfg.excitation.fixed_amplitude_nm = Some(1.5);
+    // a slow PRBS (long clock period, as the thesis' PRBS^7_128 and slower)
+    // moves the cart in long strokes
+    cfg.excitation.prbs_order = 7;
+    cfg.excitation.clock_period = 512;
+    let err = commission(&mut axis, &ds, &cfg, &mut NoProgress).unwrap_err();
+    let Error::SafetyStop { reason } = &err else {
+        panic!("expected a safety stop, got {err}");
+    };
+    assert!(reason.contains("travel window"), "{reason}");
+    let x = axis.cart_position_m();
+    assert!(x > window.0 && x < window.1, "cart at {x} m");
+    assert!(
+        axis.cart_velocity_m_s().abs() < 1e-2,
+        "not at rest: {} m/s",
+        axis.cart_velocity_m_s()
+    );
+}
