@@ -560,7 +560,7 @@ fn move_data(r: &MoveResult, payload_kg: f64) -> MoveData {
         payload_kg,
         max_error_m: s.max_tracking_error_m,
         static_error_m: s.static_error_m,
-        settling_time_s: finite(s.settling_time_s),
+        settling_time_s: s.settling_time_s.and_then(finite),
         t_s: pick(&|i| rec.time_s[i]),
         desired_m: pick(&|i| rec.desired_m[i]),
         actual_m: pick(&|i| {
