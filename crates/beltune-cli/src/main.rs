@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 
 mod cmd;
 mod progress;
+mod serve;
 
 #[derive(Parser)]
 #[command(
