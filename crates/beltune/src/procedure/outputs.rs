@@ -5,6 +5,7 @@
 //! three were built, so a failed run leaves nothing half-written.
 
 use super::commission::{cascade_from_design, Commissioning};
+use super::recorded::RecordedCommissioning;
 use super::result::{FrictionResult, IdentifiedModel, Truth, Validation};
 use crate::design::{ControllerDesign, DesignSummary, Prefilter};
 use crate::ident::{Frf, TwoMassFit};
@@ -24,20 +25,20 @@ pub struct CommissioningJson {
     pub plant: String,
     /// The identified model.
     pub identified: IdentifiedModel,
-    /// Friction.
-    pub friction: FrictionResult,
+    /// Friction (`null` when it could not be measured).
+    pub friction: Option<FrictionResult>,
     /// Controller: gains, prefilter, achieved margins.
     pub controller: DesignSummary,
-    /// The three validation moves.
-    pub validation: Validation,
+    /// The three validation moves (`null` for recorded data: no axis to move).
+    pub validation: Option<Validation>,
     /// How long the axis was busy, s.
     pub experiment_time_s: f64,
     /// Computation time (FFT, fit, design), s.
     pub computation_time_s: f64,
-    /// PRBS amplitude used, N m.
-    pub excitation_amplitude_nm: f64,
-    /// Where the FRF was measured, m.
-    pub identification_position_m: f64,
+    /// PRBS amplitude used, N m (`null` for recorded data).
+    pub excitation_amplitude_nm: Option<f64>,
+    /// Where the FRF was measured, m (`null` for recorded data).
+    pub identification_position_m: Option<f64>,
     /// For a simulated plant: the true values at the identification position.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub truth: Option<Truth>,
@@ -189,13 +190,13 @@ pub fn commissioning_json(
     CommissioningJson {
         plant: plant.to_string(),
         identified: run.identified.clone(),
-        friction: run.friction.clone(),
+        friction: Some(run.friction.clone()),
         controller: run.design.summary(),
-        validation: run.validation.clone(),
+        validation: Some(run.validation.clone()),
         experiment_time_s: run.experiment_time_s,
         computation_time_s: run.computation_time_s,
-        excitation_amplitude_nm: run.excitation_amplitude_nm,
-        identification_position_m: run.identification_position_m,
+        excitation_amplitude_nm: Some(run.excitation_amplitude_nm),
+        identification_position_m: Some(run.identification_position_m),
         truth,
         log: run.log.clone(),
     }
@@ -560,6 +561,77 @@ pub fn build_report(
         parameters,
         validation_rows,
     }
+}
+
+/// `commissioning.json` and the report for a commissioning from recorded data
+/// (`source` names the record). The JSON's `experiment_time_s` is the record's duration.
+pub fn recorded_outputs(run: &RecordedCommissioning, source: &str) -> (CommissioningJson, Report) {
+    let json = CommissioningJson {
+        plant: source.to_string(),
+        identified: run.identified.clone(),
+        friction: run.friction.clone(),
+        controller: run.design.summary(),
+        validation: None,
+        experiment_time_s: run.record_time_s,
+        computation_time_s: run.computation_time_s,
+        excitation_amplitude_nm: None,
+        identification_position_m: None,
+        truth: None,
+        log: run.log.clone(),
+    };
+    let fit = &run.identification.fit;
+    let (controller, open_loops) = design_plots(&run.design, fit);
+    let mut parameters = model_and_controller_rows(&run.identified, &run.design);
+    if let Some(f) = &run.friction {
+        parameters.extend([
+            row(
+                "viscous friction d_v",
+                "(torque unit) s/rad",
+                None,
+                f.viscous,
+                None,
+                5,
+            ),
+            row(
+                "Coulomb friction tau_c",
+                "(torque unit)",
+                None,
+                f.coulomb,
+                None,
+                5,
+            ),
+            row(
+                "constant offset",
+                "(torque unit)",
+                None,
+                f.holding_torque_nm,
+                None,
+                5,
+            ),
+        ]);
+    }
+    let id = &run.identified;
+    let report = Report {
+        title: format!("beltune commissioning report: {source}"),
+        summary: format!(
+            "From recorded data ({source}, {:.1} s): resonance {:.2} Hz, antiresonance {:.2} Hz, fit {:.2} dB rms. \
+             Controller: K_P {:.4e}, K_I {:.4e}, K_PP {:.3}. No validation move: the stages that need the axis were skipped.",
+            run.record_time_s, id.f_r_hz, id.f_z_hz, id.fit_rms_db, run.design.k_p, run.design.k_i, run.design.k_pp
+        ),
+        log: run.log.clone(),
+        frf: Some(identification_plot(
+            &run.identification.frf,
+            fit,
+            id.dead_time_s,
+        )),
+        controller: Some(controller),
+        open_loops,
+        friction: None,
+        moves: Vec::new(),
+        parameters,
+        validation_rows: Vec::new(),
+    };
+    (json, report)
 }
 
 /// Write the three files into `dir` (created if needed), each atomically.
