@@ -5,7 +5,7 @@
 
 use crate::progress::BarProgress;
 use anyhow::Context;
-use beltune::design::{DesignKnobs, PrefilterKind};
+use beltune::design::DesignKnobs;
 use beltune::ident::{
     identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig,
     MotionFrictionConfig, RecordedExcitation,
@@ -40,21 +40,8 @@ pub struct Args {
     /// Output folder.
     #[arg(long, default_value = "commissioning")]
     pub out: PathBuf,
-    /// Prefilter in the velocity loop.
-    #[arg(long, value_enum, default_value = "butterworth")]
-    pub prefilter: PrefilterArg,
-    /// Velocity-loop phase margin, deg.
-    #[arg(long)]
-    pub pm_velocity: Option<f64>,
-    /// Position-loop phase margin, deg.
-    #[arg(long)]
-    pub pm_position: Option<f64>,
-    /// Resonance suppression A_sup, dB (negative).
-    #[arg(long, allow_hyphen_values = true)]
-    pub resonance_suppression_db: Option<f64>,
-    /// Prefilter gain at the antiresonance, dB (negative).
-    #[arg(long, allow_hyphen_values = true)]
-    pub filter_attenuation_db: Option<f64>,
+    #[command(flatten)]
+    pub knobs: super::knobs::KnobArgs,
     /// Travel window MIN,MAX in m (default: inside the stroke).
     #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
     pub travel_window: Option<(f64, f64)>,
@@ -116,15 +103,6 @@ pub struct Args {
     pub quiet: bool,
 }
 
-/// Prefilter choice on the command line.
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum PrefilterArg {
-    /// 2nd-order Butterworth low-pass (4.3).
-    Butterworth,
-    /// Notch (4.1) at the resonance.
-    Notch,
-}
-
 fn parse_pair(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s
         .split_once(',')
@@ -138,27 +116,6 @@ fn parse_pair(s: &str) -> Result<(f64, f64), String> {
         .parse()
         .map_err(|_| format!("`{b}` is not a number"))?;
     Ok((a, b))
-}
-
-fn knobs_from(args: &Args) -> DesignKnobs {
-    let mut knobs = DesignKnobs {
-        prefilter: match args.prefilter {
-            PrefilterArg::Butterworth => PrefilterKind::Butterworth,
-            PrefilterArg::Notch => PrefilterKind::Notch,
-        },
-        ..DesignKnobs::default()
-    };
-    if let Some(v) = args.pm_velocity {
-        knobs.pm_velocity_deg = v;
-    }
-    if let Some(v) = args.pm_position {
-        knobs.pm_position_deg = v;
-    }
-    if let Some(v) = args.resonance_suppression_db {
-        knobs.resonance_suppression_db = v;
-    }
-    knobs.filter_attenuation_db = args.filter_attenuation_db;
-    knobs
 }
 
 fn load_plant(args: &Args) -> anyhow::Result<Plant> {
@@ -240,13 +197,13 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(csv) = args.csv.clone() {
-        let knobs = knobs_from(&args);
+        let knobs = args.knobs.knobs()?;
         return run_recorded(&args, &csv, &knobs);
     }
     let plant = load_plant(&args)?;
     let ds = DataSheet::for_plant(&plant, args.start_position, args.travel_window);
     let mut cfg = CommissioningConfig {
-        knobs: knobs_from(&args),
+        knobs: args.knobs.knobs()?,
         ..CommissioningConfig::default()
     };
     cfg.excitation.fixed_amplitude_nm = args.excitation_amplitude;

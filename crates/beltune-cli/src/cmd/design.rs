@@ -5,9 +5,7 @@
 //! `--dynamics` (one-knob mode), then the explicit expert flags.
 
 use anyhow::Context;
-use beltune::design::{
-    self, ControllerDesign, DesignKnobs, DesignSummary, Dynamics, ModelFile, PrefilterKind,
-};
+use beltune::design::{self, ControllerDesign, DesignSummary, ModelFile};
 use std::path::PathBuf;
 
 /// Arguments of `beltune design`.
@@ -17,24 +15,8 @@ pub struct Args {
     /// coulomb) or the JSON written by `beltune identify`.
     #[arg(long)]
     model: PathBuf,
-    /// Prefilter in the velocity loop: butterworth, notch or none.
-    #[arg(long, default_value = "butterworth")]
-    prefilter: String,
-    /// Velocity-loop phase margin in degrees (default 60, or from --dynamics).
-    #[arg(long, allow_negative_numbers = true)]
-    pm_velocity: Option<f64>,
-    /// Position-loop phase margin in degrees (default 80, or from --dynamics).
-    #[arg(long, allow_negative_numbers = true)]
-    pm_position: Option<f64>,
-    /// Open-loop gain at the resonance A_sup in dB (default -10, or from --dynamics).
-    #[arg(long, allow_negative_numbers = true)]
-    resonance_suppression_db: Option<f64>,
-    /// Prefilter gain at the antiresonance in dB (default -3 Butterworth, -6 notch).
-    #[arg(long, allow_negative_numbers = true)]
-    filter_attenuation_db: Option<f64>,
-    /// One-knob mode: conservative, standard, dynamic, or a number in [0, 1].
-    #[arg(long)]
-    dynamics: Option<String>,
+    #[command(flatten)]
+    knobs: super::knobs::KnobArgs,
     /// Sampling time of the controller in s.
     #[arg(long, default_value_t = design::DEFAULT_TS_S)]
     ts: f64,
@@ -57,24 +39,7 @@ struct JsonOut<'a> {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let model = ModelFile::load(&args.model)?;
     let input = model.design_input(args.ts)?;
-    let kind: PrefilterKind = args.prefilter.parse()?;
-    let mut knobs = DesignKnobs {
-        prefilter: kind,
-        ..DesignKnobs::default()
-    };
-    if let Some(d) = &args.dynamics {
-        knobs = d.parse::<Dynamics>()?.knobs(&knobs);
-    }
-    if let Some(v) = args.pm_velocity {
-        knobs.pm_velocity_deg = v;
-    }
-    if let Some(v) = args.pm_position {
-        knobs.pm_position_deg = v;
-    }
-    if let Some(v) = args.resonance_suppression_db {
-        knobs.resonance_suppression_db = v;
-    }
-    knobs.filter_attenuation_db = args.filter_attenuation_db;
+    let knobs = args.knobs.knobs()?;
     let d = design::design(&input, &knobs)?;
     print!("{}", human_summary(&d));
     if let Some(path) = &args.json {

@@ -4,6 +4,7 @@ pub mod commission;
 pub mod design;
 pub mod friction;
 pub mod identify;
+pub mod knobs;
 pub mod plant;
 pub mod serve;
 pub mod trajectory;

@@ -455,30 +455,9 @@ pub fn commission(
     let max_dt = (10e-3 / ts) as usize;
     let dead_time = estimate_dead_time(&frf, &frf_actual, fit.f_r_hz, max_dt)?;
     st.compute_s += t0.elapsed().as_secs_f64();
-    let used = frf.usable_indices();
-    let mean_coh = if used.is_empty() {
-        0.0
-    } else {
-        used.iter().map(|&i| frf.coherence[i]).sum::<f64>() / used.len() as f64
-    };
+    let identified = IdentifiedModel::from_fit(&fit, &frf, dead_time.seconds, id_pos);
     let p = fit.params;
-    let identified = IdentifiedModel {
-        f_r_hz: fit.f_r_hz,
-        f_z_hz: fit.f_z_hz,
-        theta_e: p.theta_e,
-        m_c: p.m_c,
-        c: p.c,
-        d_m: p.d_m,
-        d_c: p.d_c,
-        i_t: p.i_t,
-        dead_time_s: dead_time.seconds,
-        fit_rms_db: fit.fit_rms_db,
-        m_c_sigma: fit.uncertainty.map(|u| u.m_c).unwrap_or(f64::NAN),
-        c_sigma: fit.uncertainty.map(|u| u.c).unwrap_or(f64::NAN),
-        mean_coherence: mean_coh,
-        lines_used: fit.n_lines,
-        position_m: id_pos,
-    };
+    let mean_coh = identified.mean_coherence;
     let line = format!(
         "f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.2} kg, c {:.1} kN/m, d_m {:.2} N s/m, d_c {:.2} N s/m, dead time {:.2} ms, fit {:.2} dB rms, coherence {:.3}",
         fit.f_r_hz,

@@ -74,32 +74,8 @@ pub fn commission_recorded(
         }),
     };
     let des = design(&input, knobs)?;
-    let used = identification.frf.usable_indices();
-    let mean_coherence = if used.is_empty() {
-        0.0
-    } else {
-        used.iter()
-            .map(|&i| identification.frf.coherence[i])
-            .sum::<f64>()
-            / used.len() as f64
-    };
-    let identified = IdentifiedModel {
-        f_r_hz: fit.f_r_hz,
-        f_z_hz: fit.f_z_hz,
-        theta_e: p.theta_e,
-        m_c: p.m_c,
-        c: p.c,
-        d_m: p.d_m,
-        d_c: p.d_c,
-        i_t: p.i_t,
-        dead_time_s,
-        fit_rms_db: fit.fit_rms_db,
-        m_c_sigma: fit.uncertainty.map(|u| u.m_c).unwrap_or(f64::NAN),
-        c_sigma: fit.uncertainty.map(|u| u.c).unwrap_or(f64::NAN),
-        mean_coherence,
-        lines_used: fit.n_lines,
-        position_m: f64::NAN,
-    };
+    let identified = IdentifiedModel::from_fit(fit, &identification.frf, dead_time_s, f64::NAN);
+    let mean_coherence = identified.mean_coherence;
     let skipped = "skipped (recorded data, no axis)";
     let mut log = vec![
         format!("plausibility, positioning, holding torque, excitation amplitude: {skipped}"),

@@ -37,6 +37,42 @@ pub struct IdentifiedModel {
     pub position_m: f64,
 }
 
+impl IdentifiedModel {
+    /// The summary of a fit on `frf`, with the dead time used and the cart
+    /// position of the measurement (NaN when unknown, e.g. recorded data).
+    pub fn from_fit(
+        fit: &crate::ident::TwoMassFit,
+        frf: &crate::ident::Frf,
+        dead_time_s: f64,
+        position_m: f64,
+    ) -> Self {
+        let used = frf.usable_indices();
+        let mean_coherence = if used.is_empty() {
+            0.0
+        } else {
+            used.iter().map(|&i| frf.coherence[i]).sum::<f64>() / used.len() as f64
+        };
+        let p = fit.params;
+        IdentifiedModel {
+            f_r_hz: fit.f_r_hz,
+            f_z_hz: fit.f_z_hz,
+            theta_e: p.theta_e,
+            m_c: p.m_c,
+            c: p.c,
+            d_m: p.d_m,
+            d_c: p.d_c,
+            i_t: p.i_t,
+            dead_time_s,
+            fit_rms_db: fit.fit_rms_db,
+            m_c_sigma: fit.uncertainty.map(|u| u.m_c).unwrap_or(f64::NAN),
+            c_sigma: fit.uncertainty.map(|u| u.c).unwrap_or(f64::NAN),
+            mean_coherence,
+            lines_used: fit.n_lines,
+            position_m,
+        }
+    }
+}
+
 /// Friction seen at the motor (3.36).
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct FrictionResult {

@@ -1,0 +1,54 @@
+//! The design knobs on the command line, shared by `design` and `commission`.
+//!
+//! Precedence: defaults (thesis: Butterworth, 60 deg / 80 deg, -10 dB), then
+//! `--dynamics` (one-knob mode), then the explicit expert flags.
+
+use beltune::design::{DesignKnobs, Dynamics, PrefilterKind};
+
+/// Design knobs (thesis 4.2-4.3) and the one-knob mode.
+#[derive(clap::Args, Clone, Debug)]
+pub struct KnobArgs {
+    /// Prefilter in the velocity loop: butterworth, notch or none.
+    #[arg(long, default_value = "butterworth")]
+    pub prefilter: String,
+    /// Velocity-loop phase margin in degrees (default 60, or from --dynamics).
+    #[arg(long, allow_negative_numbers = true)]
+    pub pm_velocity: Option<f64>,
+    /// Position-loop phase margin in degrees (default 80, or from --dynamics).
+    #[arg(long, allow_negative_numbers = true)]
+    pub pm_position: Option<f64>,
+    /// Open-loop gain at the resonance A_sup in dB (default -10, or from --dynamics).
+    #[arg(long, allow_negative_numbers = true)]
+    pub resonance_suppression_db: Option<f64>,
+    /// Prefilter gain at the antiresonance in dB (default -3 Butterworth, -6 notch).
+    #[arg(long, allow_negative_numbers = true)]
+    pub filter_attenuation_db: Option<f64>,
+    /// One-knob mode: conservative, standard, dynamic, or a number in [0, 1].
+    #[arg(long)]
+    pub dynamics: Option<String>,
+}
+
+impl KnobArgs {
+    /// The knobs, or one line saying which value is wrong.
+    pub fn knobs(&self) -> anyhow::Result<DesignKnobs> {
+        let kind: PrefilterKind = self.prefilter.parse()?;
+        let mut knobs = DesignKnobs {
+            prefilter: kind,
+            ..DesignKnobs::default()
+        };
+        if let Some(d) = &self.dynamics {
+            knobs = d.parse::<Dynamics>()?.knobs(&knobs);
+        }
+        if let Some(v) = self.pm_velocity {
+            knobs.pm_velocity_deg = v;
+        }
+        if let Some(v) = self.pm_position {
+            knobs.pm_position_deg = v;
+        }
+        if let Some(v) = self.resonance_suppression_db {
+            knobs.resonance_suppression_db = v;
+        }
+        knobs.filter_attenuation_db = self.filter_attenuation_db;
+        Ok(knobs)
+    }
+}
