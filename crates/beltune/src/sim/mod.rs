@@ -330,7 +330,11 @@ impl SimAxis {
         self.delay.len() as f64 * self.info.sample_time_s
     }
 
-    /// The friction totals seen at the motor (3.36).
+    /// The friction totals seen at the motor (3.36): the mean torque at
+    /// constant motor velocity `omega` is `d_v~ omega + tau_c~ sign(omega)`
+    /// in both directions (checked in the tests), provided the motor does not
+    /// reverse; a velocity loop that limit-cycles through zero averages the
+    /// motor-side Coulomb friction out.
     pub fn friction_truth(&self) -> FrictionTotals {
         self.plant.friction_totals()
     }
