@@ -3,10 +3,9 @@
 //! model, optional current-loop dead time. Thesis chapter 3.
 
 use super::util::write_atomic;
-use anyhow::Context;
 use beltune::ident::{
-    estimate_dead_time, etfe, fit::model_magnitude_db, fit_two_mass, read_csv_columns,
-    record::check_uniform_time, DeadTime, EtfeConfig, FitConfig, ModelUnits, TwoMassFit,
+    fit::model_magnitude_db, identify_recorded, DeadTime, EtfeConfig, FitConfig, ModelUnits,
+    RecordedExcitation, TwoMassFit,
 };
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -94,57 +93,26 @@ struct ModelJson {
 
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let mut names = vec![
-        args.time.as_str(),
-        args.input.as_str(),
-        args.output.as_str(),
-    ];
-    if let Some(a) = &args.actual_torque {
-        names.push(a.as_str());
-    }
-    let cols = read_csv_columns(&args.csv, &names)?;
-    beltune::ident::record::check_not_constant(&cols, &args.input)?;
-    let input = cols.column(&args.input).expect("read");
-    let period = match args.period_samples {
-        Some(p) => p,
-        None => detect_period(input).with_context(|| {
-            format!(
-                "{}: cannot detect the period of `{}`; give --period-samples",
-                args.csv.display(),
-                args.input
-            )
-        })?,
-    };
-    let needed = period * (args.skip_periods + 2);
-    if cols.rows() < needed {
-        anyhow::bail!(
-            "{}: too few samples: {} data rows, but {} skipped + 2 averaged periods of {} samples need {}",
-            args.csv.display(),
-            cols.rows(),
-            args.skip_periods,
-            period,
-            needed
-        );
-    }
-    let sampling = check_uniform_time(&cols, &args.time, needed, 0.01)?;
     let band = match (args.min_freq_hz, args.max_freq_hz) {
         (None, None) => None,
         (lo, hi) => Some((lo.unwrap_or(0.0), hi.unwrap_or(f64::MAX))),
     };
-    let cfg = EtfeConfig {
-        sample_time_s: sampling.sample_time_s,
-        period_samples: period,
+    let id = identify_recorded(&RecordedExcitation {
+        csv: &args.csv,
+        time: &args.time,
+        input: &args.input,
+        output: &args.output,
+        actual_torque: args.actual_torque.as_deref(),
+        period_samples: args.period_samples,
         skip_periods: args.skip_periods,
-        integrator: true,
-        excitation_floor_db: args.excitation_floor_db,
-        min_coherence: args.min_coherence,
-        band_hz: band,
-    };
-    let output = cols.column(&args.output).expect("read");
-    let frf = etfe(input, output, &cfg)?;
-    let fit = fit_two_mass(
-        &frf,
-        &FitConfig {
+        etfe: EtfeConfig {
+            integrator: true,
+            excitation_floor_db: args.excitation_floor_db,
+            min_coherence: args.min_coherence,
+            band_hz: band,
+            ..EtfeConfig::default()
+        },
+        fit: FitConfig {
             theta_e: args.inertia,
             free_inertia: args.free_inertia || args.inertia.is_none(),
             i_t: args.transmission,
@@ -155,19 +123,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             },
             ..Default::default()
         },
-    )?;
-    let dead_time = match &args.actual_torque {
-        Some(col) => {
-            let actual = etfe(cols.column(col).expect("read"), output, &cfg)?;
-            let max_samples = period / 4;
-            Some(estimate_dead_time(&frf, &actual, fit.f_r_hz, max_samples)?)
-        }
-        None => None,
-    };
-
-    print_summary(&fit, dead_time.as_ref(), frf.n_periods);
+    })?;
+    let (frf, fit, dead_time) = (&id.frf, &id.fit, id.dead_time);
+    print_summary(fit, dead_time.as_ref(), frf.n_periods);
     if let Some(path) = &args.frf_csv {
-        write_atomic(path, frf_csv(&frf, &fit).as_bytes())?;
+        write_atomic(path, frf_csv(frf, fit).as_bytes())?;
     }
     if let Some(path) = &args.json {
         let p = fit.params;
@@ -184,7 +144,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             fit_rms_db: fit.fit_rms_db,
             dead_time_s: dead_time.map(|d| d.seconds),
             dead_time_samples: dead_time.map(|d| d.samples),
-            sample_time_s: sampling.sample_time_s,
+            sample_time_s: id.sample_time_s,
             units: fit.units,
             free_inertia: fit.free_inertia,
             n_lines: fit.n_lines,
@@ -197,18 +157,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         write_atomic(path, text.as_bytes())?;
     }
     Ok(())
-}
-
-/// The smallest `P` (at least 8) with `|x[k + P] - x[k]|` below 1 % of the
-/// signal's range for `k < P` (the first two periods): the period of a
-/// generated periodic excitation.
-fn detect_period(x: &[f64]) -> anyhow::Result<usize> {
-    let lo = x.iter().cloned().fold(f64::INFINITY, f64::min);
-    let hi = x.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-    let tol = 0.01 * (hi - lo);
-    (8..=x.len() / 2)
-        .find(|&p| (0..p).all(|k| (x[k + p] - x[k]).abs() <= tol))
-        .context("the input is not periodic")
 }
 
 fn print_summary(fit: &TwoMassFit, dead_time: Option<&DeadTime>, n_periods: usize) {

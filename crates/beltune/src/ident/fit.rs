@@ -67,13 +67,27 @@ pub enum FitModel {
     /// percent in `d_m`, which this removes.
     #[default]
     Exact,
+    /// The full two-mass transfer function (2.38) with the belt damping `d`
+    /// fitted as a fifth damping parameter (the linear sets of Tables
+    /// A.11-A.13 have `d = 20 N s/m`).
+    WithBeltDamping,
+}
+
+impl FitModel {
+    fn tf(self, p: &TwoMassParams) -> crate::lti::Tf {
+        match self {
+            FitModel::RigidFlexible => p.tf_rigid_flexible(),
+            FitModel::Exact => p.tf_torque_to_motor_angle_undamped_belt(),
+            FitModel::WithBeltDamping => p.tf_torque_to_motor_angle(),
+        }
+    }
 }
 
 impl Default for FitConfig {
     fn default() -> Self {
         FitConfig {
             theta_e: None,
-            free_inertia: true,
+            free_inertia: false,
             i_t: 1.0,
             n_log_lines: 150,
             units: ModelUnits::Torque,
@@ -96,12 +110,14 @@ pub struct ParamUncertainty {
     pub d_m: f64,
     /// sigma of `d_c`.
     pub d_c: f64,
+    /// sigma of the belt damping `d` (0 unless [`FitModel::WithBeltDamping`]).
+    pub d: f64,
 }
 
 /// The result of [`fit_two_mass`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct TwoMassFit {
-    /// Fitted parameters (belt damping `d` is 0: (2.42) neglects it).
+    /// Fitted parameters (belt damping `d` is 0 unless [`FitModel::WithBeltDamping`]).
     pub params: TwoMassParams,
     /// Start values derived from the FRF.
     pub start: TwoMassParams,
@@ -138,7 +154,8 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
         require_positive("theta_e", t)?;
     }
     let free = cfg.free_inertia || cfg.theta_e.is_none();
-    let n_params = if free { 5 } else { 4 };
+    let fit_d = cfg.model == FitModel::WithBeltDamping;
+    let n_params = 4 + usize::from(free) + usize::from(fit_d);
     let lines = frf.log_spaced_subset(cfg.n_log_lines.max(n_params + 1));
     if lines.len() <= n_params {
         return Err(Error::FitFailed {
@@ -157,6 +174,10 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
     let mut q0 = vec![start.m_c.ln(), start.c.ln(), start.d_m.ln(), start.d_c.ln()];
     if free {
         q0.push(start.theta_e.ln());
+    }
+    if fit_d {
+        // start the belt damping at a tenth of the cart damping
+        q0.push((0.1 * start.d_c).ln());
     }
     let problem = LogMagnitudeProblem {
         omega,
@@ -202,6 +223,11 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
             d_m: params.d_m * sig(2),
             d_c: params.d_c * sig(3),
             theta_e: if free { params.theta_e * sig(4) } else { 0.0 },
+            d: if fit_d {
+                params.d * sig(n_params - 1)
+            } else {
+                0.0
+            },
         })
     });
     Ok(TwoMassFit {
@@ -268,10 +294,7 @@ pub fn start_values(f: &FrfFeatures, theta_e: Option<f64>, i_t: f64) -> Result<T
 
 /// `20 log10 |G(j w; p)|` of the fitted model structure.
 pub fn model_magnitude_db(p: &TwoMassParams, model: FitModel, w_rad_s: f64) -> f64 {
-    let g = match model {
-        FitModel::RigidFlexible => p.tf_rigid_flexible(),
-        FitModel::Exact => p.tf_torque_to_motor_angle_undamped_belt(),
-    };
+    let g = model.tf(p);
     20.0 * g.freq_response(w_rad_s).norm().log10()
 }
 
@@ -298,16 +321,18 @@ impl LogMagnitudeProblem {
             } else {
                 self.fixed.theta_e
             },
+            d: if self.model == FitModel::WithBeltDamping {
+                q[q.len() - 1].exp()
+            } else {
+                0.0
+            },
             ..self.fixed
         }
     }
 
     fn residual_vec(&self, q: &DVector<f64>) -> Option<DVector<f64>> {
         let p = self.to_params(q);
-        let g = match self.model {
-            FitModel::RigidFlexible => p.tf_rigid_flexible(),
-            FitModel::Exact => p.tf_torque_to_motor_angle_undamped_belt(),
-        };
+        let g = self.model.tf(&p);
         let r = DVector::from_iterator(
             self.omega.len(),
             self.omega.iter().zip(&self.measured_db).map(|(&w, &m)| {

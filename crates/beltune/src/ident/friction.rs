@@ -9,7 +9,8 @@
 //! zero-phase low-pass filtering (2nd-order Butterworth forward and backward),
 //! central differences for velocity and acceleration, then linear least
 //! squares on `tau = J a + d_v v + tau_c sign(v) + tau_0`, with the samples
-//! near zero velocity excluded.
+//! near zero velocity excluded. `sign(v)` passes through the same filter as
+//! the torque, so that the filtered equation holds exactly.
 
 use crate::error::require_all_finite;
 use crate::{Error, Result};
@@ -235,6 +236,11 @@ pub fn identify_from_motion(
     for k in 2..n - 2 {
         a[k] = (v[k + 1] - v[k - 1]) / (2.0 * dt);
     }
+    // The torque is low-passed, so the Coulomb regressor must be too: the
+    // same zero-phase filter applied to sign(v) keeps the regression
+    // consistent (a filtered step instead of a sharp one at each reversal).
+    let sign: Vec<f64> = v.iter().map(|x| x.signum()).collect();
+    let sign_f = zero_phase(&sign, coeffs);
     // drop the edges (filter start-up): two periods of the cut-off
     let edge = ((2.0 * fs / fc).ceil() as usize).max(3).min(n / 4);
     let v_max = v[edge..n - edge].iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -256,7 +262,7 @@ pub fn identify_from_motion(
         match j {
             0 => a[k],
             1 => v[k],
-            2 => v[k].signum(),
+            2 => sign_f[k],
             _ => 1.0,
         }
     });

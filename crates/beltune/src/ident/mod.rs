@@ -10,6 +10,7 @@
 //! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24)
 //! - [`dead_time`]: current-loop dead time (3.25)-(3.30)
 //! - [`record`]: CSV records with validation
+//! - [`recorded`]: the whole identification from a CSV record (CLI `identify`, `commission --csv`)
 
 pub mod dead_time;
 pub mod etfe;
@@ -17,10 +18,13 @@ pub mod features;
 pub mod fit;
 pub mod friction;
 pub mod record;
+pub mod recorded;
 pub mod strategy;
 
 #[cfg(test)]
 mod tests_measured;
+#[cfg(test)]
+mod tests_sim;
 #[cfg(test)]
 pub(crate) mod testutil;
 
@@ -33,4 +37,5 @@ pub use friction::{
     FrictionFit, MotionFriction, MotionFrictionConfig, THESIS_VELOCITY_SEQUENCE_M_S,
 };
 pub use record::{read_csv_columns, CsvColumns, Sampling};
+pub use recorded::{detect_period, identify_recorded, RecordedExcitation, RecordedIdentification};
 pub use strategy::{direct_closed_loop, indirect_closed_loop, open_loop};

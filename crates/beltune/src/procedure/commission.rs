@@ -1,14 +1,17 @@
-//! The one-command self-commissioning: the eight stages of issue 6 in order,
-//! each reporting progress and one log line.
+//! The one-command self-commissioning: the stages of issue 6 in order, each
+//! reporting progress and one log line:
 //!
-//! 1. plausibility of the data-sheet values; 2. move to the identification
-//! position (cart farthest from the motor, thesis 2.2) at low speed; 3. holding
-//! torque (thesis chapter 7: the integrating position loop); 4. excitation
-//! amplitude from zero upwards until the motion clears friction and noise
-//! (thesis 3.4); 5. open-loop PRBS identification with averaging, coherence,
-//! dead time and the fit (3.2-3.5); 6. controller design (chapter 4); 7. friction
-//! runs at constant velocity with the designed controller (3.6); 8. validation
-//! move with no, linear and nonlinear feedforward (chapter 5).
+//! 1. plausibility of the data-sheet values;
+//! 2. take the axis (hold it while the integrator carries the load) and move
+//!    to the identification position (cart farthest from the motor, thesis 2.2);
+//! 3. holding torque (thesis chapter 7), friction-free from a slow run up and down;
+//! 4. excitation amplitude from small values upwards until the motion clears
+//!    friction and noise (thesis 3.4);
+//! 5. open-loop PRBS identification with averaging, coherence, dead time and
+//!    the fit (3.2-3.5);
+//! 6. controller design (chapter 4);
+//! 7. friction runs at constant velocity with the designed controller (3.6);
+//! 8. validation move with no, linear and nonlinear feedforward (chapter 5).
 
 use super::bootstrap::bootstrap_controller;
 use super::motion::{move_to, track, TrackOptions, TrackRecord};

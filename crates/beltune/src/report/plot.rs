@@ -22,6 +22,15 @@ const PALETTE: [RGBColor; 6] = [
 ];
 const GREY: RGBColor = RGBColor(170, 170, 170);
 
+/// How a curve is drawn.
+#[derive(Clone, Copy)]
+enum Draw {
+    /// Connected line.
+    Line,
+    /// One dot per point (for scattered, excluded lines).
+    Dots,
+}
+
 fn register_font() {
     REGISTER.call_once(|| {
         // The embedded font is valid; a failure would only mean unreadable labels.
@@ -80,10 +89,10 @@ fn draw_bode_panels(
     mag_area: &DrawingArea<SVGBackend, Shift>,
     phase_area: &DrawingArea<SVGBackend, Shift>,
     title: &str,
-    curves: &[(&BodeCurve, RGBColor)],
+    curves: &[(&BodeCurve, RGBColor, Draw)],
     markers: &[FrequencyMarker],
 ) -> Result<()> {
-    let refs: Vec<&BodeCurve> = curves.iter().map(|(c, _)| *c).collect();
+    let refs: Vec<&BodeCurve> = curves.iter().map(|(c, _, _)| *c).collect();
     let fr = freq_range(&refs);
     let mag = range_of(refs.iter().flat_map(|c| c.magnitude_db.iter()), -60.0..20.0);
     let ph = range_of(refs.iter().flat_map(|c| c.phase_deg.iter()), -360.0..0.0);
@@ -101,17 +110,19 @@ fn draw_bode_panels(
         .label_style(("sans-serif", 12))
         .draw()
         .map_err(err)?;
-    for (c, color) in curves {
-        chart
-            .draw_series(LineSeries::new(
-                points(&c.freq_hz, &c.magnitude_db),
-                color.stroke_width(2),
-            ))
-            .map_err(err)?
-            .label(c.label.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-            });
+    for (c, color, how) in curves {
+        let pts = points(&c.freq_hz, &c.magnitude_db);
+        let color = *color;
+        let series = match how {
+            Draw::Line => chart.draw_series(LineSeries::new(pts, color.stroke_width(2))),
+            Draw::Dots => {
+                chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 1, color.filled())))
+            }
+        }
+        .map_err(err)?;
+        series.label(c.label.clone()).legend(move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+        });
     }
     for m in markers
         .iter()
@@ -154,13 +165,15 @@ fn draw_bode_panels(
         .label_style(("sans-serif", 12))
         .draw()
         .map_err(err)?;
-    for (c, color) in curves {
-        chart
-            .draw_series(LineSeries::new(
-                points(&c.freq_hz, &c.phase_deg),
-                color.stroke_width(2),
-            ))
-            .map_err(err)?;
+    for (c, color, how) in curves {
+        let pts = points(&c.freq_hz, &c.phase_deg);
+        match how {
+            Draw::Line => chart.draw_series(LineSeries::new(pts, color.stroke_width(2))),
+            Draw::Dots => {
+                chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 1, color.filled())))
+            }
+        }
+        .map_err(err)?;
     }
     for m in markers
         .iter()
@@ -186,11 +199,11 @@ pub fn bode_svg(plot: &BodePlot) -> Result<String> {
         let root = SVGBackend::with_string(&mut out, (WIDTH, 560)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
         let (top, bottom) = root.split_vertically(300);
-        let curves: Vec<(&BodeCurve, RGBColor)> = plot
+        let curves: Vec<(&BodeCurve, RGBColor, Draw)> = plot
             .curves
             .iter()
             .enumerate()
-            .map(|(i, c)| (c, PALETTE[i % PALETTE.len()]))
+            .map(|(i, c)| (c, PALETTE[i % PALETTE.len()], Draw::Line))
             .collect();
         draw_bode_panels(&top, &bottom, &plot.title, &curves, &plot.markers)?;
         root.present().map_err(err)?;
@@ -222,9 +235,9 @@ pub fn frf_svg(plot: &FrfPlot) -> Result<String> {
         let used = pick(true);
         let excluded = pick(false);
         let curves = [
-            (&excluded, GREY),
-            (&used, PALETTE[0]),
-            (&plot.model, PALETTE[1]),
+            (&excluded, GREY, Draw::Dots),
+            (&used, PALETTE[0], Draw::Line),
+            (&plot.model, PALETTE[1], Draw::Line),
         ];
         draw_bode_panels(
             &top,
