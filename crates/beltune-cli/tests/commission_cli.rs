@@ -179,3 +179,54 @@ fn unknown_plant_is_one_clear_line() {
     assert!(err.contains("no-such-axis"), "{err}");
     assert_eq!(err.trim().lines().count(), 1);
 }
+
+/// Commissioning from a real recorded measurement (shared/data, see its README):
+/// the identification and design run, the axis stages are skipped, the outputs
+/// are complete; the identified resonance/antiresonance are those of
+/// `beltune identify` on the same file (same library pipeline).
+#[test]
+fn commission_from_recorded_data_skips_the_axis_stages() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/twomass-bench/multisine-a.csv");
+    assert!(data.is_file(), "measured data missing: {}", data.display());
+    let dir = temp_dir("recorded");
+    let out = dir.join("out");
+    let o = beltune()
+        .args(["commission", "--csv"])
+        .arg(&data)
+        .args([
+            "--input",
+            "iq_ref_A",
+            "--output",
+            "theta_motor_rad",
+            "--actual-torque",
+            "iq_meas_A",
+            "--period-samples",
+            "2500",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let log = String::from_utf8_lossy(&o.stderr);
+    assert!(log.contains("validation moves: skipped"), "{log}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("commissioning.json")).unwrap())
+            .unwrap();
+    // The bench's measured FRF has its peak near 76.7 Hz and its dip near 53.4 Hz
+    // (ident tests on the same file); 3 % as in issue 4.
+    let f_r = json["identified"]["f_r_hz"].as_f64().unwrap();
+    let f_z = json["identified"]["f_z_hz"].as_f64().unwrap();
+    assert!((f_r - 76.7).abs() / 76.7 < 0.03, "f_r {f_r}");
+    assert!((f_z - 53.4).abs() / 53.4 < 0.03, "f_z {f_z}");
+    assert!(json["validation"].is_null());
+    assert!(json["controller"]["k_p"].as_f64().unwrap() > 0.0);
+    let mut names = files_in(&out);
+    names.sort();
+    assert_eq!(
+        names,
+        ["commissioning.json", "controller.toml", "report.html"]
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,15 +1,21 @@
 //! `beltune commission`: the one-command self-commissioning of the built-in
 //! simulated axis (or a plant file), with progress bars, safety supervision,
-//! validation and the report.
+//! validation and the report; or, with `--csv`, from data recorded on a real
+//! drive (the stages that need the axis are skipped).
 
 use crate::progress::BarProgress;
 use anyhow::Context;
 use beltune::design::{DesignKnobs, PrefilterKind};
+use beltune::ident::{
+    identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig,
+    MotionFrictionConfig, RecordedExcitation,
+};
 use beltune::model::rigs::{self, Plant};
 use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::procedure::outputs::{
-    build_report, commissioning_json, controller_toml, write_outputs,
+    build_report, commissioning_json, controller_toml, recorded_outputs, write_outputs,
 };
+use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
 use beltune::report::render_html;
 use beltune::sim::{SimAxis, SimConfig};
@@ -64,6 +70,47 @@ pub struct Args {
     /// PRBS clock period P_PRBS in samples (default 16).
     #[arg(long)]
     pub prbs_clock: Option<u32>,
+    /// Commission from recorded data instead of a plant: CSV of a periodic
+    /// excitation (header row). Skips the stages that need the axis.
+    #[arg(long, requires_all = ["input", "output"])]
+    pub csv: Option<PathBuf>,
+    /// Recorded data: time column, s.
+    #[arg(long, default_value = "t_s")]
+    pub time: String,
+    /// Recorded data: desired-torque column, N m.
+    #[arg(long)]
+    pub input: Option<String>,
+    /// Recorded data: motor-angle column, rad.
+    #[arg(long)]
+    pub output: Option<String>,
+    /// Recorded data: actual-torque column (for the dead time).
+    #[arg(long)]
+    pub actual_torque: Option<String>,
+    /// Recorded data: samples per excitation period (default: detected).
+    #[arg(long)]
+    pub period_samples: Option<usize>,
+    /// Recorded data: leading periods discarded as transient.
+    #[arg(long, default_value_t = 1)]
+    pub skip_periods: usize,
+    /// Recorded data: data-sheet Theta_e in kg m^2 (fitted when not given).
+    #[arg(long)]
+    pub inertia: Option<f64>,
+    /// Recorded data: transmission i_t in m/rad.
+    #[arg(long, default_value_t = 1.0)]
+    pub transmission: f64,
+    /// Recorded data: the drive's torque limit, in the unit of the input column
+    /// (N m, or A for a current record), written to controller.toml.
+    #[arg(long, default_value_t = 3.1)]
+    pub torque_limit: f64,
+    /// Recorded data: a CSV of any motion for the friction regression (same time column name).
+    #[arg(long, requires_all = ["friction_torque", "friction_position"])]
+    pub friction_csv: Option<PathBuf>,
+    /// Friction record: torque column, N m.
+    #[arg(long)]
+    pub friction_torque: Option<String>,
+    /// Friction record: motor-angle column, rad.
+    #[arg(long)]
+    pub friction_position: Option<String>,
     /// No progress bars or log lines.
     #[arg(long)]
     pub quiet: bool,
@@ -93,6 +140,27 @@ fn parse_pair(s: &str) -> Result<(f64, f64), String> {
     Ok((a, b))
 }
 
+fn knobs_from(args: &Args) -> DesignKnobs {
+    let mut knobs = DesignKnobs {
+        prefilter: match args.prefilter {
+            PrefilterArg::Butterworth => PrefilterKind::Butterworth,
+            PrefilterArg::Notch => PrefilterKind::Notch,
+        },
+        ..DesignKnobs::default()
+    };
+    if let Some(v) = args.pm_velocity {
+        knobs.pm_velocity_deg = v;
+    }
+    if let Some(v) = args.pm_position {
+        knobs.pm_position_deg = v;
+    }
+    if let Some(v) = args.resonance_suppression_db {
+        knobs.resonance_suppression_db = v;
+    }
+    knobs.filter_attenuation_db = args.filter_attenuation_db;
+    knobs
+}
+
 fn load_plant(args: &Args) -> anyhow::Result<Plant> {
     let p = std::path::Path::new(&args.plant);
     let mut plant = if args.plant.ends_with(".toml") || p.exists() {
@@ -107,30 +175,80 @@ fn load_plant(args: &Args) -> anyhow::Result<Plant> {
     Ok(plant)
 }
 
+/// Commission from recorded data (`--csv`).
+fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyhow::Result<()> {
+    let (Some(input), Some(output)) = (&args.input, &args.output) else {
+        anyhow::bail!("--csv needs --input and --output column names");
+    };
+    let id = identify_recorded(&RecordedExcitation {
+        csv,
+        time: &args.time,
+        input,
+        output,
+        actual_torque: args.actual_torque.as_deref(),
+        period_samples: args.period_samples,
+        skip_periods: args.skip_periods,
+        etfe: EtfeConfig::default(),
+        fit: FitConfig {
+            theta_e: args.inertia,
+            free_inertia: args.inertia.is_none(),
+            i_t: args.transmission,
+            ..FitConfig::default()
+        },
+    })?;
+    let friction = match (
+        &args.friction_csv,
+        &args.friction_torque,
+        &args.friction_position,
+    ) {
+        (Some(f), Some(tq), Some(pos)) => {
+            let cols = read_csv_columns(f, &[args.time.as_str(), pos.as_str(), tq.as_str()])?;
+            let column = |n: &str| {
+                cols.column(n)
+                    .ok_or_else(|| anyhow::anyhow!("{}: missing column `{n}`", f.display()))
+            };
+            Some(
+                identify_from_motion(
+                    column(&args.time)?,
+                    column(pos)?,
+                    column(tq)?,
+                    &MotionFrictionConfig::default(),
+                )
+                .with_context(|| f.display().to_string())?,
+            )
+        }
+        _ => None,
+    };
+    let run = commission_recorded(id, friction, knobs, 2e-3)?;
+    let source = csv.display().to_string();
+    let (json, report) = recorded_outputs(&run, &source);
+    let friction = run.friction.clone().unwrap_or_default();
+    let toml = controller_toml(&run.design, &friction, args.torque_limit)?;
+    let html = render_html(&report)?;
+    let files = write_outputs(&args.out, &json, &toml, &html)?;
+    if !args.quiet {
+        for line in &run.log {
+            eprintln!("{line}");
+        }
+        for f in files {
+            println!("wrote {}", f.display());
+        }
+    }
+    Ok(())
+}
+
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(csv) = args.csv.clone() {
+        let knobs = knobs_from(&args);
+        return run_recorded(&args, &csv, &knobs);
+    }
     let plant = load_plant(&args)?;
     let ds = DataSheet::for_plant(&plant, args.start_position, args.travel_window);
     let mut cfg = CommissioningConfig {
-        knobs: DesignKnobs {
-            prefilter: match args.prefilter {
-                PrefilterArg::Butterworth => PrefilterKind::Butterworth,
-                PrefilterArg::Notch => PrefilterKind::Notch,
-            },
-            ..DesignKnobs::default()
-        },
+        knobs: knobs_from(&args),
         ..CommissioningConfig::default()
     };
-    if let Some(v) = args.pm_velocity {
-        cfg.knobs.pm_velocity_deg = v;
-    }
-    if let Some(v) = args.pm_position {
-        cfg.knobs.pm_position_deg = v;
-    }
-    if let Some(v) = args.resonance_suppression_db {
-        cfg.knobs.resonance_suppression_db = v;
-    }
-    cfg.knobs.filter_attenuation_db = args.filter_attenuation_db;
     cfg.excitation.fixed_amplitude_nm = args.excitation_amplitude;
     if let Some(n) = args.prbs_order {
         cfg.excitation.prbs_order = n;

@@ -74,7 +74,8 @@ pub enum FitModel {
 }
 
 impl FitModel {
-    fn tf(self, p: &TwoMassParams) -> crate::lti::Tf {
+    /// The fitted transfer function torque -> motor angle for parameters `p`.
+    pub fn tf(self, p: &TwoMassParams) -> crate::lti::Tf {
         match self {
             FitModel::RigidFlexible => p.tf_rigid_flexible(),
             FitModel::Exact => p.tf_torque_to_motor_angle_undamped_belt(),

@@ -11,6 +11,7 @@ pub mod bootstrap;
 pub mod commission;
 pub mod motion;
 pub mod outputs;
+pub mod recorded;
 pub mod result;
 pub mod runner;
 pub mod validation;

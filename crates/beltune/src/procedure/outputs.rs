@@ -5,8 +5,10 @@
 //! three were built, so a failed run leaves nothing half-written.
 
 use super::commission::{cascade_from_design, Commissioning};
+use super::recorded::RecordedCommissioning;
 use super::result::{FrictionResult, IdentifiedModel, Truth, Validation};
 use crate::design::{ControllerDesign, DesignSummary, Prefilter};
+use crate::ident::{Frf, TwoMassFit};
 use crate::lti::C64;
 use crate::report::{
     BodeCurve, BodePlot, FrequencyMarker, FrfPlot, FrictionPlot, MovePlot, ParameterRow, Report,
@@ -23,20 +25,20 @@ pub struct CommissioningJson {
     pub plant: String,
     /// The identified model.
     pub identified: IdentifiedModel,
-    /// Friction.
-    pub friction: FrictionResult,
+    /// Friction (`null` when it could not be measured).
+    pub friction: Option<FrictionResult>,
     /// Controller: gains, prefilter, achieved margins.
     pub controller: DesignSummary,
-    /// The three validation moves.
-    pub validation: Validation,
+    /// The three validation moves (`null` for recorded data: no axis to move).
+    pub validation: Option<Validation>,
     /// How long the axis was busy, s.
     pub experiment_time_s: f64,
     /// Computation time (FFT, fit, design), s.
     pub computation_time_s: f64,
-    /// PRBS amplitude used, N m.
-    pub excitation_amplitude_nm: f64,
-    /// Where the FRF was measured, m.
-    pub identification_position_m: f64,
+    /// PRBS amplitude used, N m (`null` for recorded data).
+    pub excitation_amplitude_nm: Option<f64>,
+    /// Where the FRF was measured, m (`null` for recorded data).
+    pub identification_position_m: Option<f64>,
     /// For a simulated plant: the true values at the identification position.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub truth: Option<Truth>,
@@ -188,13 +190,13 @@ pub fn commissioning_json(
     CommissioningJson {
         plant: plant.to_string(),
         identified: run.identified.clone(),
-        friction: run.friction.clone(),
+        friction: Some(run.friction.clone()),
         controller: run.design.summary(),
-        validation: run.validation.clone(),
+        validation: Some(run.validation.clone()),
         experiment_time_s: run.experiment_time_s,
         computation_time_s: run.computation_time_s,
-        excitation_amplitude_nm: run.excitation_amplitude_nm,
-        identification_position_m: run.identification_position_m,
+        excitation_amplitude_nm: Some(run.excitation_amplitude_nm),
+        identification_position_m: Some(run.identification_position_m),
         truth,
         log: run.log.clone(),
     }
@@ -204,6 +206,14 @@ fn hz(w_rad_s: f64) -> f64 {
     w_rad_s / (2.0 * PI)
 }
 
+/// `p` shifted by whole turns to within 180 deg of the previous point.
+fn unwrap_deg(mut p: f64, prev: Option<f64>) -> f64 {
+    if let Some(q) = prev {
+        p -= 360.0 * ((p - q) / 360.0).round();
+    }
+    p
+}
+
 fn curve(label: &str, freq_hz: &[f64], h: impl Fn(f64) -> C64) -> BodeCurve {
     let mut phase_deg = Vec::with_capacity(freq_hz.len());
     let mut prev: Option<f64> = None;
@@ -211,15 +221,7 @@ fn curve(label: &str, freq_hz: &[f64], h: impl Fn(f64) -> C64) -> BodeCurve {
     for f in freq_hz {
         let v = h(2.0 * PI * f);
         magnitude_db.push(20.0 * v.norm().log10());
-        let mut p = v.arg().to_degrees();
-        if let Some(q) = prev {
-            while p - q > 180.0 {
-                p -= 360.0;
-            }
-            while p - q < -180.0 {
-                p += 360.0;
-            }
-        }
+        let p = unwrap_deg(v.arg().to_degrees(), prev);
         prev = Some(p);
         phase_deg.push(p);
     }
@@ -247,19 +249,18 @@ fn decimate(x: &[f64], n: usize) -> Vec<f64> {
     x.iter().step_by(step).copied().collect()
 }
 
-/// The report for a run. `before` is the data-sheet model (if any), `truth` the simulation truth.
-pub fn build_report(
-    run: &Commissioning,
-    plant: &str,
-    before: Option<&crate::model::TwoMassParams>,
-    truth: Option<&Truth>,
-) -> Report {
-    let fit = &run.fit;
-    let des = &run.design;
-    let dt = run.dead_time.seconds;
-    // Measured FRF: all lines, model with dead time.
-    let frf = &run.frf;
+/// The measured FRF (all lines) with coherence and the fitted model with dead time.
+pub fn identification_plot(frf: &Frf, fit: &TwoMassFit, dead_time_s: f64) -> FrfPlot {
     let lines: Vec<usize> = (1..frf.freq_hz.len()).collect();
+    let mut prev: Option<f64> = None;
+    let phase_deg = lines
+        .iter()
+        .map(|&i| {
+            let p = unwrap_deg(frf.response[i].arg().to_degrees(), prev);
+            prev = Some(p);
+            p
+        })
+        .collect();
     let measured = BodeCurve {
         label: "measured (torque command -> motor angle)".into(),
         freq_hz: lines.iter().map(|&i| frf.freq_hz[i]).collect(),
@@ -267,34 +268,26 @@ pub fn build_report(
             .iter()
             .map(|&i| 20.0 * frf.response[i].norm().log10())
             .collect(),
-        phase_deg: {
-            let mut prev: Option<f64> = None;
-            lines
-                .iter()
-                .map(|&i| {
-                    let mut p = frf.response[i].arg().to_degrees();
-                    if let Some(q) = prev {
-                        while p - q > 180.0 {
-                            p -= 360.0;
-                        }
-                        while p - q < -180.0 {
-                            p += 360.0;
-                        }
-                    }
-                    prev = Some(p);
-                    p
-                })
-                .collect()
-        },
+        phase_deg,
     };
     let f_lo = measured.freq_hz.first().copied().unwrap_or(1.0);
     let f_hi = measured.freq_hz.last().copied().unwrap_or(1000.0);
     let grid = log_grid_hz(f_lo, f_hi, 400);
-    let tf = fit.params.tf_rigid_flexible();
-    let model = curve("fitted model (2.42) with dead time", &grid, |w| {
-        tf.freq_response(w) * C64::from_polar(1.0, -w * dt)
+    let tf = fit.model.tf(&fit.params);
+    let model = curve("fitted model with dead time", &grid, |w| {
+        tf.freq_response(w) * C64::from_polar(1.0, -w * dead_time_s)
     });
-    let markers = vec![
+    FrfPlot {
+        usable: lines.iter().map(|&i| frf.is_usable(i)).collect(),
+        coherence: lines.iter().map(|&i| frf.coherence[i]).collect(),
+        measured,
+        model,
+        markers: resonance_markers(fit),
+    }
+}
+
+fn resonance_markers(fit: &TwoMassFit) -> Vec<FrequencyMarker> {
+    vec![
         FrequencyMarker {
             label: format!("f_z {:.1} Hz", fit.f_z_hz),
             freq_hz: fit.f_z_hz,
@@ -303,22 +296,18 @@ pub fn build_report(
             label: format!("f_r {:.1} Hz", fit.f_r_hz),
             freq_hz: fit.f_r_hz,
         },
-    ];
-    let frf_plot = FrfPlot {
-        usable: lines.iter().map(|&i| frf.is_usable(i)).collect(),
-        coherence: lines.iter().map(|&i| frf.coherence[i]).collect(),
-        measured,
-        model,
-        markers: markers.clone(),
-    };
-    // Controller and loops.
+    ]
+}
+
+/// The controller and the two open loops with crossovers and margins marked.
+pub fn design_plots(des: &ControllerDesign, fit: &TwoMassFit) -> (BodePlot, Vec<BodePlot>) {
     let grid = log_grid_hz(0.1, 1000.0, 500);
     let controller = BodePlot {
         title: "Controller G_pre G_PI (velocity error -> torque)".into(),
         curves: vec![curve("G_pre G_PI", &grid, |w| {
             des.prefilter.tf().freq_response(w) * C64::new(des.k_p, -des.k_i / w)
         })],
-        markers: markers.clone(),
+        markers: resonance_markers(fit),
     };
     let vm = &des.velocity_margins;
     let pm = &des.position_margins;
@@ -356,6 +345,87 @@ pub fn build_report(
             }],
         },
     ];
+    (controller, open_loops)
+}
+
+fn row(
+    name: &str,
+    unit: &str,
+    before: Option<f64>,
+    after: f64,
+    truth: Option<f64>,
+    d: usize,
+) -> ParameterRow {
+    ParameterRow {
+        name: name.into(),
+        unit: unit.into(),
+        before: before.map(|b| fmt(b, d)),
+        after: fmt(after, d),
+        truth: truth.map(|t| fmt(t, d)),
+    }
+}
+
+/// Rows of the model and the controller (before/truth columns empty).
+fn model_and_controller_rows(id: &IdentifiedModel, des: &ControllerDesign) -> Vec<ParameterRow> {
+    let vm = &des.velocity_margins;
+    let pm = &des.position_margins;
+    vec![
+        row("resonance f_r", "Hz", None, id.f_r_hz, None, 2),
+        row("antiresonance f_z", "Hz", None, id.f_z_hz, None, 2),
+        row(
+            "motor inertia Theta_e",
+            "kg mm^2",
+            None,
+            id.theta_e * 1e6,
+            None,
+            2,
+        ),
+        row("moving mass m_c", "kg", None, id.m_c, None, 2),
+        row("belt stiffness c", "kN/m", None, id.c / 1e3, None, 1),
+        row("motor damping d_m", "N s/m", None, id.d_m, None, 2),
+        row("cart damping d_c", "N s/m", None, id.d_c, None, 2),
+        row("dead time t_T", "ms", None, id.dead_time_s * 1e3, None, 2),
+        row("K_P", "N m s/rad", None, des.k_p, None, 4),
+        row("K_I", "N m/rad", None, des.k_i, None, 3),
+        row("K_PP", "1/s", None, des.k_pp, None, 3),
+        row(
+            "velocity phase margin",
+            "deg",
+            None,
+            vm.phase_margin_deg,
+            None,
+            2,
+        ),
+        row(
+            "position phase margin",
+            "deg",
+            None,
+            pm.phase_margin_deg,
+            None,
+            2,
+        ),
+        row(
+            "gain at resonance",
+            "dB",
+            None,
+            des.gain_at_resonance_db,
+            None,
+            2,
+        ),
+    ]
+}
+
+/// The report for a run. `before` is the data-sheet model (if any), `truth` the simulation truth.
+pub fn build_report(
+    run: &Commissioning,
+    plant: &str,
+    before: Option<&crate::model::TwoMassParams>,
+    truth: Option<&Truth>,
+) -> Report {
+    let fit = &run.fit;
+    let des = &run.design;
+    let frf_plot = identification_plot(&run.frf, fit, run.dead_time.seconds);
+    let (controller, open_loops) = design_plots(des, fit);
     let friction = FrictionPlot {
         velocity_rad_s: run
             .friction_points
@@ -415,121 +485,54 @@ pub fn build_report(
         })
         .collect();
     let id = &run.identified;
-    let row =
-        |name: &str, unit: &str, before: Option<f64>, after: f64, truth: Option<f64>, d: usize| {
-            ParameterRow {
-                name: name.into(),
-                unit: unit.into(),
-                before: before.map(|b| fmt(b, d)),
-                after: fmt(after, d),
-                truth: truth.map(|t| fmt(t, d)),
-            }
-        };
-    let mut parameters = vec![
-        row(
-            "resonance f_r",
-            "Hz",
-            before.map(|b| b.f_r_hz()),
-            id.f_r_hz,
-            truth.map(|t| t.f_r_hz),
-            2,
-        ),
-        row(
-            "antiresonance f_z",
-            "Hz",
-            before.map(|b| b.f_z_hz()),
-            id.f_z_hz,
-            truth.map(|t| t.f_z_hz),
-            2,
-        ),
-        row(
-            "motor inertia Theta_e",
-            "kg mm^2",
+    let mut parameters = model_and_controller_rows(id, des);
+    // before / truth columns of the model rows
+    let columns: [(Option<f64>, Option<f64>); 5] = [
+        (before.map(|b| b.f_r_hz()), truth.map(|t| t.f_r_hz)),
+        (before.map(|b| b.f_z_hz()), truth.map(|t| t.f_z_hz)),
+        (
             before.map(|b| b.theta_e * 1e6),
-            id.theta_e * 1e6,
             truth.map(|t| t.theta_e * 1e6),
-            2,
         ),
-        row(
-            "moving mass m_c",
-            "kg",
-            before.map(|b| b.m_c),
-            id.m_c,
-            truth.map(|t| t.m_c),
-            2,
-        ),
-        row(
-            "belt stiffness c",
-            "kN/m",
-            before.map(|b| b.c / 1e3),
-            id.c / 1e3,
-            truth.map(|t| t.c / 1e3),
-            1,
-        ),
-        row("motor damping d_m", "N s/m", None, id.d_m, None, 2),
-        row("cart damping d_c", "N s/m", None, id.d_c, None, 2),
-        row(
-            "dead time t_T",
-            "ms",
-            None,
-            id.dead_time_s * 1e3,
-            truth.map(|t| t.dead_time_s * 1e3),
-            2,
-        ),
-        row(
-            "viscous friction d_v",
-            "mN m s/rad",
-            None,
-            run.friction.viscous * 1e3,
-            truth.map(|t| t.viscous * 1e3),
-            3,
-        ),
-        row(
-            "Coulomb friction tau_c",
-            "N m",
-            None,
-            run.friction.coulomb,
-            truth.map(|t| t.coulomb),
-            4,
-        ),
-        row(
-            "holding torque",
-            "N m",
-            None,
-            run.holding_torque_nm,
-            None,
-            4,
-        ),
+        (before.map(|b| b.m_c), truth.map(|t| t.m_c)),
+        (before.map(|b| b.c / 1e3), truth.map(|t| t.c / 1e3)),
     ];
-    parameters.extend([
-        row("K_P", "N m s/rad", None, des.k_p, None, 4),
-        row("K_I", "N m/rad", None, des.k_i, None, 3),
-        row("K_PP", "1/s", None, des.k_pp, None, 3),
-        row(
-            "velocity phase margin",
-            "deg",
-            None,
-            vm.phase_margin_deg,
-            None,
-            2,
-        ),
-        row(
-            "position phase margin",
-            "deg",
-            None,
-            pm.phase_margin_deg,
-            None,
-            2,
-        ),
-        row(
-            "gain at resonance",
-            "dB",
-            None,
-            des.gain_at_resonance_db,
-            None,
-            2,
-        ),
-    ]);
+    for (r, (b, t)) in parameters.iter_mut().zip(columns) {
+        let d = if r.unit == "kN/m" { 1 } else { 2 };
+        r.before = b.map(|v| fmt(v, d));
+        r.truth = t.map(|v| fmt(v, d));
+    }
+    parameters[7].truth = truth.map(|t| fmt(t.dead_time_s * 1e3, 2));
+    let f = &run.friction;
+    parameters.splice(
+        8..8,
+        [
+            row(
+                "viscous friction d_v",
+                "mN m s/rad",
+                None,
+                f.viscous * 1e3,
+                truth.map(|t| t.viscous * 1e3),
+                3,
+            ),
+            row(
+                "Coulomb friction tau_c",
+                "N m",
+                None,
+                f.coulomb,
+                truth.map(|t| t.coulomb),
+                4,
+            ),
+            row(
+                "holding torque",
+                "N m",
+                None,
+                run.holding_torque_nm,
+                None,
+                4,
+            ),
+        ],
+    );
     let nl = &run.validation.nonlinear;
     let summary = format!(
         "{plant}: resonance {:.1} Hz, antiresonance {:.1} Hz, fit {:.2} dB rms. Controller: K_P {:.4}, K_I {:.3}, K_PP {:.2}. \
@@ -558,6 +561,77 @@ pub fn build_report(
         parameters,
         validation_rows,
     }
+}
+
+/// `commissioning.json` and the report for a commissioning from recorded data
+/// (`source` names the record). The JSON's `experiment_time_s` is the record's duration.
+pub fn recorded_outputs(run: &RecordedCommissioning, source: &str) -> (CommissioningJson, Report) {
+    let json = CommissioningJson {
+        plant: source.to_string(),
+        identified: run.identified.clone(),
+        friction: run.friction.clone(),
+        controller: run.design.summary(),
+        validation: None,
+        experiment_time_s: run.record_time_s,
+        computation_time_s: run.computation_time_s,
+        excitation_amplitude_nm: None,
+        identification_position_m: None,
+        truth: None,
+        log: run.log.clone(),
+    };
+    let fit = &run.identification.fit;
+    let (controller, open_loops) = design_plots(&run.design, fit);
+    let mut parameters = model_and_controller_rows(&run.identified, &run.design);
+    if let Some(f) = &run.friction {
+        parameters.extend([
+            row(
+                "viscous friction d_v",
+                "(torque unit) s/rad",
+                None,
+                f.viscous,
+                None,
+                5,
+            ),
+            row(
+                "Coulomb friction tau_c",
+                "(torque unit)",
+                None,
+                f.coulomb,
+                None,
+                5,
+            ),
+            row(
+                "constant offset",
+                "(torque unit)",
+                None,
+                f.holding_torque_nm,
+                None,
+                5,
+            ),
+        ]);
+    }
+    let id = &run.identified;
+    let report = Report {
+        title: format!("beltune commissioning report: {source}"),
+        summary: format!(
+            "From recorded data ({source}, {:.1} s): resonance {:.2} Hz, antiresonance {:.2} Hz, fit {:.2} dB rms. \
+             Controller: K_P {:.4e}, K_I {:.4e}, K_PP {:.3}. No validation move: the stages that need the axis were skipped.",
+            run.record_time_s, id.f_r_hz, id.f_z_hz, id.fit_rms_db, run.design.k_p, run.design.k_i, run.design.k_pp
+        ),
+        log: run.log.clone(),
+        frf: Some(identification_plot(
+            &run.identification.frf,
+            fit,
+            id.dead_time_s,
+        )),
+        controller: Some(controller),
+        open_loops,
+        friction: None,
+        moves: Vec::new(),
+        parameters,
+        validation_rows: Vec::new(),
+    };
+    (json, report)
 }
 
 /// Write the three files into `dir` (created if needed), each atomically.

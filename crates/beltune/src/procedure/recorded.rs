@@ -1,0 +1,137 @@
+//! Commissioning from data recorded on a real drive instead of a plant: the
+//! identification comes from a logged periodic excitation (CSV, see
+//! [`crate::ident::recorded`]), friction optionally from a logged motion, then
+//! the design. The stages that need the axis (positioning, holding torque,
+//! amplitude search, friction runs, validation moves) are skipped and say so.
+
+use super::result::{FrictionResult, IdentifiedModel};
+use crate::design::{design, ControllerDesign, DesignInput, DesignKnobs, FrictionParams};
+use crate::ident::{MotionFriction, RecordedIdentification};
+use crate::Result;
+use std::time::Instant;
+
+/// Dead time assumed when the record has no actual-torque column, s (thesis (3.30)).
+pub const DEFAULT_DEAD_TIME_S: f64 = 1e-3;
+
+/// What a recorded commissioning produced.
+#[derive(Clone, Debug)]
+pub struct RecordedCommissioning {
+    /// The identification from the record.
+    pub identification: RecordedIdentification,
+    /// The model summary.
+    pub identified: IdentifiedModel,
+    /// Friction from the motion record (motor angle in rad, torque in N m), if given.
+    pub friction: Option<FrictionResult>,
+    /// The design.
+    pub design: ControllerDesign,
+    /// Duration of the excitation record, s.
+    pub record_time_s: f64,
+    /// Computation time, s.
+    pub computation_time_s: f64,
+    /// One line per stage, including the skipped ones.
+    pub log: Vec<String>,
+}
+
+/// Design from a recorded identification and, optionally, a friction
+/// regression on a recorded motion of the motor angle (rad) under a torque (N m).
+pub fn commission_recorded(
+    identification: RecordedIdentification,
+    motion_friction: Option<MotionFriction>,
+    knobs: &DesignKnobs,
+    t_r_s: f64,
+) -> Result<RecordedCommissioning> {
+    let t0 = Instant::now();
+    let fit = &identification.fit;
+    let p = fit.params;
+    let (dead_time_s, dead_line) = match identification.dead_time {
+        Some(d) => (
+            d.seconds,
+            format!("{:.2} ms from the actual torque", d.seconds * 1e3),
+        ),
+        None => (
+            DEFAULT_DEAD_TIME_S,
+            format!(
+                "no actual-torque column: {:.1} ms assumed (thesis 3.30)",
+                DEFAULT_DEAD_TIME_S * 1e3
+            ),
+        ),
+    };
+    let friction = motion_friction.map(|m| FrictionResult {
+        viscous: m.viscous.max(0.0),
+        coulomb: m.coulomb.max(0.0),
+        linear_viscous: m.viscous.max(0.0),
+        relative_residual: m.relative_residual,
+        holding_torque_nm: m.offset,
+    });
+    let input = DesignInput {
+        model: p,
+        dead_time_s,
+        t_r_s,
+        ts_s: identification.sample_time_s,
+        friction: friction.as_ref().map(|f| FrictionParams {
+            viscous_n_m_s_per_rad: f.viscous,
+            coulomb_n_m: f.coulomb,
+        }),
+    };
+    let des = design(&input, knobs)?;
+    let used = identification.frf.usable_indices();
+    let mean_coherence = if used.is_empty() {
+        0.0
+    } else {
+        used.iter()
+            .map(|&i| identification.frf.coherence[i])
+            .sum::<f64>()
+            / used.len() as f64
+    };
+    let identified = IdentifiedModel {
+        f_r_hz: fit.f_r_hz,
+        f_z_hz: fit.f_z_hz,
+        theta_e: p.theta_e,
+        m_c: p.m_c,
+        c: p.c,
+        d_m: p.d_m,
+        d_c: p.d_c,
+        i_t: p.i_t,
+        dead_time_s,
+        fit_rms_db: fit.fit_rms_db,
+        m_c_sigma: fit.uncertainty.map(|u| u.m_c).unwrap_or(f64::NAN),
+        c_sigma: fit.uncertainty.map(|u| u.c).unwrap_or(f64::NAN),
+        mean_coherence,
+        lines_used: fit.n_lines,
+        position_m: f64::NAN,
+    };
+    let skipped = "skipped (recorded data, no axis)";
+    let mut log = vec![
+        format!("plausibility, positioning, holding torque, excitation amplitude: {skipped}"),
+        format!(
+            "identification: f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.4e}, c {:.4e}, fit {:.2} dB rms over {} lines, coherence {:.3}; dead time {dead_line}",
+            fit.f_r_hz, fit.f_z_hz, p.m_c, p.c, fit.fit_rms_db, fit.n_lines, mean_coherence
+        ),
+        format!(
+            "design: K_P {:.4e}, K_I {:.4e}, K_PP {:.3}; phase margins {:.1} / {:.1} deg",
+            des.k_p,
+            des.k_i,
+            des.k_pp,
+            des.velocity_margins.phase_margin_deg,
+            des.position_margins.phase_margin_deg
+        ),
+    ];
+    log.push(match &friction {
+        Some(f) => format!(
+            "friction (from the motion record): d_v {:.4e}, tau_c {:.4e}, offset {:.4e}, relative residual {:.3}",
+            f.viscous, f.coulomb, f.holding_torque_nm, f.relative_residual
+        ),
+        None => format!("friction: {skipped}: no motion record given"),
+    });
+    log.push(format!("validation moves: {skipped}"));
+    let record_time_s = identification.rows as f64 * identification.sample_time_s;
+    Ok(RecordedCommissioning {
+        identification,
+        identified,
+        friction,
+        design: des,
+        record_time_s,
+        computation_time_s: t0.elapsed().as_secs_f64(),
+        log,
+    })
+}
