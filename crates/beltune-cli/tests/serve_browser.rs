@@ -376,6 +376,24 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
                     .unwrap_or_else(|| panic!("beltune design JSON lacks {key}")),
             );
         }
+        // The move numbers and traces are the server's (deterministic, seeded simulation).
+        let knobs = serve::api::DesignRequest {
+            pm_velocity_deg: Some(PM_AFTER_DEG),
+            ..Default::default()
+        }
+        .validate()
+        .unwrap();
+        let tuned = serve::tuner::Tuner::tune(&LibraryTuner::builtin().unwrap(), &knobs).unwrap();
+        let m = tuned.validation_move.expect("no simulated move");
+        assert_close("max error", number(&c, "max_error").await, m.max_error_m);
+        assert_close("static error", number(&c, "static_error").await, m.static_error_m);
+        for (plot, name) in [("plot-error", "tracking-error"), ("plot-torque", "torque")] {
+            let n: usize = attr(&c, &format!("#{plot} path[data-name={name}]"), "data-points")
+                .await
+                .parse()
+                .unwrap();
+            assert_eq!(n, m.t_s.len(), "{plot} lost points");
+        }
         let path1 = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "d").await;
         assert_ne!(path0, path1, "the open-loop curve was not redrawn");
         let stats = |k: usize| {
