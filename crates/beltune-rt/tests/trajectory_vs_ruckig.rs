@@ -347,3 +347,60 @@ fn thesis_case_table_a8_matches_closed_form() {
     let r = traj.position_range();
     assert!(r.lowest >= -1e-12 && r.highest <= d + FINAL_STATE_TOL);
 }
+
+#[test]
+fn extreme_finite_inputs_never_panic() {
+    // Magnitudes from 1e-200 to 1e200 in every field: the planner must return
+    // a typed error or a finite plan whose end is the target, never panic.
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(99);
+    let mut any = |rng: &mut Xoshiro256PlusPlus| {
+        let m = 10f64.powf(rng.random_range(-200.0..200.0));
+        if rng.random_bool(0.5) {
+            m
+        } else {
+            -m
+        }
+    };
+    let mut planned = 0;
+    for _ in 0..5_000 {
+        let start = State {
+            position: any(&mut rng),
+            velocity: any(&mut rng),
+            acceleration: any(&mut rng),
+        };
+        let limits = Limits {
+            v_max: any(&mut rng).abs(),
+            v_min: -any(&mut rng).abs(),
+            a_max: any(&mut rng).abs(),
+            a_min: -any(&mut rng).abs(),
+            j_max: any(&mut rng).abs(),
+            position_min: f64::NEG_INFINITY,
+            position_max: f64::INFINITY,
+        };
+        // Half the targets admissible (inside the velocity limits, at a = 0).
+        let target = if rng.random_bool(0.5) {
+            State {
+                position: any(&mut rng),
+                velocity: limits.v_max * rng.random_range(0.0..1.0),
+                acceleration: 0.0,
+            }
+        } else {
+            State {
+                position: any(&mut rng),
+                velocity: any(&mut rng),
+                acceleration: any(&mut rng),
+            }
+        };
+        if let Ok(traj) = Trajectory::plan(&start, &target, &limits) {
+            assert!(traj.duration_s().is_finite() && traj.duration_s() >= 0.0);
+            let s = traj.sample(traj.duration_s() * 0.5);
+            assert!(s.position.is_finite() && s.velocity.is_finite());
+            planned += 1;
+        }
+    }
+    println!("extreme inputs: {planned} of 5000 planned");
+    assert!(
+        planned > 100,
+        "only {planned} extreme requests were plannable"
+    );
+}
