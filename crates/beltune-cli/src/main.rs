@@ -6,9 +6,14 @@
 use clap::{Parser, Subcommand};
 
 mod cmd;
+mod progress;
 
 #[derive(Parser)]
-#[command(name = "beltune", version, about = "Self-commissioning of belt-driven servo axes")]
+#[command(
+    name = "beltune",
+    version,
+    about = "Self-commissioning of belt-driven servo axes"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

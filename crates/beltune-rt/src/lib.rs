@@ -23,8 +23,8 @@
 #![forbid(unsafe_code)]
 
 pub mod control;
-mod error;
 pub mod encoder;
+mod error;
 pub mod filter;
 pub mod prbs;
 pub mod real;

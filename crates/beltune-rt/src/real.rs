@@ -129,5 +129,27 @@ macro_rules! impl_real {
     };
 }
 
-impl_real!(f64, sqrt, sin, cos, tan, atan2, exp, floor, fabs, core::f64::consts::PI);
-impl_real!(f32, sqrtf, sinf, cosf, tanf, atan2f, expf, floorf, fabsf, core::f32::consts::PI);
+impl_real!(
+    f64,
+    sqrt,
+    sin,
+    cos,
+    tan,
+    atan2,
+    exp,
+    floor,
+    fabs,
+    core::f64::consts::PI
+);
+impl_real!(
+    f32,
+    sqrtf,
+    sinf,
+    cosf,
+    tanf,
+    atan2f,
+    expf,
+    floorf,
+    fabsf,
+    core::f32::consts::PI
+);

@@ -83,6 +83,16 @@ pub enum Error {
         /// Why no solution exists.
         reason: String,
     },
+    /// An open loop's gain or phase never crosses its critical value on the frequency grid.
+    #[error("no {what} crossover of the open loop between {w_min_rad_s} and {w_max_rad_s} rad/s")]
+    NoCrossover {
+        /// `gain` (|L| = 1) or `phase` (arg L = -180 deg).
+        what: String,
+        /// Lowest grid frequency, rad/s.
+        w_min_rad_s: f64,
+        /// Highest grid frequency, rad/s.
+        w_max_rad_s: f64,
+    },
     /// A designed loop is unstable.
     #[error("unstable closed loop: {reason}")]
     Unstable {
@@ -95,6 +105,14 @@ pub enum Error {
     #[error("safety stop: {reason}")]
     SafetyStop {
         /// Which limit was violated, with the values.
+        reason: String,
+    },
+
+    // ---- report ----
+    /// A plot could not be drawn or the report not rendered.
+    #[error("report: {reason}")]
+    Report {
+        /// What failed.
         reason: String,
     },
 

@@ -6,6 +6,7 @@
 #![no_std]
 #![no_main]
 
+use beltune_rt::control::{CascadeConfig, CascadeController, CascadeGains, Setpoint};
 use beltune_rt::filter::{butterworth_lowpass, Sos};
 
 #[panic_handler]
@@ -18,8 +19,8 @@ fn panic(_info: &core::panic::PanicInfo) -> ! {
 #[no_mangle]
 pub extern "C" fn rust_eh_personality() {}
 
-/// Entry point called by the C runtime. Runs one filter sample so the
-/// real-time code is actually linked, not just type-checked.
+/// Entry point called by the C runtime. Runs one filter sample and one
+/// controller step so the real-time code is actually linked, not just type-checked.
 #[no_mangle]
 pub extern "C" fn main(_argc: i32, _argv: *const *const u8) -> i32 {
     let coeffs = match butterworth_lowpass(123.24, 1e-4) {
@@ -28,7 +29,17 @@ pub extern "C" fn main(_argc: i32, _argv: *const *const u8) -> i32 {
     };
     let mut f = Sos::new(coeffs);
     let y = f.step(1.0);
-    if y.is_finite() {
+    let cfg = match CascadeConfig::<f32>::new(CascadeGains::new(6.29, 0.12, 1.39), 1e-4, 2e-3, 2.0)
+    {
+        Ok(c) => c,
+        Err(_) => return 3,
+    };
+    let mut ctrl = match CascadeController::new(cfg) {
+        Ok(c) => c,
+        Err(_) => return 4,
+    };
+    let out = ctrl.step(&Setpoint::hold(0.01), 0.0);
+    if y.is_finite() && out.finite {
         0
     } else {
         2

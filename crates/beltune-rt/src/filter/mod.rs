@@ -18,6 +18,6 @@ mod tustin;
 
 pub use section::{Cascade, FirstOrder, FirstOrderCoeffs, FreqPoint, Sos, SosCoeffs};
 pub use tustin::{
-    butterworth_lowpass, first_order_from_continuous, notch, sos_from_continuous,
-    velocity_filter, Prewarp,
+    butterworth_lowpass, first_order_from_continuous, notch, sos_from_continuous, velocity_filter,
+    Prewarp,
 };

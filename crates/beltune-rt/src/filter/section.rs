@@ -237,7 +237,10 @@ pub struct FirstOrder<T = f64> {
 impl<T: Real> FirstOrder<T> {
     /// A section with zero state.
     pub fn new(coeffs: FirstOrderCoeffs<T>) -> Self {
-        FirstOrder { coeffs, s1: T::ZERO }
+        FirstOrder {
+            coeffs,
+            s1: T::ZERO,
+        }
     }
 
     /// Filter one sample. Cost: 3 multiplications, 2 additions.

@@ -53,7 +53,7 @@ pub fn sos_from_continuous(
     };
     let b = map(num);
     let a = map(den);
-    if !(a[0].is_finite() && a[0] != 0.0) || !b.iter().chain(a.iter()).all(|x| x.is_finite()) {
+    if !(a[0].is_finite() && a[0] != 0.0 && b.iter().chain(a.iter()).all(|x| x.is_finite())) {
         return Err(Error::InvalidParameter {
             name: "den",
             reason: "continuous denominator degenerates under the Tustin transform",
@@ -78,7 +78,7 @@ pub fn first_order_from_continuous(
     let k = tustin_gain(ts_s, prewarp)?;
     let b = [num[0] * k + num[1], num[1] - num[0] * k];
     let a = [den[0] * k + den[1], den[1] - den[0] * k];
-    if !(a[0].is_finite() && a[0] != 0.0) || !b.iter().chain(a.iter()).all(|x| x.is_finite()) {
+    if !(a[0].is_finite() && a[0] != 0.0 && b.iter().chain(a.iter()).all(|x| x.is_finite())) {
         return Err(Error::InvalidParameter {
             name: "den",
             reason: "continuous denominator degenerates under the Tustin transform",

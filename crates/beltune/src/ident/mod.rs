@@ -1,1 +1,30 @@
-//! Identification of thesis chapter 3 (being written).
+//! Identification, thesis chapter 3: from a recorded excitation to the
+//! frequency response (ETFE with Clary's method II and coherence), the
+//! identification strategies, the current-loop dead time, the parametric
+//! two-mass fit, and friction.
+//!
+//! - [`etfe`]: (3.7)-(3.15), averaging (Figure 3.7), coherence, log-spaced subset (Figure 3.9)
+//! - [`features`]: resonance peak, antiresonance dip, rigid-body asymptote (start values)
+//! - [`fit`]: Levenberg-Marquardt fit of (2.42), (3.32)-(3.34), with uncertainties
+//! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24)
+//! - [`dead_time`]: current-loop dead time (3.25)-(3.30)
+//! - [`record`]: CSV records with validation
+
+pub mod dead_time;
+pub mod etfe;
+pub mod features;
+pub mod fit;
+pub mod record;
+pub mod strategy;
+
+#[cfg(test)]
+mod tests_measured;
+#[cfg(test)]
+pub(crate) mod testutil;
+
+pub use dead_time::{estimate_dead_time, DeadTime};
+pub use etfe::{etfe, log_spaced_subset, EtfeConfig, Frf, LineStatus};
+pub use features::{frf_features, FrfFeatures};
+pub use fit::{fit_two_mass, FitConfig, FitModel, ModelUnits, ParamUncertainty, TwoMassFit};
+pub use record::{read_csv_columns, CsvColumns, Sampling};
+pub use strategy::{direct_closed_loop, indirect_closed_loop, open_loop};

@@ -1,7 +1,18 @@
 //! Plant models of thesis chapter 2.
 //!
+//! - [`params`]: physical (data-sheet) parameters, belt segments (2.10),
+//!   replacement stiffness/damping (2.26)/(2.27), linearization, friction totals (3.36).
+//! - [`three_mass`]: the nonlinear three-mass model (2.20) and its linearization.
+//! - [`nonlinear_two_mass`]: the nonlinear two-mass model (2.30).
 //! - [`two_mass`]: the linear two-mass model and its transfer functions (2.33)-(2.49).
+//! - [`rigs`]: the built-in plants (`egc70`, `sim-a`, `sim-b`, `sim-c`) and TOML loading.
 
+pub mod nonlinear_two_mass;
+pub mod params;
+pub mod rigs;
+pub mod three_mass;
 pub mod two_mass;
 
+pub use params::{BeltSegments, FrictionTotals, PhysicalParams, SegmentLengths};
+pub use rigs::{builtin, load_toml, LinearPlant, Plant, BUILTIN_NAMES};
 pub use two_mass::TwoMassParams;

@@ -209,7 +209,11 @@ mod tests {
     #[test]
     fn table_a5_resonance_and_antiresonance() {
         let p = TwoMassParams::thesis_table_a5();
-        assert!((p.f_r_hz() - 134.00).abs() / 134.0 < 0.005, "{}", p.f_r_hz());
+        assert!(
+            (p.f_r_hz() - 134.00).abs() / 134.0 < 0.005,
+            "{}",
+            p.f_r_hz()
+        );
         assert!((p.f_z_hz() - 76.51).abs() / 76.51 < 0.005, "{}", p.f_z_hz());
     }
 
@@ -271,8 +275,14 @@ mod tests {
             TwoMassParams { m_c: 0.0, ..ok },
             TwoMassParams { c: -1.0, ..ok },
             TwoMassParams { d_c: -1.0, ..ok },
-            TwoMassParams { theta_e: f64::NAN, ..ok },
-            TwoMassParams { i_t: f64::INFINITY, ..ok },
+            TwoMassParams {
+                theta_e: f64::NAN,
+                ..ok
+            },
+            TwoMassParams {
+                i_t: f64::INFINITY,
+                ..ok
+            },
         ] {
             assert!(bad.validate().is_err(), "{bad:?}");
         }

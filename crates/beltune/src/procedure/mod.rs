@@ -1,1 +1,16 @@
-//! The commissioning procedure (being written).
+//! The commissioning procedure (thesis chapters 3-5): stages driven sample by
+//! sample through the [`crate::plant::Axis`] trait, under a safety supervisor.
+
+pub mod progress;
+pub mod safety;
+
+pub use progress::{LogProgress, NoProgress, Progress};
+pub use safety::{SafetyLimits, SafetySupervisor, Violation};
+
+pub mod bootstrap;
+pub mod commission;
+pub mod motion;
+pub mod outputs;
+pub mod result;
+pub mod runner;
+pub mod validation;

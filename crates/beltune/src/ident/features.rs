@@ -1,0 +1,139 @@
+//! Features of a measured torque -> motor angle FRF that need no model fit:
+//! resonance peak, antiresonance dip and the rigid-body (low-frequency)
+//! asymptote. They give the start values of the parametric fit (3.34), so no
+//! user guess is needed, and an independent check of the fitted model.
+//!
+//! The FRF of (2.42) falls with `1/w^2`; the features are searched in the
+//! compensated magnitude `|G| w^2`, which is `1/J_rigid` far below the
+//! antiresonance, has its minimum at `w_z` and its maximum at `w_r`.
+
+use super::etfe::Frf;
+use crate::{Error, Result};
+use std::f64::consts::PI;
+
+/// What the measured FRF shows by itself.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FrfFeatures {
+    /// Resonance (peak of `|G| w^2`), Hz, refined by a parabola through three lines.
+    pub resonance_hz: f64,
+    /// Antiresonance (dip of `|G| w^2` below the resonance), Hz, refined likewise.
+    pub antiresonance_hz: f64,
+    /// `|G|` at the resonance line, rad per input unit.
+    pub resonance_magnitude: f64,
+    /// `|G|` at the antiresonance line, rad per input unit.
+    pub antiresonance_magnitude: f64,
+    /// Rigid-body inertia `Theta_e + i_t^2 m_c` from the low-frequency
+    /// asymptote `|G| ~ 1/(J w^2)`, input unit s^2/rad (kg m^2 for torque in N m).
+    pub rigid_inertia: f64,
+    /// Number of lines the asymptote was averaged over.
+    pub asymptote_lines: usize,
+}
+
+/// Find resonance, antiresonance and the low-frequency asymptote among the
+/// usable lines of `frf` (a torque -> angle FRF with the integrator).
+///
+/// The rigid inertia uses the lines below the antiresonance, each corrected
+/// by the undamped two-mass shape `|1 - (w/w_z)^2| / |1 - (w/w_r)^2|` (from
+/// (2.40)-(2.42)), and takes the median.
+///
+/// Errors ([`Error::FitFailed`]): fewer than 5 usable lines, no interior
+/// maximum (resonance) or no interior minimum below it (antiresonance).
+pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
+    let idx = frf.usable_indices();
+    if idx.len() < 5 {
+        return Err(Error::FitFailed {
+            reason: format!(
+                "only {} usable frequency lines (excited and coherent); need at least 5",
+                idx.len()
+            ),
+        });
+    }
+    let comp: Vec<f64> = idx
+        .iter()
+        .map(|&i| frf.response[i].norm() * frf.omega_rad_s(i).powi(2))
+        .collect();
+    // resonance: the largest interior local maximum of |G| w^2
+    let peak = (1..idx.len() - 1)
+        .filter(|&k| comp[k] >= comp[k - 1] && comp[k] >= comp[k + 1])
+        .max_by(|&a, &b| comp[a].total_cmp(&comp[b]))
+        .ok_or_else(|| Error::FitFailed {
+            reason: "no resonance peak inside the usable band".into(),
+        })?;
+    // antiresonance: the deepest interior local minimum below the resonance
+    let dip = (1..peak)
+        .filter(|&k| comp[k] <= comp[k - 1] && comp[k] <= comp[k + 1])
+        .min_by(|&a, &b| comp[a].total_cmp(&comp[b]))
+        .ok_or_else(|| Error::FitFailed {
+            reason: "no antiresonance dip below the resonance inside the usable band".into(),
+        })?;
+    let f = |k: usize| frf.freq_hz[idx[k]];
+    let resonance_hz = parabolic_vertex(
+        [f(peak - 1), f(peak), f(peak + 1)],
+        [comp[peak - 1].ln(), comp[peak].ln(), comp[peak + 1].ln()],
+    );
+    let antiresonance_hz = parabolic_vertex(
+        [f(dip - 1), f(dip), f(dip + 1)],
+        [comp[dip - 1].ln(), comp[dip].ln(), comp[dip + 1].ln()],
+    );
+
+    // rigid-body asymptote from the lines below 0.7 f_z (at least those below f_z)
+    let wz = 2.0 * PI * antiresonance_hz;
+    let wr = 2.0 * PI * resonance_hz;
+    let estimate = |k: usize| {
+        let w = frf.omega_rad_s(idx[k]);
+        let shape = (1.0 - (w / wz).powi(2)).abs() / (1.0 - (w / wr).powi(2)).abs();
+        shape / comp[k]
+    };
+    let mut low: Vec<f64> = (0..dip)
+        .filter(|&k| f(k) < 0.7 * antiresonance_hz)
+        .map(estimate)
+        .collect();
+    if low.is_empty() {
+        low = (0..dip).map(estimate).collect();
+    }
+    if low.is_empty() {
+        return Err(Error::FitFailed {
+            reason: "no usable line below the antiresonance for the rigid-body asymptote".into(),
+        });
+    }
+    low.sort_by(f64::total_cmp);
+    let rigid_inertia = low[low.len() / 2];
+    Ok(FrfFeatures {
+        resonance_hz,
+        antiresonance_hz,
+        resonance_magnitude: frf.response[idx[peak]].norm(),
+        antiresonance_magnitude: frf.response[idx[dip]].norm(),
+        rigid_inertia,
+        asymptote_lines: low.len(),
+    })
+}
+
+/// Abscissa of the vertex of the parabola through three points; the middle
+/// abscissa when the points are collinear or the vertex leaves the interval.
+fn parabolic_vertex(x: [f64; 3], y: [f64; 3]) -> f64 {
+    let d1 = (y[1] - y[0]) / (x[1] - x[0]);
+    let d2 = (y[2] - y[1]) / (x[2] - x[1]);
+    let curv = (d2 - d1) / (x[2] - x[0]);
+    if curv == 0.0 || !curv.is_finite() {
+        return x[1];
+    }
+    // y' = d1 + curv (2 x - x0 - x1) = 0
+    let v = 0.5 * (x[0] + x[1] - d1 / curv);
+    if v > x[0] && v < x[2] {
+        v
+    } else {
+        x[1]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parabola_vertex_is_exact_for_a_parabola() {
+        let p = |x: f64| -(x - 2.3).powi(2) + 4.0;
+        let v = parabolic_vertex([2.0, 2.5, 3.5], [p(2.0), p(2.5), p(3.5)]);
+        assert!((v - 2.3).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,490 @@
+//! Parametric fit (3.5): the two-mass model (2.42) fitted to the magnitude
+//! of a measured FRF by the log-magnitude least-squares problem
+//! (3.33)-(3.34), solved with Levenberg-Marquardt (`levenberg-marquardt`).
+//!
+//! - Parameters `p = [m_c, c, d_m, d_c]` (3.32), optionally also `Theta_e`
+//!   (`free_inertia`). They are fitted as logarithms, so every fitted value
+//!   is positive.
+//! - Lines: the nearly log-spaced subset `F_o` of the usable lines (Figure 3.9).
+//! - Start values from the FRF itself ([`frf_features`]): the antiresonance
+//!   dip gives `c/m_c` and `d_c`, the resonance peak the inertia ratio and
+//!   the resonance damping, the low-frequency asymptote the rigid inertia.
+//! - Uncertainty: `cov(q) = s^2 (J^T J)^-1` with `s^2 = J*/(n_o - n_p)` at the
+//!   optimum (`q = ln p`), mapped to `sigma_p = p sigma_q`.
+//!
+//! Units: with the torque in N m the parameters are SI (`theta_e` kg m^2,
+//! `m_c` kg, `c` N/m, `d_m`, `d_c` N s/m, `i_t` m/rad). A rotary two-mass
+//! system uses `i_t = 1` (then `m_c` is the load inertia in kg m^2, `c` in
+//! N m/rad). With the motor current as input ([`ModelUnits::Current`]) every
+//! N m becomes A: inertias in A s^2/rad, and so on.
+
+use super::etfe::Frf;
+use super::features::{frf_features, FrfFeatures};
+use crate::error::require_positive;
+use crate::lti::C64;
+use crate::model::TwoMassParams;
+use crate::{Error, Result};
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use nalgebra::{DMatrix, DVector, Dyn, Owned};
+
+/// The input unit of the identified model (a label; the numbers are the same).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModelUnits {
+    /// Input is torque in N m: SI parameters.
+    #[default]
+    Torque,
+    /// Input is motor current in A (torque constant unknown): every N m reads A.
+    Current,
+}
+
+/// Settings of the parametric fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitConfig {
+    /// `Theta_e` from the data sheet (kg m^2, or A s^2/rad in current units).
+    /// `None`: fitted (implies `free_inertia`), started from the FRF.
+    pub theta_e: Option<f64>,
+    /// Fit `Theta_e` too, starting from `theta_e` if given.
+    pub free_inertia: bool,
+    /// Transmission `i_t = r / i_g`, m/rad; `1.0` for a rotary two-mass system.
+    pub i_t: f64,
+    /// Size `n_o` of the nearly log-spaced line subset (Figure 3.9).
+    pub n_log_lines: usize,
+    /// Unit label of the input.
+    pub units: ModelUnits,
+    /// Which transfer function is fitted.
+    pub model: FitModel,
+}
+
+/// The model structure whose magnitude is fitted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitModel {
+    /// The rigid/flexible approximation (2.42) the thesis fits and the design uses.
+    RigidFlexible,
+    /// The exact two-mass transfer function (2.39) (belt damping `d = 0`),
+    /// which (2.42) approximates; with damping the two differ by a few
+    /// percent in `d_m`, which this removes.
+    #[default]
+    Exact,
+}
+
+impl Default for FitConfig {
+    fn default() -> Self {
+        FitConfig {
+            theta_e: None,
+            free_inertia: true,
+            i_t: 1.0,
+            n_log_lines: 150,
+            units: ModelUnits::Torque,
+            model: FitModel::Exact,
+        }
+    }
+}
+
+/// One-sigma uncertainties of the fitted parameters, same units as the
+/// parameters (0 for a parameter that was not fitted).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ParamUncertainty {
+    /// sigma of `theta_e`.
+    pub theta_e: f64,
+    /// sigma of `m_c`.
+    pub m_c: f64,
+    /// sigma of `c`.
+    pub c: f64,
+    /// sigma of `d_m`.
+    pub d_m: f64,
+    /// sigma of `d_c`.
+    pub d_c: f64,
+}
+
+/// The result of [`fit_two_mass`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct TwoMassFit {
+    /// Fitted parameters (belt damping `d` is 0: (2.42) neglects it).
+    pub params: TwoMassParams,
+    /// Start values derived from the FRF.
+    pub start: TwoMassParams,
+    /// Features of the measured FRF the start values came from.
+    pub features: FrfFeatures,
+    /// Uncertainties (pseudo-inverse of `J^T J`: a parameter pushed to its
+    /// positivity bound, e.g. a negligible damping, shows sigma ~ 0);
+    /// `None` if they cannot be computed.
+    pub uncertainty: Option<ParamUncertainty>,
+    /// Resonance of the fitted model (2.44), Hz.
+    pub f_r_hz: f64,
+    /// Antiresonance of the fitted model (2.45), Hz.
+    pub f_z_hz: f64,
+    /// RMS of the dB residuals (3.33) over the fitted lines, dB.
+    pub fit_rms_db: f64,
+    /// Number of lines `n_o` used.
+    pub n_lines: usize,
+    /// Whether `Theta_e` was fitted.
+    pub free_inertia: bool,
+    /// Unit label.
+    pub units: ModelUnits,
+}
+
+/// Fit (2.42) to the usable lines of `frf` (torque or current -> motor angle).
+///
+/// Errors: invalid settings, too few usable lines for the number of
+/// parameters, no resonance/antiresonance visible, LM failure or a
+/// non-finite optimum ([`Error::FitFailed`]).
+pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
+    require_positive("i_t", cfg.i_t)?;
+    if let Some(t) = cfg.theta_e {
+        require_positive("theta_e", t)?;
+    }
+    let free = cfg.free_inertia || cfg.theta_e.is_none();
+    let n_params = if free { 5 } else { 4 };
+    let lines = frf.log_spaced_subset(cfg.n_log_lines.max(n_params + 1));
+    if lines.len() <= n_params {
+        return Err(Error::FitFailed {
+            reason: format!(
+                "{} usable frequency lines for {} parameters",
+                lines.len(),
+                n_params
+            ),
+        });
+    }
+    let features = frf_features(frf)?;
+    let start = start_values(&features, cfg.theta_e, cfg.i_t)?;
+
+    let omega: Vec<f64> = lines.iter().map(|&i| frf.omega_rad_s(i)).collect();
+    let measured_db: Vec<f64> = lines.iter().map(|&i| frf.magnitude_db(i)).collect();
+    let mut q0 = vec![start.m_c.ln(), start.c.ln(), start.d_m.ln(), start.d_c.ln()];
+    if free {
+        q0.push(start.theta_e.ln());
+    }
+    let problem = LogMagnitudeProblem {
+        omega,
+        measured_db,
+        fixed: start,
+        free,
+        model: cfg.model,
+        q: DVector::from_vec(q0),
+    };
+    let (solved, report) = LevenbergMarquardt::new()
+        .with_patience(400)
+        .minimize(problem);
+    if !report.termination.was_successful() {
+        return Err(Error::FitFailed {
+            reason: format!("Levenberg-Marquardt stopped: {:?}", report.termination),
+        });
+    }
+    let params = solved.to_params(&solved.q);
+    if params.validate().is_err() {
+        return Err(Error::FitFailed {
+            reason: format!("non-physical optimum {params:?}"),
+        });
+    }
+    let r = solved
+        .residual_vec(&solved.q)
+        .ok_or_else(|| Error::FitFailed {
+            reason: "model not finite at the optimum".into(),
+        })?;
+    let n = r.len();
+    let sum_sq = r.norm_squared();
+    let fit_rms_db = (sum_sq / n as f64).sqrt();
+    let uncertainty = solved.jacobian_mat().and_then(|j| {
+        let s2 = sum_sq / (n - n_params) as f64;
+        // pseudo-inverse: a damping driven to its positivity bound (ln p -> -inf)
+        // has no sensitivity left and gets sigma 0 instead of breaking the rest
+        let jtj = j.transpose() * &j;
+        let scale = jtj.diagonal().max();
+        let cov = jtj.pseudo_inverse(1e-12 * scale).ok()? * s2;
+        let sig = |k: usize| cov[(k, k)].max(0.0).sqrt();
+        Some(ParamUncertainty {
+            m_c: params.m_c * sig(0),
+            c: params.c * sig(1),
+            d_m: params.d_m * sig(2),
+            d_c: params.d_c * sig(3),
+            theta_e: if free { params.theta_e * sig(4) } else { 0.0 },
+        })
+    });
+    Ok(TwoMassFit {
+        f_r_hz: params.f_r_hz(),
+        f_z_hz: params.f_z_hz(),
+        params,
+        start,
+        features,
+        uncertainty,
+        fit_rms_db,
+        n_lines: n,
+        free_inertia: free,
+        units: cfg.units,
+    })
+}
+
+/// Start values from the FRF features (closed forms of (2.40)-(2.42) at the
+/// modes, undamped shape elsewhere):
+/// - `R^2 = (w_r/w_z)^2 = 1 + kappa` (2.46)-(2.47); `Theta_e = J/R^2` if not given;
+/// - `i_t^2 m_c = kappa Theta_e`, `c = m_c w_z^2` (2.45);
+/// - at the dip `|G| = d_c / (c w_z i_t^2 m_c)` gives `d_c`;
+/// - at the peak `|G| = kappa c / (w_r^3 D_r)` with
+///   `D_r = i_t^2 m_c d_m + Theta_e d_c` gives `d_m`.
+pub fn start_values(f: &FrfFeatures, theta_e: Option<f64>, i_t: f64) -> Result<TwoMassParams> {
+    let wr = 2.0 * std::f64::consts::PI * f.resonance_hz;
+    let wz = 2.0 * std::f64::consts::PI * f.antiresonance_hz;
+    let r2 = (wr / wz).powi(2);
+    if r2.is_nan() || r2 <= 1.0 {
+        return Err(Error::FitFailed {
+            reason: format!(
+                "resonance {:.3} Hz is not above the antiresonance {:.3} Hz",
+                f.resonance_hz, f.antiresonance_hz
+            ),
+        });
+    }
+    let theta_e = theta_e.unwrap_or(f.rigid_inertia / r2);
+    let kappa = r2 - 1.0;
+    let it2 = i_t * i_t;
+    let m_c = kappa * theta_e / it2;
+    let c = m_c * wz * wz;
+    let d_c = (f.antiresonance_magnitude * c * wz * it2 * m_c).max(1e-9 * c / wz);
+    let d_r = kappa * c / (wr.powi(3) * f.resonance_magnitude);
+    let d_m_raw = (d_r - theta_e * d_c) / (it2 * m_c);
+    let d_m = if d_m_raw > 0.0 {
+        d_m_raw
+    } else {
+        0.1 * d_r / (it2 * m_c)
+    };
+    let p = TwoMassParams {
+        theta_e,
+        m_c,
+        c,
+        d: 0.0,
+        d_m: d_m.max(1e-9 * d_c),
+        d_c,
+        i_t,
+    };
+    p.validate().map_err(|e| Error::FitFailed {
+        reason: format!("start values from the FRF are not physical: {e}"),
+    })?;
+    Ok(p)
+}
+
+/// `20 log10 |G(j w; p)|` of (2.42).
+pub fn model_magnitude_db(p: &TwoMassParams, w_rad_s: f64) -> f64 {
+    20.0 * p.tf_rigid_flexible().freq_response(w_rad_s).norm().log10()
+}
+
+/// The residuals (3.33) as a `levenberg-marquardt` problem in `q = ln p`.
+struct LogMagnitudeProblem {
+    omega: Vec<f64>,
+    measured_db: Vec<f64>,
+    /// Holds `theta_e` (when not free) and `i_t`.
+    fixed: TwoMassParams,
+    free: bool,
+    model: FitModel,
+    q: DVector<f64>,
+}
+
+impl LogMagnitudeProblem {
+    fn to_params(&self, q: &DVector<f64>) -> TwoMassParams {
+        TwoMassParams {
+            m_c: q[0].exp(),
+            c: q[1].exp(),
+            d_m: q[2].exp(),
+            d_c: q[3].exp(),
+            theta_e: if self.free {
+                q[4].exp()
+            } else {
+                self.fixed.theta_e
+            },
+            ..self.fixed
+        }
+    }
+
+    fn residual_vec(&self, q: &DVector<f64>) -> Option<DVector<f64>> {
+        let p = self.to_params(q);
+        let g = match self.model {
+            FitModel::RigidFlexible => p.tf_rigid_flexible(),
+            FitModel::Exact => p.tf_torque_to_motor_angle_undamped_belt(),
+        };
+        let r = DVector::from_iterator(
+            self.omega.len(),
+            self.omega.iter().zip(&self.measured_db).map(|(&w, &m)| {
+                let h: C64 = g.freq_response(w);
+                m - 20.0 * h.norm().log10()
+            }),
+        );
+        r.iter().all(|x| x.is_finite()).then_some(r)
+    }
+
+    /// Central differences in `q` (the model is smooth; step 1e-6 in ln p).
+    fn jacobian_mat(&self) -> Option<DMatrix<f64>> {
+        const H: f64 = 1e-6;
+        let n = self.q.len();
+        let mut j = DMatrix::zeros(self.omega.len(), n);
+        for k in 0..n {
+            let mut qp = self.q.clone();
+            let mut qm = self.q.clone();
+            qp[k] += H;
+            qm[k] -= H;
+            let col = (self.residual_vec(&qp)? - self.residual_vec(&qm)?) / (2.0 * H);
+            j.set_column(k, &col);
+        }
+        Some(j)
+    }
+}
+
+impl LeastSquaresProblem<f64, Dyn, Dyn> for LogMagnitudeProblem {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, Dyn>;
+    type ParameterStorage = Owned<f64, Dyn>;
+
+    fn set_params(&mut self, x: &DVector<f64>) {
+        self.q.copy_from(x);
+    }
+
+    fn params(&self) -> DVector<f64> {
+        self.q.clone()
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        self.residual_vec(&self.q)
+    }
+
+    fn jacobian(&self) -> Option<DMatrix<f64>> {
+        self.jacobian_mat()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ident::etfe::{etfe, EtfeConfig};
+    use crate::ident::testutil::{prbs, simulate_two_mass};
+
+    /// Thesis Tables A.11-A.13 (S_A, S_B, S_C), i_t = 78 mm / 2 pi; `d` is the belt damping.
+    fn sim_set(name: &str, d: f64) -> TwoMassParams {
+        let base = TwoMassParams {
+            theta_e: 44.90e-6,
+            m_c: 10.0,
+            c: 200e3,
+            d,
+            d_m: 100.0,
+            d_c: 100.0,
+            i_t: 0.078 / (2.0 * std::f64::consts::PI),
+        };
+        match name {
+            "sim-a" => base,
+            "sim-b" => TwoMassParams { m_c: 1.0, ..base },
+            "sim-c" => TwoMassParams { c: 2000e3, ..base },
+            _ => unreachable!(),
+        }
+    }
+
+    /// Open-loop PRBS experiment on the exact ZOH discretization, ETFE, fit.
+    fn identify(truth: &TwoMassParams) -> TwoMassFit {
+        let ts = 100e-6;
+        let u = prbs(11, 2, 0.3, 4); // 4094 samples per period: 2.44 Hz lines
+        let (phi, _) = simulate_two_mass(truth, &u, ts);
+        let frf = etfe(
+            &u,
+            &phi,
+            &EtfeConfig {
+                sample_time_s: ts,
+                period_samples: 4094,
+                skip_periods: 1,
+                // below f_s / 10 the ZOH-sampled response equals the continuous one in magnitude
+                band_hz: Some((1.0, 1000.0)),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        fit_two_mass(
+            &frf,
+            &FitConfig {
+                theta_e: Some(truth.theta_e),
+                free_inertia: false,
+                i_t: truth.i_t,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    }
+
+    fn rel(a: f64, b: f64) -> f64 {
+        (a / b - 1.0).abs()
+    }
+
+    /// Issue 4: on sim-a/b/c without noise all four parameters within 1 %.
+    /// (2.42) neglects the belt damping `d`, so the data come from the plant
+    /// with `d = 0`; (2.42) is then the model of (2.39) up to the rigid/flexible
+    /// split of the damping, which is what the 1 % tolerance covers.
+    #[test]
+    fn sim_sets_without_noise_within_one_percent() {
+        const TOL: f64 = 0.01;
+        for name in ["sim-a", "sim-b", "sim-c"] {
+            let truth = sim_set(name, 0.0);
+            let fit = identify(&truth);
+            let p = fit.params;
+            println!("{name}: {p:?} rms {} dB", fit.fit_rms_db);
+            assert!(rel(p.m_c, truth.m_c) < TOL, "{name} m_c {}", p.m_c);
+            assert!(rel(p.c, truth.c) < TOL, "{name} c {}", p.c);
+            assert!(rel(p.d_m, truth.d_m) < TOL, "{name} d_m {}", p.d_m);
+            assert!(rel(p.d_c, truth.d_c) < TOL, "{name} d_c {}", p.d_c);
+            assert!(rel(fit.f_r_hz, truth.f_r_hz()) < TOL);
+            assert!(rel(fit.f_z_hz, truth.f_z_hz()) < TOL);
+        }
+    }
+
+    /// With the tables' belt damping d = 20 N s/m (not in the fitted model),
+    /// the belt damping shows up in the fitted d_m/d_c and biases m_c and c
+    /// by up to 6 % (sim-b, measured); 8 % bounds that bias.
+    #[test]
+    fn sim_sets_with_belt_damping_keep_mass_and_stiffness() {
+        const TOL: f64 = 0.08;
+        for name in ["sim-a", "sim-b", "sim-c"] {
+            let truth = sim_set(name, 20.0);
+            let fit = identify(&truth);
+            let p = fit.params;
+            println!("{name} d=20: {p:?} rms {} dB", fit.fit_rms_db);
+            assert!(rel(p.m_c, truth.m_c) < TOL, "{name} m_c {}", p.m_c);
+            assert!(rel(p.c, truth.c) < TOL, "{name} c {}", p.c);
+        }
+    }
+
+    /// The start values alone are already close (they come from the data).
+    #[test]
+    fn start_values_are_close_to_the_truth() {
+        let truth = sim_set("sim-a", 0.0);
+        let fit = identify(&truth);
+        // closed forms at the modes from 2.44 Hz lines: within 20 %
+        assert!(rel(fit.start.m_c, truth.m_c) < 0.2, "{:?}", fit.start);
+        assert!(rel(fit.start.c, truth.c) < 0.2, "{:?}", fit.start);
+        assert!(rel(fit.start.d_c, truth.d_c) < 0.6, "{:?}", fit.start);
+    }
+
+    #[test]
+    fn bad_settings_are_rejected() {
+        let truth = sim_set("sim-a", 0.0);
+        let ts = 100e-6;
+        let u = prbs(9, 4, 0.3, 3);
+        let (phi, _) = simulate_two_mass(&truth, &u, ts);
+        let frf = etfe(
+            &u,
+            &phi,
+            &EtfeConfig {
+                sample_time_s: ts,
+                period_samples: 511 * 4,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let cfg = FitConfig {
+            i_t: -1.0,
+            ..Default::default()
+        };
+        assert!(matches!(
+            fit_two_mass(&frf, &cfg),
+            Err(Error::InvalidParameter { .. })
+        ));
+        let cfg = FitConfig {
+            theta_e: Some(f64::NAN),
+            ..Default::default()
+        };
+        assert!(fit_two_mass(&frf, &cfg).is_err());
+    }
+}

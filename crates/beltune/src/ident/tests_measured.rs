@@ -1,0 +1,104 @@
+//! Tests on the real measurement `twomass-bench/multisine-a.csv` (see the
+//! data README): 2500 Hz, 20 periods of 2500 samples, first period transient,
+//! rotary two-mass bench, current units, free inertia.
+
+use super::*;
+use std::path::PathBuf;
+
+fn data_path() -> PathBuf {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/twomass-bench/multisine-a.csv");
+    assert!(
+        p.exists(),
+        "measured data missing: {} (expected /work/shared beside the repository root)",
+        p.display()
+    );
+    p
+}
+
+fn measured_frf(input: &str, band_hz: Option<(f64, f64)>) -> Frf {
+    let cols = read_csv_columns(&data_path(), &["t_s", input, "theta_motor_rad"]).unwrap();
+    let s = record::check_uniform_time(&cols, "t_s", 5000, 0.01).unwrap();
+    assert!((s.sample_time_s - 1.0 / 2500.0).abs() < 1e-9);
+    let cfg = EtfeConfig {
+        sample_time_s: s.sample_time_s,
+        period_samples: 2500,
+        skip_periods: 1,
+        band_hz,
+        ..Default::default()
+    };
+    etfe(
+        cols.column(input).unwrap(),
+        cols.column("theta_motor_rad").unwrap(),
+        &cfg,
+    )
+    .unwrap()
+}
+
+fn rotary_current_fit(frf: &Frf) -> TwoMassFit {
+    fit_two_mass(
+        frf,
+        &FitConfig {
+            theta_e: None,
+            free_inertia: true,
+            i_t: 1.0,
+            units: ModelUnits::Current,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
+
+/// The reference input excites exactly the README's band (11-250 Hz, 1 Hz
+/// lines); the FRF shows the antiresonance and resonance below 100 Hz.
+#[test]
+fn measured_frf_band_and_modes() {
+    let frf = measured_frf("iq_ref_A", None);
+    assert_eq!(frf.n_periods, 19);
+    let idx = frf.usable_indices();
+    assert_eq!(frf.freq_hz[idx[0]], 11.0);
+    assert_eq!(frf.freq_hz[*idx.last().unwrap()], 250.0);
+    assert_eq!(idx.len(), 240);
+    let feat = frf_features(&frf).unwrap();
+    // README: antiresonance and resonance below 100 Hz, resonance above the dip
+    assert!(feat.antiresonance_hz > 20.0 && feat.antiresonance_hz < feat.resonance_hz);
+    assert!(feat.resonance_hz < 100.0, "{feat:?}");
+    // the peak stands well above and the dip well below the 1/w^2 line
+    let backbone = 1.0 / feat.rigid_inertia;
+    let w = |f: f64| 2.0 * std::f64::consts::PI * f;
+    assert!(feat.resonance_magnitude * w(feat.resonance_hz).powi(2) > 10.0 * backbone);
+    assert!(feat.antiresonance_magnitude * w(feat.antiresonance_hz).powi(2) < 0.3 * backbone);
+}
+
+/// Rotary, current units, free inertia: the fitted model's modes lie within
+/// 3 % (issue 4) of the measured FRF's peak and dip, its rigid-body inertia
+/// matches the low-frequency asymptote, and the two current signals agree.
+#[test]
+fn measured_fit_matches_peak_dip_and_asymptote() {
+    /// Issue 4: fitted f_r, f_z within 3 % of the measured peak and dip.
+    const MODE_TOL: f64 = 0.03;
+    /// The asymptote is read from lines 11-37 Hz, only 1.5-5x below the
+    /// antiresonance, through an undamped shape correction: 5 %.
+    const ASYMPTOTE_TOL: f64 = 0.05;
+    /// A good fit of a two-mass model to a real bench: a few dB at most.
+    const MAX_RMS_DB: f64 = 2.0;
+    let frf = measured_frf("iq_ref_A", None);
+    let fit = rotary_current_fit(&frf);
+    let feat = fit.features;
+    println!("{fit:#?}");
+    assert!((fit.f_r_hz / feat.resonance_hz - 1.0).abs() < MODE_TOL);
+    assert!((fit.f_z_hz / feat.antiresonance_hz - 1.0).abs() < MODE_TOL);
+    let j = fit.params.rigid_inertia();
+    assert!((j / feat.rigid_inertia - 1.0).abs() < ASYMPTOTE_TOL, "{j}");
+    assert!(fit.fit_rms_db < MAX_RMS_DB, "{}", fit.fit_rms_db);
+    let u = fit.uncertainty.expect("uncertainty");
+    assert!(u.c > 0.0 && u.c < 0.05 * fit.params.c, "{u:?}");
+    assert!(u.m_c > 0.0 && u.m_c < 0.05 * fit.params.m_c, "{u:?}");
+
+    // the measured current, restricted to the excited band, gives the same modes
+    let frf_meas = measured_frf("iq_meas_A", Some((11.0, 250.0)));
+    let fit_meas = rotary_current_fit(&frf_meas);
+    const INPUT_AGREEMENT: f64 = 0.01;
+    assert!((fit_meas.f_r_hz / fit.f_r_hz - 1.0).abs() < INPUT_AGREEMENT);
+    assert!((fit_meas.f_z_hz / fit.f_z_hz - 1.0).abs() < INPUT_AGREEMENT);
+}

@@ -1,0 +1,115 @@
+//! Closed-loop motion under the runner: follow a planned trajectory with the
+//! cascaded controller of `beltune-rt`, move to a position.
+
+use super::runner::{Runner, Sample};
+use crate::Result;
+use beltune_rt::control::{
+    BeltStretch, CartSample, CascadeConfig, CascadeController, MotionSample, Setpoint,
+    SetpointConversion,
+};
+use beltune_rt::trajectory::{Limits, State, Trajectory};
+
+/// How the desired cart trajectory becomes the controller's motor setpoint.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TrackOptions {
+    /// Feedforward preview in samples (the current-loop dead time `n_T`), 0 for none.
+    pub preview_samples: usize,
+    /// Belt-stretch compensation (THESIS-NOTES): `Off` for a rigid belt.
+    pub belt_stretch: BeltStretch<f64>,
+    /// Check the following error against the supervisor's limit.
+    pub check_following_error: bool,
+}
+
+/// A recorded closed-loop run.
+#[derive(Clone, Debug, Default)]
+pub struct TrackRecord {
+    /// Time since the start of the run, s.
+    pub time_s: Vec<f64>,
+    /// Desired cart position, m.
+    pub desired_m: Vec<f64>,
+    /// Desired cart velocity, m/s.
+    pub desired_velocity_m_s: Vec<f64>,
+    /// What was measured.
+    pub samples: Vec<Sample>,
+    /// Duration of the trajectory itself (the rest is settling), s.
+    pub trajectory_duration_s: f64,
+}
+
+/// Motor setpoint for the cart trajectory at `time_s` (relative to the encoder origin).
+fn motor_sample(
+    conv: &SetpointConversion<f64>,
+    origin_m: f64,
+    t: &Trajectory,
+    time_s: f64,
+) -> MotionSample<f64> {
+    let s = t.sample(time_s);
+    conv.motor_sample(&CartSample {
+        position_m: s.position - origin_m,
+        velocity_m_s: s.velocity,
+        acceleration_m_s2: s.acceleration,
+        jerk_m_s3: s.jerk,
+    })
+}
+
+/// Follow `traj` (cart coordinates) with a controller built from `config`, then
+/// hold its end for `settle_s`. The controller starts bumplessly at the
+/// current position.
+pub fn track(
+    runner: &mut Runner,
+    config: &CascadeConfig<f64>,
+    traj: &Trajectory,
+    settle_s: f64,
+    opts: TrackOptions,
+) -> Result<TrackRecord> {
+    let ts = runner.info().sample_time_s;
+    let mut ctrl = CascadeController::new(*config)?;
+    ctrl.reset_to(runner.motor_angle_rad());
+    let conv = SetpointConversion::new(runner.i_t(), opts.belt_stretch)?;
+    let origin = runner.origin_m();
+    let duration = traj.duration_s();
+    let n = ((duration + settle_s.max(0.0)) / ts).ceil() as usize;
+    let mut rec = TrackRecord {
+        trajectory_duration_s: duration,
+        ..Default::default()
+    };
+    rec.time_s.reserve(n);
+    for k in 0..n {
+        let t = k as f64 * ts;
+        let now = motor_sample(&conv, origin, traj, t);
+        let ahead = motor_sample(&conv, origin, traj, t + opts.preview_samples as f64 * ts);
+        let sp = Setpoint::with_preview(now, ahead);
+        let out = ctrl.step(&sp, runner.motor_angle_rad());
+        let desired = traj.sample(t);
+        let following = opts
+            .check_following_error
+            .then(|| desired.position - runner.position_m());
+        let sample = runner.step(out.torque_nm, following)?;
+        rec.time_s.push(t);
+        rec.desired_m.push(desired.position);
+        rec.desired_velocity_m_s.push(desired.velocity);
+        rec.samples.push(sample);
+    }
+    Ok(rec)
+}
+
+/// Move from the current position to `target_m` at rest, within `limits`.
+pub fn move_to(
+    runner: &mut Runner,
+    config: &CascadeConfig<f64>,
+    target_m: f64,
+    limits: &Limits,
+    settle_s: f64,
+) -> Result<TrackRecord> {
+    let start = State::at_rest(runner.position_m());
+    let traj = Trajectory::plan(&start, &State::at_rest(target_m), limits)?;
+    track(
+        runner,
+        config,
+        &traj,
+        settle_s,
+        TrackOptions {
+            check_following_error: true,
+            ..Default::default()
+        },
+    )
+}

@@ -1,0 +1,40 @@
+//! Progress reporting of the commissioning stages. The library only calls this
+//! trait; the command-line program draws progress bars (indicatif) from it.
+
+/// Receives the progress of the commissioning procedure.
+pub trait Progress {
+    /// A stage starts; it will run about `total_samples` axis samples (0 if it runs none).
+    fn stage_started(&mut self, name: &str, total_samples: u64);
+    /// `samples` more axis samples of the current stage are done.
+    fn advance(&mut self, samples: u64);
+    /// The stage is done; `summary` is one log line of what it found.
+    fn stage_finished(&mut self, summary: &str);
+}
+
+/// Discards all progress (for tests and `--quiet`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn stage_started(&mut self, _name: &str, _total_samples: u64) {}
+    fn advance(&mut self, _samples: u64) {}
+    fn stage_finished(&mut self, _summary: &str) {}
+}
+
+/// Records the log lines (the report shows them).
+#[derive(Clone, Debug, Default)]
+pub struct LogProgress {
+    /// One line per finished stage: `"<stage>: <summary>"`.
+    pub lines: Vec<String>,
+    current: String,
+}
+
+impl Progress for LogProgress {
+    fn stage_started(&mut self, name: &str, _total_samples: u64) {
+        self.current = name.to_string();
+    }
+    fn advance(&mut self, _samples: u64) {}
+    fn stage_finished(&mut self, summary: &str) {
+        self.lines.push(format!("{}: {}", self.current, summary));
+    }
+}

@@ -1,0 +1,306 @@
+//! The safety supervisor, active in every commissioning stage: a travel window
+//! inside the stroke, a torque limit, a velocity limit and a following-error
+//! limit. It only judges; the procedure reacts to a [`Violation`] by stopping
+//! the excitation at once and bringing the axis to rest with a jerk-limited stop.
+
+use crate::error::{require_finite, require_positive};
+use crate::{Error, Result};
+
+/// Limits the supervisor enforces (cart coordinates, measured on the motor side as `i_t phi_m`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SafetyLimits {
+    /// Lowest allowed cart position, m.
+    pub travel_min_m: f64,
+    /// Highest allowed cart position, m.
+    pub travel_max_m: f64,
+    /// Largest allowed torque command magnitude, N m.
+    pub torque_max_nm: f64,
+    /// Largest allowed cart speed, m/s.
+    pub velocity_max_m_s: f64,
+    /// Largest allowed following error (desired minus measured position) in
+    /// closed-loop stages, m.
+    pub following_error_max_m: f64,
+}
+
+impl SafetyLimits {
+    /// Check the limits for consistency.
+    pub fn validate(&self) -> Result<()> {
+        require_finite("travel_min_m", self.travel_min_m)?;
+        require_finite("travel_max_m", self.travel_max_m)?;
+        if self.travel_max_m <= self.travel_min_m {
+            return Err(Error::invalid(
+                "travel window",
+                self.travel_max_m - self.travel_min_m,
+                "the travel window must have positive width (max > min)",
+            ));
+        }
+        require_positive("torque_max_nm", self.torque_max_nm)?;
+        require_positive("velocity_max_m_s", self.velocity_max_m_s)?;
+        require_positive("following_error_max_m", self.following_error_max_m)?;
+        Ok(())
+    }
+
+    /// Width of the travel window, m.
+    pub fn travel_width_m(&self) -> f64 {
+        self.travel_max_m - self.travel_min_m
+    }
+}
+
+/// Which limit was violated, with the values (SI units).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub enum Violation {
+    /// The position left the travel window.
+    Travel {
+        /// Measured position, m.
+        position_m: f64,
+        /// Window, m.
+        min_m: f64,
+        /// Window, m.
+        max_m: f64,
+    },
+    /// The position will leave the travel window before the axis can stop.
+    TravelAhead {
+        /// Measured position, m.
+        position_m: f64,
+        /// Where the axis would come to rest with the stop deceleration, m.
+        stop_position_m: f64,
+    },
+    /// The speed exceeded the limit.
+    Velocity {
+        /// Measured speed, m/s.
+        velocity_m_s: f64,
+        /// Limit, m/s.
+        limit_m_s: f64,
+    },
+    /// A torque command beyond the limit was requested.
+    Torque {
+        /// Requested torque, N m.
+        torque_nm: f64,
+        /// Limit, N m.
+        limit_nm: f64,
+    },
+    /// The following error exceeded the limit.
+    FollowingError {
+        /// Error, m.
+        error_m: f64,
+        /// Limit, m.
+        limit_m: f64,
+    },
+    /// A measurement was not finite (encoder or torque fault).
+    NonFinite,
+}
+
+impl std::fmt::Display for Violation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Violation::Travel {
+                position_m,
+                min_m,
+                max_m,
+            } => write!(
+                f,
+                "position {:.1} mm left the travel window [{:.1}, {:.1}] mm",
+                position_m * 1e3,
+                min_m * 1e3,
+                max_m * 1e3
+            ),
+            Violation::TravelAhead {
+                position_m,
+                stop_position_m,
+            } => write!(
+                f,
+                "at {:.1} mm the axis could not stop before {:.1} mm, outside the travel window",
+                position_m * 1e3,
+                stop_position_m * 1e3
+            ),
+            Violation::Velocity {
+                velocity_m_s,
+                limit_m_s,
+            } => write!(
+                f,
+                "speed {:.3} m/s exceeded the limit {:.3} m/s",
+                velocity_m_s.abs(),
+                limit_m_s
+            ),
+            Violation::Torque {
+                torque_nm,
+                limit_nm,
+            } => write!(
+                f,
+                "torque {:.3} N m exceeded the limit {:.3} N m",
+                torque_nm.abs(),
+                limit_nm
+            ),
+            Violation::FollowingError { error_m, limit_m } => write!(
+                f,
+                "following error {:.2} mm exceeded the limit {:.2} mm",
+                error_m.abs() * 1e3,
+                limit_m * 1e3
+            ),
+            Violation::NonFinite => write!(f, "a measurement was not finite"),
+        }
+    }
+}
+
+/// The supervisor: call [`SafetySupervisor::check`] every sample.
+#[derive(Clone, Debug)]
+pub struct SafetySupervisor {
+    limits: SafetyLimits,
+    /// Deceleration assumed for the "can it still stop?" look-ahead, m/s^2.
+    stop_deceleration_m_s2: f64,
+}
+
+impl SafetySupervisor {
+    /// A supervisor for `limits`; `stop_deceleration_m_s2` is the deceleration
+    /// the jerk-limited stop can be relied on to reach (used for the
+    /// look-ahead that stops an excitation before it reaches the window edge).
+    pub fn new(limits: SafetyLimits, stop_deceleration_m_s2: f64) -> Result<Self> {
+        limits.validate()?;
+        require_positive("stop_deceleration_m_s2", stop_deceleration_m_s2)?;
+        Ok(SafetySupervisor {
+            limits,
+            stop_deceleration_m_s2,
+        })
+    }
+
+    /// The limits.
+    pub fn limits(&self) -> &SafetyLimits {
+        &self.limits
+    }
+
+    /// Distance needed to stop from `velocity_m_s` with the stop deceleration, m.
+    pub fn stopping_distance_m(&self, velocity_m_s: f64) -> f64 {
+        velocity_m_s * velocity_m_s / (2.0 * self.stop_deceleration_m_s2)
+    }
+
+    /// Judge one sample. `following_error_m` is `None` in open-loop stages.
+    pub fn check(
+        &self,
+        position_m: f64,
+        velocity_m_s: f64,
+        torque_command_nm: f64,
+        following_error_m: Option<f64>,
+    ) -> std::result::Result<(), Violation> {
+        let l = &self.limits;
+        if !(position_m.is_finite() && velocity_m_s.is_finite() && torque_command_nm.is_finite()) {
+            return Err(Violation::NonFinite);
+        }
+        if position_m < l.travel_min_m || position_m > l.travel_max_m {
+            return Err(Violation::Travel {
+                position_m,
+                min_m: l.travel_min_m,
+                max_m: l.travel_max_m,
+            });
+        }
+        let stop = position_m + velocity_m_s.signum() * self.stopping_distance_m(velocity_m_s);
+        if stop < l.travel_min_m || stop > l.travel_max_m {
+            return Err(Violation::TravelAhead {
+                position_m,
+                stop_position_m: stop,
+            });
+        }
+        if velocity_m_s.abs() > l.velocity_max_m_s {
+            return Err(Violation::Velocity {
+                velocity_m_s,
+                limit_m_s: l.velocity_max_m_s,
+            });
+        }
+        // A command exactly at the limit is saturation, not a violation.
+        if torque_command_nm.abs() > l.torque_max_nm * (1.0 + 1e-9) {
+            return Err(Violation::Torque {
+                torque_nm: torque_command_nm,
+                limit_nm: l.torque_max_nm,
+            });
+        }
+        if let Some(e) = following_error_m {
+            if !e.is_finite() {
+                return Err(Violation::NonFinite);
+            }
+            if e.abs() > l.following_error_max_m {
+                return Err(Violation::FollowingError {
+                    error_m: e,
+                    limit_m: l.following_error_max_m,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn limits() -> SafetyLimits {
+        SafetyLimits {
+            travel_min_m: 0.0,
+            travel_max_m: 0.5,
+            torque_max_nm: 1.0,
+            velocity_max_m_s: 1.0,
+            following_error_max_m: 0.01,
+        }
+    }
+
+    #[test]
+    fn each_limit_is_enforced() {
+        let s = SafetySupervisor::new(limits(), 10.0).unwrap();
+        assert!(s.check(0.25, 0.0, 0.5, Some(0.001)).is_ok());
+        assert!(matches!(
+            s.check(0.6, 0.0, 0.0, None),
+            Err(Violation::Travel { .. })
+        ));
+        // 0.45 m moving at 1 m/s towards 0.5 m: needs 0.05 m to stop at 10 m/s^2 -> stops at 0.5 m exactly: ok;
+        assert!(s.check(0.449, 0.99, 0.0, None).is_ok());
+        // 0.48 m at 0.9 m/s needs 0.0405 m -> 0.5205 m: outside.
+        assert!(matches!(
+            s.check(0.48, 0.9, 0.0, None),
+            Err(Violation::TravelAhead { .. })
+        ));
+        assert!(matches!(
+            s.check(0.1, 1.5, 0.0, None),
+            Err(Violation::Velocity { .. })
+        ));
+        assert!(
+            s.check(0.25, 0.0, 1.0, None).is_ok(),
+            "saturation is not a violation"
+        );
+        assert!(matches!(
+            s.check(0.25, 0.0, -1.2, None),
+            Err(Violation::Torque { .. })
+        ));
+        assert!(matches!(
+            s.check(0.25, 0.0, 0.0, Some(-0.02)),
+            Err(Violation::FollowingError { .. })
+        ));
+        assert!(matches!(
+            s.check(f64::NAN, 0.0, 0.0, None),
+            Err(Violation::NonFinite)
+        ));
+    }
+
+    #[test]
+    fn inconsistent_limits_are_rejected() {
+        let mut l = limits();
+        l.travel_max_m = -1.0;
+        assert!(SafetySupervisor::new(l, 10.0).is_err());
+        assert!(SafetySupervisor::new(limits(), 0.0).is_err());
+        let l = SafetyLimits {
+            torque_max_nm: f64::NAN,
+            ..limits()
+        };
+        assert!(SafetySupervisor::new(l, 10.0).is_err());
+    }
+
+    #[test]
+    fn messages_name_the_values_in_mm() {
+        let v = Violation::Travel {
+            position_m: 0.6,
+            min_m: 0.0,
+            max_m: 0.5,
+        };
+        assert_eq!(
+            v.to_string(),
+            "position 600.0 mm left the travel window [0.0, 500.0] mm"
+        );
+    }
+}

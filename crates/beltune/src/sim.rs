@@ -1,1 +1,0 @@
-//! Time-domain simulation of an axis (being written).

@@ -1,0 +1,475 @@
+//! The simulated test rig: [`SimAxis`] runs any [`Plant`] behind the
+//! [`Axis`] trait, sample by sample, as a drive sees it.
+//!
+//! Per sample of `T_s` (10 kHz for the built-ins):
+//! 1. the torque command is saturated at the torque limit and enters the
+//!    current loop, modelled as a dead time of `n = round(T_d / T_s)` samples
+//!    (a delay line; the thesis identifies the current loop as a dead time, 3.4);
+//! 2. the delayed torque is held constant over the sample (zero-order hold) and
+//!    drives the plant: a physical plant with the nonlinear three-mass model
+//!    (2.20) (or, by [`SimConfig::model`], the nonlinear two-mass model (2.30)),
+//!    integrated with RK4 in `n_sub` sub-steps chosen from the stiffest belt
+//!    mode, and Coulomb friction with a velocity-level stick-slip model
+//!    (`mech.rs`); a linear set exactly (ZOH discretization of (2.33));
+//! 3. the drive measures at the end of the sample: the motor encoder counts
+//!    `floor((phi_m - phi_m(0)) / q)`, the actual torque (the delayed torque plus
+//!    seeded Gaussian noise) and, for evaluation only, the cart position from a
+//!    linear encoder.
+//!
+//! The input-output relation of one sample is therefore
+//! `counts_k ~ phi_m((k+1) T_s)` driven by `tau_{k-n}` held over `[k T_s, (k+1) T_s)`:
+//! in the frequency domain `G(j w) e^{-j w n T_s} e^{+j w T_s / 2}` (the ZOH's
+//! half-sample lag and the measurement at the end of the sample), which the
+//! tests compare against.
+
+mod linear;
+mod mech;
+
+use crate::error::{require_finite, require_non_negative, require_positive};
+use crate::model::params::{FrictionTotals, PhysicalParams};
+use crate::model::three_mass::ThreeMassState;
+use crate::model::{Plant, TwoMassParams};
+use crate::plant::{Axis, AxisInfo, Measurement};
+use crate::{Error, Result};
+use mech::Mech;
+use nalgebra::{SMatrix, SVector};
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+/// Which model simulates a physical plant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SimModel {
+    /// The nonlinear three-mass model (2.20) (default).
+    #[default]
+    ThreeMass,
+    /// The nonlinear two-mass model (2.30).
+    TwoMass,
+}
+
+/// Simulation settings (public fields, `Default`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct SimConfig {
+    /// Seed of the noise generator (Xoshiro256++): equal seeds, equal runs.
+    pub seed: u64,
+    /// Standard deviation of the noise on the measured actual torque, N m.
+    pub torque_noise_nm: f64,
+    /// Initial cart position, m (`None`: the middle of the stroke; 0 for a linear set).
+    pub initial_cart_position_m: Option<f64>,
+    /// Tilt override, rad (`None`: the plant's own tilt).
+    pub tilt_rad: Option<f64>,
+    /// Model used for a physical plant.
+    pub model: SimModel,
+    /// Resolution of the (evaluation-only) linear encoder on the cart, m per count.
+    pub cart_encoder_resolution_m: f64,
+    /// Largest internal sub-step, s (`None`: chosen from the stiffest mode so
+    /// that `w_max h <= 0.25`).
+    pub max_substep_s: Option<f64>,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            seed: 0x5EED,
+            torque_noise_nm: 2e-3,
+            initial_cart_position_m: None,
+            tilt_rad: None,
+            model: SimModel::ThreeMass,
+            cart_encoder_resolution_m: 1e-6,
+            max_substep_s: None,
+        }
+    }
+}
+
+/// RK4 accuracy target: the largest `w_max h` of a sub-step. RK4's relative
+/// frequency error is about `(w h)^4 / 120`, below 4e-5 at 0.25.
+const MAX_OMEGA_H: f64 = 0.25;
+
+#[derive(Clone, Debug)]
+enum Dynamics {
+    ThreeMass(Box<Mech<3, 3>>),
+    TwoMass(Box<Mech<2, 1>>),
+    Linear {
+        phi: SMatrix<f64, 4, 4>,
+        gamma: SVector<f64, 4>,
+        x: SVector<f64, 4>,
+    },
+}
+
+/// A simulated axis (see the module docs).
+#[derive(Clone, Debug)]
+pub struct SimAxis {
+    plant: Plant,
+    config: SimConfig,
+    info: AxisInfo,
+    dynamics: Dynamics,
+    n_sub: usize,
+    h_sub: f64,
+    delay: Vec<f64>,
+    delay_pos: usize,
+    applied_torque_nm: f64,
+    rng: Xoshiro256PlusPlus,
+    steps: u64,
+    phi_m_zero_rad: f64,
+    rejected_commands: u64,
+}
+
+impl SimAxis {
+    /// A simulated axis for `plant`, at rest with an unstretched belt at the
+    /// configured initial cart position. Typed errors for an invalid plant or
+    /// configuration (position outside the stroke, negative noise, ...).
+    pub fn new(plant: &Plant, config: SimConfig) -> Result<Self> {
+        plant.validate()?;
+        require_non_negative("torque_noise_nm", config.torque_noise_nm)?;
+        require_positive(
+            "cart_encoder_resolution_m",
+            config.cart_encoder_resolution_m,
+        )?;
+        if let Some(h) = config.max_substep_s {
+            require_positive("max_substep_s", h)?;
+        }
+        let mut plant = plant.clone();
+        if let Some(tilt) = config.tilt_rad {
+            match &mut plant {
+                Plant::Physical(p) => p.tilt_rad = tilt,
+                Plant::Linear(_) => {
+                    return Err(Error::invalid(
+                        "tilt_rad",
+                        tilt,
+                        "a linear simulation set has no gravity; use a physical plant",
+                    ))
+                }
+            }
+            plant.validate()?;
+        }
+        let info = plant.info();
+        let xi0 = match (&plant, config.initial_cart_position_m) {
+            (Plant::Physical(p), None) => 0.5 * p.stroke_m,
+            (Plant::Linear(_), None) => 0.0,
+            (_, Some(x)) => x,
+        };
+        let n_delay = (plant.dead_time_s() / info.sample_time_s).round() as usize;
+        let mut axis = SimAxis {
+            dynamics: Dynamics::Linear {
+                phi: SMatrix::zeros(),
+                gamma: SVector::zeros(),
+                x: SVector::zeros(),
+            },
+            plant,
+            rng: Xoshiro256PlusPlus::seed_from_u64(config.seed),
+            config,
+            info,
+            n_sub: 1,
+            h_sub: info.sample_time_s,
+            delay: vec![0.0; n_delay],
+            delay_pos: 0,
+            applied_torque_nm: 0.0,
+            steps: 0,
+            phi_m_zero_rad: 0.0,
+            rejected_commands: 0,
+        };
+        axis.set_cart_position(xi0)?;
+        axis.phi_m_zero_rad = axis.motor_angle_rad();
+        Ok(axis)
+    }
+
+    /// Put the cart at rest at `xi_m` with an unstretched belt (velocities
+    /// zero). The encoder is not reset: the counts jump like a real encoder
+    /// whose axis was moved by hand. Error if `xi_m` is outside the stroke.
+    pub fn set_cart_position(&mut self, xi_m: f64) -> Result<()> {
+        require_finite("cart position [m]", xi_m)?;
+        match self.plant.clone() {
+            Plant::Physical(p) => {
+                if !(0.0..=p.stroke_m).contains(&xi_m) {
+                    return Err(Error::invalid(
+                        "cart position [m]",
+                        xi_m,
+                        format!("outside the stroke [0, {}] m", p.stroke_m),
+                    ));
+                }
+                self.dynamics = match self.config.model {
+                    SimModel::ThreeMass => Dynamics::ThreeMass(Box::new(three_mass_mech(&p, xi_m))),
+                    SimModel::TwoMass => Dynamics::TwoMass(Box::new(two_mass_mech(&p, xi_m))),
+                };
+                // sub-steps from the stiffest configuration (both stroke ends)
+                let mut w_max: f64 = 0.0;
+                let mut d_max: f64 = 0.0;
+                for x in [0.0, p.stroke_m] {
+                    let (w, d) = match self.config.model {
+                        SimModel::ThreeMass => three_mass_mech(&p, x).rate_bounds(),
+                        SimModel::TwoMass => two_mass_mech(&p, x).rate_bounds(),
+                    };
+                    w_max = w_max.max(w);
+                    d_max = d_max.max(d);
+                }
+                let mut h = MAX_OMEGA_H / w_max.max(d_max).max(1e-12);
+                if let Some(hmax) = self.config.max_substep_s {
+                    h = h.min(hmax);
+                }
+                self.n_sub = ((p.sample_time_s / h).ceil() as usize).max(1);
+                self.h_sub = p.sample_time_s / self.n_sub as f64;
+            }
+            Plant::Linear(l) => {
+                let (phi, gamma) = linear::zoh(&l.two_mass, l.sample_time_s);
+                let x = SVector::<f64, 4>::new(xi_m / l.two_mass.i_t, 0.0, xi_m, 0.0);
+                self.dynamics = Dynamics::Linear { phi, gamma, x };
+                self.n_sub = 1;
+                self.h_sub = l.sample_time_s;
+            }
+        }
+        Ok(())
+    }
+
+    /// The simulated plant (with the tilt override applied).
+    pub fn plant(&self) -> &Plant {
+        &self.plant
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &SimConfig {
+        &self.config
+    }
+
+    /// Simulated time, s (samples times `T_s`).
+    pub fn time_s(&self) -> f64 {
+        self.steps as f64 * self.info.sample_time_s
+    }
+
+    /// Samples simulated so far.
+    pub fn samples(&self) -> u64 {
+        self.steps
+    }
+
+    /// Internal sub-steps per sample.
+    pub fn substeps(&self) -> usize {
+        self.n_sub
+    }
+
+    /// True motor angle `phi_m`, rad.
+    pub fn motor_angle_rad(&self) -> f64 {
+        match &self.dynamics {
+            Dynamics::ThreeMass(m) => m.q[0],
+            Dynamics::TwoMass(m) => m.q[0],
+            Dynamics::Linear { x, .. } => x[0],
+        }
+    }
+
+    /// True motor velocity `omega_m`, rad/s.
+    pub fn motor_velocity_rad_s(&self) -> f64 {
+        match &self.dynamics {
+            Dynamics::ThreeMass(m) => m.v[0],
+            Dynamics::TwoMass(m) => m.v[0],
+            Dynamics::Linear { x, .. } => x[1],
+        }
+    }
+
+    /// True cart position `xi`, m.
+    pub fn cart_position_m(&self) -> f64 {
+        match &self.dynamics {
+            Dynamics::ThreeMass(m) => m.q[2],
+            Dynamics::TwoMass(m) => m.q[1],
+            Dynamics::Linear { x, .. } => x[2],
+        }
+    }
+
+    /// True cart velocity `xi'`, m/s.
+    pub fn cart_velocity_m_s(&self) -> f64 {
+        match &self.dynamics {
+            Dynamics::ThreeMass(m) => m.v[2],
+            Dynamics::TwoMass(m) => m.v[1],
+            Dynamics::Linear { x, .. } => x[3],
+        }
+    }
+
+    /// The full three-mass state (2.18), if the three-mass model runs.
+    pub fn three_mass_state(&self) -> Option<ThreeMassState> {
+        match &self.dynamics {
+            Dynamics::ThreeMass(m) => Some(ThreeMassState {
+                phi_m_rad: m.q[0],
+                omega_m_rad_s: m.v[0],
+                phi_2_rad: m.q[1],
+                omega_2_rad_s: m.v[1],
+                xi_m: m.q[2],
+                xi_dot_m_s: m.v[2],
+            }),
+            _ => None,
+        }
+    }
+
+    /// The torque acting on the motor during the last sample (after
+    /// saturation and dead time, without measurement noise), N m.
+    pub fn applied_torque_nm(&self) -> f64 {
+        self.applied_torque_nm
+    }
+
+    /// The linear two-mass parameters at the current cart position (the truth
+    /// an identification should find).
+    pub fn linearized_truth(&self) -> TwoMassParams {
+        let xi = self.cart_position_m();
+        // validated at construction; positions outside the stroke are clamped
+        self.plant
+            .linearize(xi)
+            .or_else(|_| self.plant.linearize(0.0))
+            .expect("plant validated at construction")
+    }
+
+    /// The simulated dead time, `n T_s` (the plant's dead time rounded to whole samples), s.
+    pub fn dead_time_s(&self) -> f64 {
+        self.delay.len() as f64 * self.info.sample_time_s
+    }
+
+    /// The friction totals seen at the motor (3.36).
+    pub fn friction_truth(&self) -> FrictionTotals {
+        self.plant.friction_totals()
+    }
+
+    /// Non-finite torque commands received (each applied as 0 N m).
+    pub fn rejected_commands(&self) -> u64 {
+        self.rejected_commands
+    }
+
+    fn advance(&mut self, tau: f64) {
+        let params = match &self.plant {
+            Plant::Physical(p) => Some(p),
+            Plant::Linear(_) => None,
+        };
+        match &mut self.dynamics {
+            Dynamics::ThreeMass(m) => {
+                let p = params.expect("three-mass dynamics belong to a physical plant");
+                for _ in 0..self.n_sub {
+                    set_three_mass_segments(m, p);
+                    m.step(tau, self.h_sub);
+                }
+            }
+            Dynamics::TwoMass(m) => {
+                let p = params.expect("two-mass dynamics belong to a physical plant");
+                for _ in 0..self.n_sub {
+                    set_two_mass_segments(m, p);
+                    m.step(tau, self.h_sub);
+                }
+            }
+            Dynamics::Linear { phi, gamma, x } => {
+                *x = *phi * *x + *gamma * tau;
+            }
+        }
+    }
+}
+
+impl Axis for SimAxis {
+    fn info(&self) -> AxisInfo {
+        self.info
+    }
+
+    fn step(&mut self, torque_command_nm: f64) -> Measurement {
+        let cmd = if torque_command_nm.is_finite() {
+            torque_command_nm
+        } else {
+            self.rejected_commands += 1;
+            0.0
+        };
+        let lim = self.info.torque_limit_nm;
+        let sat = cmd.clamp(-lim, lim);
+        let tau = if self.delay.is_empty() {
+            sat
+        } else {
+            let out = self.delay[self.delay_pos];
+            self.delay[self.delay_pos] = sat;
+            self.delay_pos = (self.delay_pos + 1) % self.delay.len();
+            out
+        };
+        self.applied_torque_nm = tau;
+        self.advance(tau);
+        self.steps += 1;
+        let noise = if self.config.torque_noise_nm > 0.0 {
+            let z: f64 = StandardNormal.sample(&mut self.rng);
+            self.config.torque_noise_nm * z
+        } else {
+            0.0
+        };
+        let counts = ((self.motor_angle_rad() - self.phi_m_zero_rad)
+            / self.info.motor_rad_per_count)
+            .floor();
+        let cart = (self.cart_position_m() / self.config.cart_encoder_resolution_m).floor()
+            * self.config.cart_encoder_resolution_m;
+        Measurement {
+            motor_counts: counts as i64,
+            torque_actual_nm: tau + noise,
+            cart_position_m: Some(cart),
+        }
+    }
+}
+
+/// Three-mass model (2.20) as a generalized system, `q = [phi_m, phi_2, xi]`:
+/// segment stretches `g_1.q = i_t phi_m - xi`, `g_2.q = r phi_2 - xi`,
+/// `g_3.q = i_t phi_m - r phi_2` (`= r (phi_1 - phi_2)`).
+fn three_mass_mech(p: &PhysicalParams, xi_m: f64) -> Mech<3, 3> {
+    let (it, r) = (p.i_t(), p.r_m);
+    let x0 = ThreeMassState::at_rest(p, xi_m);
+    let mut m = Mech {
+        q: [x0.phi_m_rad, x0.phi_2_rad, x0.xi_m],
+        v: [0.0; 3],
+        inv_mass: [
+            1.0 / p.theta_e(),
+            1.0 / p.theta_end_pulley_kg_m2,
+            1.0 / p.m_c(),
+        ],
+        viscous: [
+            it * it * p.d_m_n_s_per_m,
+            r * r * p.d_end_pulley_n_s_per_m,
+            p.d_c_n_s_per_m,
+        ],
+        coulomb: [p.tau_c_motor_nm, p.tau_c_end_pulley_nm, p.f_c_cart_n],
+        input: [1.0, 0.0, 0.0],
+        constant: [0.0, 0.0, p.gravity_force_n()],
+        g: [[it, 0.0, -1.0], [0.0, r, -1.0], [it, -r, 0.0]],
+        c: [0.0; 3],
+        d: [0.0; 3],
+    };
+    set_three_mass_segments(&mut m, p);
+    m
+}
+
+#[inline]
+fn set_three_mass_segments(m: &mut Mech<3, 3>, p: &PhysicalParams) {
+    let s = p.belt_segments(m.q[2]);
+    m.c = [s.c_1_n_per_m, s.c_2_n_per_m, s.c_3_n_per_m];
+    m.d = [s.d_1_n_s_per_m, s.d_2_n_s_per_m, s.d_3_n_s_per_m];
+}
+
+/// Two-mass model (2.30), `q = [phi_m, xi]`, one replacement spring (2.26)/(2.27)
+/// stretched by `i_t phi_m - xi`; end-pulley friction on the motor side.
+fn two_mass_mech(p: &PhysicalParams, xi_m: f64) -> Mech<2, 1> {
+    let it = p.i_t();
+    let mut m = Mech {
+        q: [xi_m / it, xi_m],
+        v: [0.0; 2],
+        inv_mass: [1.0 / p.theta_e(), 1.0 / p.m_c()],
+        viscous: [
+            it * it * (p.d_m_n_s_per_m + p.d_end_pulley_n_s_per_m),
+            p.d_c_n_s_per_m,
+        ],
+        coulomb: [
+            p.tau_c_motor_nm + p.tau_c_end_pulley_nm / p.i_g,
+            p.f_c_cart_n,
+        ],
+        input: [1.0, 0.0],
+        constant: [0.0, p.gravity_force_n()],
+        g: [[it, -1.0]],
+        c: [0.0],
+        d: [0.0],
+    };
+    set_two_mass_segments(&mut m, p);
+    m
+}
+
+#[inline]
+fn set_two_mass_segments(m: &mut Mech<2, 1>, p: &PhysicalParams) {
+    let s = p.belt_segments(m.q[1]);
+    m.c = [s.replacement_stiffness_n_per_m()];
+    m.d = [s.replacement_damping_n_s_per_m()];
+}
+
+#[cfg(test)]
+mod tests;
