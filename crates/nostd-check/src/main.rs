@@ -8,6 +8,7 @@
 
 use beltune_rt::control::{CascadeConfig, CascadeController, CascadeGains, Setpoint};
 use beltune_rt::filter::{butterworth_lowpass, Sos};
+use beltune_rt::trajectory::{Limits, State, Trajectory};
 
 #[panic_handler]
 fn panic(_info: &core::panic::PanicInfo) -> ! {
@@ -19,8 +20,9 @@ fn panic(_info: &core::panic::PanicInfo) -> ! {
 #[no_mangle]
 pub extern "C" fn rust_eh_personality() {}
 
-/// Entry point called by the C runtime. Runs one filter sample and one
-/// controller step so the real-time code is actually linked, not just type-checked.
+/// Entry point called by the C runtime. Runs one filter sample, one
+/// controller step and one trajectory planning and sample so the real-time
+/// code is actually linked, not just type-checked.
 #[no_mangle]
 pub extern "C" fn main(_argc: i32, _argv: *const *const u8) -> i32 {
     let coeffs = match butterworth_lowpass(123.24, 1e-4) {
@@ -39,7 +41,16 @@ pub extern "C" fn main(_argc: i32, _argv: *const *const u8) -> i32 {
         Err(_) => return 4,
     };
     let out = ctrl.step(&Setpoint::hold(0.01), 0.0);
-    if y.is_finite() && out.finite {
+    let traj = match Trajectory::plan(
+        &State::at_rest(0.0),
+        &State::at_rest(0.5),
+        &Limits::default(),
+    ) {
+        Ok(t) => t,
+        Err(_) => return 5,
+    };
+    let s = traj.sample(1e-4);
+    if y.is_finite() && out.finite && s.position.is_finite() {
         0
     } else {
         2

@@ -16,6 +16,21 @@
 //! Units: positions in m (or rad for a rotary axis), velocities in m/s,
 //! accelerations in m/s^2, jerks in m/s^3, times in s.
 //!
+//! ```
+//! use beltune_rt::trajectory::{Limits, State, Trajectory};
+//!
+//! // Thesis 6.3: 0 -> 0.5 m with the limits of Table A.8.
+//! let limits = Limits { position_min: -0.01, position_max: 0.57, ..Limits::default() };
+//! let traj = Trajectory::plan(&State::at_rest(0.0), &State::at_rest(0.5), &limits)?;
+//! assert!((traj.duration_s() - 0.7368063).abs() < 1e-6);
+//! // In the 100 us interrupt: the desired state of sample k.
+//! let ts = 1e-4;
+//! let k = 1234;
+//! let desired = traj.sample(k as f64 * ts);
+//! assert!(desired.velocity > 0.0 && desired.jerk.abs() <= 40.0);
+//! # Ok::<(), beltune_rt::Error>(())
+//! ```
+//!
 //! | file | step |
 //! | --- | --- |
 //! | `brake.rs` | brake pre-phase for start states outside the limits |

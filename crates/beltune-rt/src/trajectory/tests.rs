@@ -126,3 +126,15 @@ fn invalid_requests_are_typed_errors() {
         Err(Error::Infeasible { .. })
     ));
 }
+
+#[test]
+fn zero_move_has_zero_duration() {
+    let s = State::at_rest(0.25);
+    let traj = Trajectory::plan(&s, &s, &Limits::default()).unwrap();
+    assert_eq!(traj.duration_s(), 0.0);
+    let at = traj.sample(1.0);
+    assert_eq!(
+        (at.position, at.velocity, at.acceleration),
+        (0.25, 0.0, 0.0)
+    );
+}
