@@ -131,7 +131,8 @@ mod tests {
 
     #[test]
     fn period_of_a_repeated_pattern_is_found() {
-        let base: Vec<f64> = (0..37).map(|k| ((k * 7919) % 13) as f64).collect();
+        // k^2 mod 37 has no shorter period than 37 (37 is prime)
+        let base: Vec<f64> = (0..37).map(|k| ((k * k) % 37) as f64).collect();
         let x: Vec<f64> = base.iter().cycle().take(37 * 4).copied().collect();
         assert_eq!(detect_period(&x), Some(37));
         let ramp: Vec<f64> = (0..100).map(|k| k as f64).collect();
