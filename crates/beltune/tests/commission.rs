@@ -16,8 +16,8 @@ const FREQUENCY_TOLERANCE: f64 = 0.02;
 const MAX_TRACKING_ERROR_M: f64 = 1e-3;
 /// Thesis chapter 5: static positioning error.
 const STATIC_ERROR_M: f64 = 100e-6;
-/// Issue 6 aims for under 20 s of axis time; a regression guard with 10 % slack.
-const EXPERIMENT_TIME_GUARD_S: f64 = 22.0;
+/// Issue 6: the axis busy for under 20 s (the thesis' FRF measurement alone takes about 16 s).
+const EXPERIMENT_TIME_GUARD_S: f64 = 20.0;
 /// Issue 6: computation below 5 % of the axis busy time (in a release build;
 /// the test profile is optimized too). Not a wall-clock test of the machine:
 /// it checks that no stage computes for seconds.

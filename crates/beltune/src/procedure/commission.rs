@@ -670,14 +670,14 @@ fn holding_torque(
     center_m: f64,
     ds: &DataSheet,
 ) -> Result<f64> {
-    let v = 0.05;
-    let half = 0.01;
+    let v = 0.1;
+    let half = 0.012;
     let limits = Limits {
         v_max: v,
         v_min: -v,
-        a_max: 1.0,
-        a_min: -1.0,
-        j_max: 20.0,
+        a_max: 4.0,
+        a_min: -4.0,
+        j_max: 100.0,
         position_min: ds.travel_min_m,
         position_max: ds.travel_max_m,
     };
