@@ -835,8 +835,9 @@ fn save_reproduces_the_controller_toml_of_beltune_commission() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Floats read back from commissioning.json can be 1 ulp off (serde_json's default
-/// float parser is not correctly rounded; the `float_roundtrip` feature is off).
+/// Floats read back from commissioning.json are exact (serde_json's
+/// `float_roundtrip` feature is on; without it they can be 1 ulp off, and the
+/// design's iterative solver turns 1 ulp of input into several ulps of gain).
 const JSON_READ_BACK_REL_TOL: f64 = 4.0 * f64::EPSILON;
 
 fn same_toml(at: &str, a: &toml::Value, b: &toml::Value) {

@@ -32,28 +32,6 @@ use std::time::Instant;
 /// File read from `--commissioning DIR`.
 pub const COMMISSIONING_FILE: &str = "commissioning.json";
 
-/// Identified two-mass model in `commissioning.json` (extra keys are ignored).
-#[derive(Debug, Clone, Deserialize)]
-pub struct IdentifiedModel {
-    /// Motor-side inertia, kg m^2.
-    pub theta_e: f64,
-    /// Cart mass incl. payload, kg.
-    pub m_c: f64,
-    /// Belt stiffness, N/m.
-    pub c: f64,
-    /// Belt damping, N s/m (optional, 0 when absent).
-    #[serde(default)]
-    pub d: f64,
-    /// Motor damping (translational equivalent), N s/m.
-    pub d_m: f64,
-    /// Cart damping, N s/m.
-    pub d_c: f64,
-    /// Transmission r / i_g, m/rad.
-    pub i_t: f64,
-    /// Current-loop dead time, s.
-    pub dead_time_s: f64,
-}
-
 /// Friction identified from constant-velocity runs (thesis 3.6), as seen at the motor.
 #[derive(Debug, Clone, Copy, Deserialize)]
 pub struct FrictionTotals {
@@ -72,8 +50,8 @@ pub struct FrictionTotals {
 /// The parts of `commissioning.json` the tuning page needs.
 #[derive(Debug, Clone, Deserialize)]
 pub struct CommissioningFile {
-    /// Identified model.
-    pub identified: IdentifiedModel,
+    /// Identified model (the keys `beltune design` reads; extra keys are ignored).
+    pub identified: beltune::design::ModelFile,
     /// Identified friction (optional).
     #[serde(default)]
     pub friction: Option<FrictionTotals>,
@@ -100,15 +78,7 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     let file: CommissioningFile =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let id = file.identified;
-    let params = TwoMassParams {
-        theta_e: id.theta_e,
-        m_c: id.m_c,
-        c: id.c,
-        d: id.d,
-        d_m: id.d_m,
-        d_c: id.d_c,
-        i_t: id.i_t,
-    };
+    let params = id.params();
     params
         .validate()
         .with_context(|| format!("{}: identified model", path.display()))?;
