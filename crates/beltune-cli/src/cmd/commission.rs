@@ -29,10 +29,10 @@ pub struct Args {
     #[arg(long, default_value = "egc70")]
     pub plant: String,
     /// Payload on the cart, kg (egc70 only; default 11.2 kg).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub payload: Option<f64>,
     /// Tilt of the axis, degrees (0 horizontal, 90 vertical).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub tilt: Option<f64>,
     /// Seed of the simulated measurement noise.
     #[arg(long, default_value_t = 1)]

@@ -303,9 +303,7 @@ pub fn commission(
     // Stop deceleration: what 60 % of the torque limit gives on the data-sheet
     // inertia (the rest is margin for friction, gravity and the loop), at most 20 m/s^2.
     let a_stop = (0.6 * torque_max / j_ds * datasheet.i_t_m).min(20.0);
-    // The look-ahead assumes half the deceleration the stop uses: a factor 2
-    // for the dead time, the stop controller's lag and the torque still queued.
-    let supervisor = SafetySupervisor::new(limits, 0.5 * a_stop)?;
+    let supervisor = SafetySupervisor::new(limits, a_stop)?;
     let boot = bootstrap_controller(j_ds, datasheet.i_t_m, ts, torque_max)?;
     let stop_limits = Limits {
         a_max: a_stop,

@@ -153,7 +153,8 @@ pub struct SafetySupervisor {
 impl SafetySupervisor {
     /// A supervisor for `limits`; `stop_deceleration_m_s2` is the deceleration
     /// the jerk-limited stop can be relied on to reach (used for the
-    /// look-ahead that stops an excitation before it reaches the window edge).
+    /// look-ahead that stops the axis before it reaches the window edge; in
+    /// open-loop stages the look-ahead assumes half of it).
     pub fn new(limits: SafetyLimits, stop_deceleration_m_s2: f64) -> Result<Self> {
         limits.validate()?;
         require_positive("stop_deceleration_m_s2", stop_deceleration_m_s2)?;
@@ -192,7 +193,14 @@ impl SafetySupervisor {
                 max_m: l.travel_max_m,
             });
         }
-        let stop = position_m + velocity_m_s.signum() * self.stopping_distance_m(velocity_m_s);
+        // In open-loop stages (no following error: nothing tracks a plan) the
+        // look-ahead assumes half the stop deceleration: the torque already
+        // queued in the dead time and the stop controller's lag come first.
+        let distance = match following_error_m {
+            Some(_) => self.stopping_distance_m(velocity_m_s),
+            None => 2.0 * self.stopping_distance_m(velocity_m_s),
+        };
+        let stop = position_m + velocity_m_s.signum() * distance;
         if stop < l.travel_min_m || stop > l.travel_max_m {
             return Err(Violation::TravelAhead {
                 position_m,
@@ -249,11 +257,17 @@ mod tests {
             s.check(0.6, 0.0, 0.0, None),
             Err(Violation::Travel { .. })
         ));
-        // 0.45 m moving at 1 m/s towards 0.5 m: needs 0.05 m to stop at 10 m/s^2 -> stops at 0.5 m exactly: ok;
-        assert!(s.check(0.449, 0.99, 0.0, None).is_ok());
-        // 0.48 m at 0.9 m/s needs 0.0405 m -> 0.5205 m: outside.
+        // Closed loop: 0.449 m moving at 0.99 m/s towards 0.5 m needs 0.049 m to
+        // stop at 10 m/s^2 -> stops at 0.498 m: ok;
+        assert!(s.check(0.449, 0.99, 0.0, Some(0.0)).is_ok());
+        // open loop: twice the distance, 0.547 m: outside.
         assert!(matches!(
-            s.check(0.48, 0.9, 0.0, None),
+            s.check(0.449, 0.99, 0.0, None),
+            Err(Violation::TravelAhead { .. })
+        ));
+        // 0.48 m at 0.9 m/s needs 0.0405 m -> 0.5205 m: outside even in closed loop.
+        assert!(matches!(
+            s.check(0.48, 0.9, 0.0, Some(0.0)),
             Err(Violation::TravelAhead { .. })
         ));
         assert!(matches!(
