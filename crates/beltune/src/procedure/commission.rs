@@ -161,7 +161,7 @@ impl Default for ExcitationConfig {
         ExcitationConfig {
             prbs_order: 9,
             clock_period: 16,
-            periods: 3,
+            periods: 2,
             skip_periods: 1,
             fixed_amplitude_nm: None,
             amplitude_start_fraction: 0.02,
@@ -669,7 +669,7 @@ fn holding_torque(
     ds: &DataSheet,
 ) -> Result<f64> {
     let v = 0.1;
-    let half = 0.012;
+    let half = 0.03;
     let limits = Limits {
         v_max: v,
         v_min: -v,
