@@ -7,8 +7,10 @@
 //! motor side (rigid belt between the pulleys), so the friction totals (3.36)
 //! equal those of the three-mass model.
 
+// `sign` with `sign(0) = 0`, as the friction models (2.21), (2.23) need.
 use crate::model::params::PhysicalParams;
 use crate::Result;
+use beltune_rt::Real;
 
 /// The state (2.28).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -27,16 +29,6 @@ pub struct TwoMassState {
 #[derive(Clone, Debug, PartialEq)]
 pub struct NonlinearTwoMass {
     params: PhysicalParams,
-}
-
-fn sign0(x: f64) -> f64 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
 }
 
 impl NonlinearTwoMass {
@@ -71,8 +63,8 @@ impl NonlinearTwoMass {
         let c = seg.replacement_stiffness_n_per_m();
         let d = seg.replacement_damping_n_s_per_m();
         let tau_mr = -it * it * self.d_m_n_s_per_m() * x.omega_m_rad_s
-            - self.tau_c_nm() * sign0(x.omega_m_rad_s);
-        let f = -p.d_c_n_s_per_m * x.xi_dot_m_s - p.f_c_cart_n * sign0(x.xi_dot_m_s)
+            - self.tau_c_nm() * Real::sign(x.omega_m_rad_s);
+        let f = -p.d_c_n_s_per_m * x.xi_dot_m_s - p.f_c_cart_n * Real::sign(x.xi_dot_m_s)
             + p.gravity_force_n();
         let stretch = it * x.phi_m_rad - x.xi_m;
         let stretch_rate = it * x.omega_m_rad_s - x.xi_dot_m_s;

@@ -5,9 +5,11 @@
 //!
 //! State (2.18): `x = [phi_m, omega_m, phi_2, omega_2, xi, xi']`, input `u = tau_m`.
 
+// `sign` with `sign(0) = 0`, as the friction models (2.21), (2.23) need.
 use crate::lti::C64;
 use crate::model::params::{BeltSegments, PhysicalParams};
 use crate::Result;
+use beltune_rt::Real;
 use nalgebra::{SMatrix, SVector};
 
 /// The state (2.18) of the three-mass model.
@@ -76,17 +78,6 @@ pub struct ThreeMass {
     params: PhysicalParams,
 }
 
-/// `sign` with `sign(0) = 0` (the friction models (2.21), (2.23)).
-fn sign0(x: f64) -> f64 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
-}
-
 impl ThreeMass {
     /// The model of validated parameters.
     pub fn new(params: &PhysicalParams) -> Result<Self> {
@@ -112,10 +103,10 @@ impl ThreeMass {
         let (d1, d2, d3) = (s.d_1_n_s_per_m, s.d_2_n_s_per_m, s.d_3_n_s_per_m);
         // (2.21) with d_m as translational equivalent (THESIS-NOTES)
         let tau_mr = -it * it * p.d_m_n_s_per_m * x.omega_m_rad_s
-            - p.tau_c_motor_nm * sign0(x.omega_m_rad_s);
+            - p.tau_c_motor_nm * Real::sign(x.omega_m_rad_s);
         // end pulley friction "modeled in a similar fashion"
         let tau_2 = -r * r * p.d_end_pulley_n_s_per_m * x.omega_2_rad_s
-            - p.tau_c_end_pulley_nm * sign0(x.omega_2_rad_s);
+            - p.tau_c_end_pulley_nm * Real::sign(x.omega_2_rad_s);
         // (2.17): tau_1 / i_g
         let tau_1_over_ig = -it * c1 * (it * x.phi_m_rad - x.xi_m)
             - it * d1 * (it * x.omega_m_rad_s - x.xi_dot_m_s)
@@ -129,7 +120,7 @@ impl ThreeMass {
             - r * r * d3 * (x.omega_2_rad_s - x.omega_m_rad_s / ig))
             / p.theta_end_pulley_kg_m2;
         // (2.23), (2.24)
-        let f = -p.d_c_n_s_per_m * x.xi_dot_m_s - p.f_c_cart_n * sign0(x.xi_dot_m_s)
+        let f = -p.d_c_n_s_per_m * x.xi_dot_m_s - p.f_c_cart_n * Real::sign(x.xi_dot_m_s)
             + p.gravity_force_n();
         let xi_ddot = (f
             + c1 * (it * x.phi_m_rad - x.xi_m)
