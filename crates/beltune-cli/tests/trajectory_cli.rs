@@ -59,6 +59,40 @@ fn json_has_duration_and_seven_phases() {
     assert!((sum - duration).abs() < 1e-12);
 }
 
+/// Asymmetric jerk `+J1 = 40`, `-J2 = -20` m/s^3, the same 0.5 m: jerk
+/// phases `+J1` for tau, `-J2` for `2 J1 tau / J2`, `+J1` for tau (the
+/// velocity condition makes the peak and low acceleration equal in size), and
+/// integrating them gives `d = tau^3 (J1/3 + J1^2/J2 + 2 J1^3 / (3 J2^2))`;
+/// here 200 tau^3 = 0.5, T = 6 tau = 0.8143 s (peak 5.4 m/s^2, 1.1 m/s).
+#[test]
+fn asymmetric_jerk_matches_the_closed_form() {
+    let mut args = THESIS_MOVE.to_vec();
+    args.extend(["--j-min", "-20", "--json"]);
+    let out = beltune(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let (j1, j2, d) = (40.0_f64, 20.0_f64, 0.5_f64);
+    let tau = (d / (j1 / 3.0 + j1 * j1 / j2 + 2.0 * j1.powi(3) / (3.0 * j2 * j2))).cbrt();
+    let expected = 2.0 * tau + 2.0 * j1 * tau / j2;
+    let duration = v["duration_s"].as_f64().unwrap();
+    assert!(
+        (duration - expected).abs() <= DURATION_REL_TOL * expected,
+        "{duration} vs {expected}"
+    );
+    let jerks: Vec<f64> = v["phase_jerks_m_s3"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j.as_f64().unwrap())
+        .collect();
+    assert!(jerks.iter().all(|&j| j == 0.0 || j == 40.0 || j == -20.0));
+    assert!(jerks.contains(&-20.0), "{jerks:?}");
+}
+
 #[test]
 fn table_output_lists_the_phases() {
     let out = beltune(&THESIS_MOVE);
@@ -116,6 +150,10 @@ fn invalid_requests_print_one_line_and_fail() {
     let mut negative_jerk = THESIS_MOVE.to_vec();
     negative_jerk[10] = "-40";
     assert_one_line_error(&negative_jerk, "j_max");
+
+    let mut positive_j_min = THESIS_MOVE.to_vec();
+    positive_j_min.extend(["--j-min", "5"]);
+    assert_one_line_error(&positive_j_min, "j_min");
 
     let mut outside = THESIS_MOVE.to_vec();
     outside[4] = "0.7,0,0";

@@ -28,6 +28,7 @@ fn bench_trajectory(c: &mut Criterion) {
         a_max: 8.0,
         a_min: -5.0,
         j_max: 50.0,
+        j_min: -50.0,
         position_min: f64::NEG_INFINITY,
         position_max: f64::INFINITY,
     };
@@ -47,6 +48,29 @@ fn bench_trajectory(c: &mut Criterion) {
                 black_box(&moving_start),
                 black_box(&moving_target),
                 black_box(&general),
+            )
+        })
+    });
+
+    c.bench_function("trajectory plan, general solver (thesis move)", |b| {
+        b.iter(|| {
+            Trajectory::plan_with_general_solver(
+                black_box(&start),
+                black_box(&target),
+                black_box(&limits),
+            )
+        })
+    });
+    let asymmetric = Limits {
+        j_min: -25.0,
+        ..general
+    };
+    c.bench_function("trajectory plan (moving, asymmetric jerk)", |b| {
+        b.iter(|| {
+            Trajectory::plan(
+                black_box(&moving_start),
+                black_box(&moving_target),
+                black_box(&asymmetric),
             )
         })
     });

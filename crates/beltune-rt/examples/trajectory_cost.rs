@@ -4,7 +4,7 @@
 //! ```text
 //! cargo build -p beltune-rt --release --example trajectory_cost
 //! valgrind --tool=callgrind --callgrind-out-file=/dev/null \
-//!     target/release/examples/trajectory_cost <plan|sample> <n>
+//!     target/release/examples/trajectory_cost <plan|plan-general|sample> <n>
 //! ```
 //!
 //! Run with `n` and `2 n`; the difference of the total instruction counts
@@ -34,6 +34,16 @@ fn main() {
                 acc += traj.map(|t| t.duration_s()).unwrap_or(0.0);
             }
         }
+        "plan-general" => {
+            for _ in 0..n {
+                let traj = Trajectory::plan_with_general_solver(
+                    black_box(&start),
+                    black_box(&target),
+                    black_box(&limits),
+                );
+                acc += traj.map(|t| t.duration_s()).unwrap_or(0.0);
+            }
+        }
         "sample" => {
             let traj = Trajectory::plan(&start, &target, &limits).expect("plannable");
             let ts = 1e-4;
@@ -47,7 +57,7 @@ fn main() {
             }
         }
         other => {
-            eprintln!("unknown method `{other}` (plan | sample)");
+            eprintln!("unknown method `{other}` (plan | plan-general | sample)");
             std::process::exit(2);
         }
     }

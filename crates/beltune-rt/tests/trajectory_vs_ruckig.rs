@@ -1,6 +1,8 @@
 //! The trajectory generator against the reference implementation `rsruckig`
-//! (dev-dependency only) on seeded random cases, plus the thesis case of
-//! Table A.8 against a closed-form duration.
+//! (dev-dependency only) on seeded random cases, with Ruckig's closed forms
+//! (the default for symmetric jerk) and with the general solver used for
+//! asymmetric jerk, plus the thesis case of Table A.8 against a closed-form
+//! duration.
 
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use beltune_rt::Error;
@@ -68,6 +70,7 @@ fn random_limits(rng: &mut Xoshiro256PlusPlus, asymmetric: bool) -> Limits {
         a_max,
         a_min,
         j_max,
+        j_min: -j_max,
         position_min: f64::NEG_INFINITY,
         position_max: f64::INFINITY,
     }
@@ -202,8 +205,11 @@ fn check_samples(c: &Case, traj: &Trajectory) {
     );
 }
 
-#[test]
-fn durations_equal_rsruckig_on_12000_random_cases() {
+/// A planner under test: [`Trajectory::plan`] or the general solver.
+type Planner = fn(&State, &State, &Limits) -> Result<Trajectory, Error>;
+
+/// Plan the 12,000 seeded cases with `plan` and compare with rsruckig.
+fn compare_with_reference(plan: Planner) {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(0xBE17_70E5);
     let mut compared = 0;
     let mut reference_failed = 0;
@@ -216,7 +222,7 @@ fn durations_equal_rsruckig_on_12000_random_cases() {
     for family in 0..6 {
         for _ in 0..CASES_PER_FAMILY {
             let c = random_case(&mut rng, family);
-            let ours = Trajectory::plan(&c.start, &c.target, &c.limits);
+            let ours = plan(&c.start, &c.target, &c.limits);
             let Some(t_ref) = reference_duration(&c) else {
                 // Allowed either way; counted (so far these are all starts
                 // with |a0| far beyond the limits and a small j_max).
@@ -278,6 +284,19 @@ fn durations_equal_rsruckig_on_12000_random_cases() {
         braked >= 1_000,
         "only {braked} cases exercised the brake pre-phase"
     );
+}
+
+#[test]
+fn durations_equal_rsruckig_on_12000_random_cases() {
+    compare_with_reference(Trajectory::plan);
+}
+
+/// The general solver for asymmetric jerk (`asymmetric.rs`), run on the same
+/// symmetric cases: its polynomial families must reproduce Ruckig's closed
+/// forms, brake pre-phase included.
+#[test]
+fn general_solver_equals_rsruckig_on_12000_random_cases() {
+    compare_with_reference(Trajectory::plan_with_general_solver);
 }
 
 #[test]
@@ -362,20 +381,29 @@ fn extreme_finite_inputs_never_panic() {
         }
     };
     let mut planned = 0;
+    let mut planned_asymmetric = 0;
     for _ in 0..5_000 {
         let start = State {
             position: any(&mut rng),
             velocity: any(&mut rng),
             acceleration: any(&mut rng),
         };
-        let limits = Limits {
+        let mut limits = Limits {
             v_max: any(&mut rng).abs(),
             v_min: -any(&mut rng).abs(),
             a_max: any(&mut rng).abs(),
             a_min: -any(&mut rng).abs(),
             j_max: any(&mut rng).abs(),
+            j_min: f64::NAN,
             position_min: f64::NEG_INFINITY,
             position_max: f64::INFINITY,
+        };
+        // Half symmetric jerk (Ruckig's closed forms), half asymmetric (the
+        // general solver).
+        limits.j_min = if rng.random_bool(0.5) {
+            -limits.j_max
+        } else {
+            -any(&mut rng).abs()
         };
         // Half the targets admissible (inside the velocity limits, at a = 0).
         let target = if rng.random_bool(0.5) {
@@ -396,9 +424,14 @@ fn extreme_finite_inputs_never_panic() {
             let s = traj.sample(traj.duration_s() * 0.5);
             assert!(s.position.is_finite() && s.velocity.is_finite());
             planned += 1;
+            if limits.j_min != -limits.j_max {
+                planned_asymmetric += 1;
+            }
         }
     }
-    println!("extreme inputs: {planned} of 5000 planned");
+    println!(
+        "extreme inputs: {planned} of 5000 planned, {planned_asymmetric} with asymmetric jerk"
+    );
     assert!(
         planned > 20,
         "only {planned} extreme requests were plannable"

@@ -50,7 +50,21 @@ pub extern "C" fn main(_argc: i32, _argv: *const *const u8) -> i32 {
         Err(_) => return 5,
     };
     let s = traj.sample(1e-4);
-    if y.is_finite() && out.finite && s.position.is_finite() {
+    // Asymmetric jerk: the general solver (polynomial roots) links too.
+    let asymmetric = Limits {
+        j_min: -20.0,
+        ..Limits::default()
+    };
+    let slow_down = match Trajectory::plan(&State::at_rest(0.0), &State::at_rest(0.5), &asymmetric)
+    {
+        Ok(t) => t,
+        Err(_) => return 6,
+    };
+    if y.is_finite()
+        && out.finite
+        && s.position.is_finite()
+        && slow_down.duration_s() > traj.duration_s()
+    {
         0
     } else {
         2

@@ -24,7 +24,7 @@ pub struct Args {
     /// Highest acceleration, m/s^2 (> 0).
     #[arg(long, allow_hyphen_values = true)]
     pub a_max: f64,
-    /// Jerk limit, m/s^3 (> 0).
+    /// Highest jerk, m/s^3 (> 0).
     #[arg(long, allow_hyphen_values = true)]
     pub j_max: f64,
     /// Lowest velocity, m/s (< 0; default -v_max).
@@ -33,6 +33,9 @@ pub struct Args {
     /// Lowest acceleration, m/s^2 (< 0; default -a_max).
     #[arg(long, allow_hyphen_values = true)]
     pub a_min: Option<f64>,
+    /// Lowest jerk, m/s^3 (< 0; default -j_max).
+    #[arg(long, allow_hyphen_values = true)]
+    pub j_min: Option<f64>,
     /// Position limits `MIN,MAX` in m (default: none).
     #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
     pub position_limits: Option<(f64, f64)>,
@@ -84,6 +87,7 @@ fn limits(args: &Args) -> Limits {
         a_max: args.a_max,
         a_min: args.a_min.unwrap_or(-args.a_max),
         j_max: args.j_max,
+        j_min: args.j_min.unwrap_or(-args.j_max),
         position_min,
         position_max,
     }

@@ -469,6 +469,7 @@ impl LibraryTuner {
             a_max: a_stop,
             a_min: -a_stop,
             j_max: 20.0 * a_stop,
+            j_min: -20.0 * a_stop,
             ..spec.limits
         };
         let mut progress = NoProgress;

@@ -46,6 +46,11 @@ pub(crate) struct BrakePhase {
 }
 
 impl BrakePhase {
+    /// `j_pull` is the jerk that pulls the acceleration back, with the sign
+    /// convention of the reference (`j[0] = -j_pull`): `-j_min` for a start
+    /// above the limits, `-j_max` below. `j_back` is the jerk that later
+    /// returns the acceleration to zero, in the same convention (`j_max`
+    /// above, `j_min` below); with symmetric jerk `j_back = j_pull`.
     #[allow(clippy::too_many_arguments)]
     fn acceleration_brake(
         &mut self,
@@ -55,21 +60,22 @@ impl BrakePhase {
         v_min: f64,
         a_max: f64,
         a_min: f64,
-        j_max: f64,
+        j_pull: f64,
+        j_back: f64,
     ) {
-        self.j[0] = -j_max;
+        self.j[0] = -j_pull;
 
-        let t_to_a_max = (a0 - a_max) / j_max;
-        let t_to_a_zero = a0 / j_max;
+        let t_to_a_max = (a0 - a_max) / j_pull;
+        let t_to_a_zero = a0 / j_pull;
 
-        let v_at_a_max = v_at_t(v0, a0, -j_max, t_to_a_max);
-        let v_at_a_zero = v_at_t(v0, a0, -j_max, t_to_a_zero);
+        let v_at_a_max = v_at_t(v0, a0, -j_pull, t_to_a_max);
+        let v_at_a_zero = v_at_t(v0, a0, -j_pull, t_to_a_zero);
 
-        if (v_at_a_zero > v_max && j_max > 0.0) || (v_at_a_zero < v_max && j_max < 0.0) {
-            self.velocity_brake(v0, a0, v_max, v_min, a_min, j_max);
-        } else if (v_at_a_max < v_min && j_max > 0.0) || (v_at_a_max > v_min && j_max < 0.0) {
+        if (v_at_a_zero > v_max && j_pull > 0.0) || (v_at_a_zero < v_max && j_pull < 0.0) {
+            self.velocity_brake(v0, a0, v_max, v_min, a_min, j_pull, j_back);
+        } else if (v_at_a_max < v_min && j_pull > 0.0) || (v_at_a_max > v_min && j_pull < 0.0) {
             let t_to_v_min = -(v_at_a_max - v_min) / a_max;
-            let t_to_v_max = -a_max / (2.0 * j_max) - (v_at_a_max - v_max) / a_max;
+            let t_to_v_max = -a_max / (2.0 * j_pull) - (v_at_a_max - v_max) / a_max;
 
             self.t[0] = t_to_a_max + EPS;
             self.t[1] = t_to_v_min.min((t_to_v_max - EPS).max(0.0));
@@ -78,17 +84,30 @@ impl BrakePhase {
         }
     }
 
-    fn velocity_brake(&mut self, v0: f64, a0: f64, v_max: f64, v_min: f64, a_min: f64, j_max: f64) {
-        self.j[0] = -j_max;
-        let t_to_a_min = (a0 - a_min) / j_max;
-        let t_to_v_max = a0 / j_max + (a0 * a0 + 2.0 * j_max * (v0 - v_max)).sqrt() / j_max.abs();
-        let t_to_v_min = a0 / j_max + (a0 * a0 / 2.0 + j_max * (v0 - v_min)).sqrt() / j_max.abs();
+    /// Jerks as in [`Self::acceleration_brake`].
+    #[allow(clippy::too_many_arguments)]
+    fn velocity_brake(
+        &mut self,
+        v0: f64,
+        a0: f64,
+        v_max: f64,
+        v_min: f64,
+        a_min: f64,
+        j_pull: f64,
+        j_back: f64,
+    ) {
+        self.j[0] = -j_pull;
+        let t_to_a_min = (a0 - a_min) / j_pull;
+        let t_to_v_max =
+            a0 / j_pull + (a0 * a0 + 2.0 * j_pull * (v0 - v_max)).sqrt() / j_pull.abs();
+        let t_to_v_min =
+            a0 / j_pull + (a0 * a0 / 2.0 + j_pull * (v0 - v_min)).sqrt() / j_pull.abs();
         let t_min_to_v_max = t_to_v_max.min(t_to_v_min);
 
         if t_to_a_min < t_min_to_v_max {
-            let v_at_a_min = v_at_t(v0, a0, -j_max, t_to_a_min);
+            let v_at_a_min = v_at_t(v0, a0, -j_pull, t_to_a_min);
             let t_to_v_max_with_constant = -(v_at_a_min - v_max) / a_min;
-            let t_to_v_min_with_constant = a_min / (2.0 * j_max) - (v_at_a_min - v_min) / a_min;
+            let t_to_v_min_with_constant = a_min / (2.0 * j_back) - (v_at_a_min - v_min) / a_min;
 
             self.t[0] = (t_to_a_min - EPS).max(0.0);
             self.t[1] = t_to_v_max_with_constant
@@ -99,8 +118,9 @@ impl BrakePhase {
         }
     }
 
-    /// Plan the brake segments for a start `(v0, a0)` and the limits; all
-    /// limits must be non-zero (checked by the caller).
+    /// Plan the brake segments for a start `(v0, a0)` and the limits
+    /// (`j_min < 0 < j_max`); all limits must be non-zero (checked by the
+    /// caller). With `j_min = -j_max` this is exactly the reference's brake.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn plan(
         v0: f64,
@@ -110,20 +130,21 @@ impl BrakePhase {
         a_max: f64,
         a_min: f64,
         j_max: f64,
+        j_min: f64,
     ) -> Self {
         let mut b = Self::default();
         if a0 > a_max {
-            b.acceleration_brake(v0, a0, v_max, v_min, a_max, a_min, j_max);
+            b.acceleration_brake(v0, a0, v_max, v_min, a_max, a_min, -j_min, j_max);
         } else if a0 < a_min {
-            b.acceleration_brake(v0, a0, v_min, v_max, a_min, a_max, -j_max);
+            b.acceleration_brake(v0, a0, v_min, v_max, a_min, a_max, -j_max, j_min);
         } else if (v0 > v_max && v_at_a_zero(v0, a0, -j_max) > v_min)
-            || (a0 > 0.0 && v_at_a_zero(v0, a0, j_max) > v_max)
+            || (a0 > 0.0 && v_at_a_zero(v0, a0, -j_min) > v_max)
         {
-            b.velocity_brake(v0, a0, v_max, v_min, a_min, j_max);
-        } else if (v0 < v_min && v_at_a_zero(v0, a0, j_max) < v_max)
+            b.velocity_brake(v0, a0, v_max, v_min, a_min, -j_min, j_max);
+        } else if (v0 < v_min && v_at_a_zero(v0, a0, -j_min) < v_max)
             || (a0 < 0.0 && v_at_a_zero(v0, a0, -j_max) < v_min)
         {
-            b.velocity_brake(v0, a0, v_min, v_max, a_max, -j_max);
+            b.velocity_brake(v0, a0, v_min, v_max, a_max, -j_max, j_min);
         }
         b
     }
@@ -161,7 +182,7 @@ mod tests {
 
     #[test]
     fn admissible_start_needs_no_brake() {
-        let b = BrakePhase::plan(0.5, 1.0, 5.0, -5.0, 45.0, -45.0, 40.0);
+        let b = BrakePhase::plan(0.5, 1.0, 5.0, -5.0, 45.0, -45.0, 40.0, -40.0);
         assert_eq!(b.t, [0.0, 0.0]);
     }
 
@@ -176,7 +197,7 @@ mod tests {
             (4.9, 20.0),
         ] {
             let (v_max, v_min, a_max, a_min, j_max) = (5.0, -4.0, 45.0, -30.0, 40.0);
-            let mut b = BrakePhase::plan(v0, a0, v_max, v_min, a_max, a_min, j_max);
+            let mut b = BrakePhase::plan(v0, a0, v_max, v_min, a_max, a_min, j_max, -j_max);
             let (mut p, mut v, mut a) = (0.0, v0, a0);
             b.finalize(&mut p, &mut v, &mut a);
             assert!(b.duration > 0.0, "start ({v0}, {a0}) needs a brake");

@@ -6,7 +6,7 @@
 //! allocation) and then sampled every `T_s` ([`Trajectory::sample`]). The
 //! profile has the seven phases P1-P7 of Figure 6.11 with jerk `+-j_max` or 0
 //! in each; limits may be asymmetric (`v_min < 0 < v_max`,
-//! `a_min < 0 < a_max`, jerk symmetric `+-j_max` as in Ruckig). A start state
+//! `a_min < 0 < a_max`, `j_min < 0 < j_max`). A start state
 //! that violates (or will inevitably violate) the velocity or acceleration
 //! limits is first brought back inside them by a brake pre-phase of at most
 //! two constant-jerk segments. Position limits are checked: a target outside
@@ -34,8 +34,10 @@
 //! | file | step |
 //! | --- | --- |
 //! | `brake.rs` | brake pre-phase for start states outside the limits |
-//! | `step1.rs` | the extremal (time-optimal) profile families |
+//! | `step1.rs` | the extremal (time-optimal) profile families, symmetric jerk |
 //! | `roots.rs` | roots of the quartics of step 1 |
+//! | `asymmetric.rs` | the same families for `j_min != -j_max` |
+//! | `poly.rs` | polynomial arithmetic and real roots for `asymmetric.rs` |
 //! | `profile.rs` | a seven-phase profile and its admissibility check |
 //! | `block.rs` | choice of the fastest valid profile |
 //! | `math.rs` | integration of a constant-jerk phase, `libm` helpers |
@@ -46,7 +48,9 @@
 //! solver and the profile selection are a no_std, allocation-free port of
 //! Ruckig's 1-DOF position algorithm (Berscheid and Kroeger, "Jerk-limited
 //! Real-time Trajectory Generation with Arbitrary Target States", RSS 2021)
-//! from its Rust port rsruckig 3.0.1, under the MIT License:
+//! from its Rust port rsruckig 3.0.1, under the MIT License (Ruckig has no
+//! asymmetric jerk limits: `asymmetric.rs` and `poly.rs` are this project's own,
+//! and the brake takes the jerk of each direction from `j_max`/`j_min`):
 //!
 //! ```text
 //! MIT License
@@ -73,15 +77,18 @@
 //! SOFTWARE.
 //! ```
 
+mod asymmetric;
 mod block;
 mod brake;
 mod math;
+mod poly;
 mod profile;
 mod roots;
 mod step1;
 
 use crate::error::{finite, positive};
 use crate::Error;
+use asymmetric::{time_optimal_profile, Problem};
 use block::Block;
 use brake::{v_at_a_zero, BrakePhase};
 use math::integrate;
@@ -92,6 +99,20 @@ use step1::ExtremalProfiles;
 /// position limits: the profile check only guarantees the final position to
 /// 1e-8 m, so a move that ends exactly on a limit must not be rejected.
 const POSITION_LIMIT_TOL: f64 = 1e-8;
+
+/// Which step-1 solver plans the move.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Solver {
+    /// Ruckig's closed forms for symmetric jerk, the general one otherwise.
+    Auto,
+    /// The general solver of `asymmetric.rs` always.
+    General,
+}
+
+/// No candidate profile passed the check.
+const NO_PROFILE: Error = Error::Infeasible {
+    reason: "no time-optimal profile found (numerically degenerate request)",
+};
 
 /// A kinematic state of the axis.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -126,8 +147,10 @@ pub struct Limits {
     pub a_max: f64,
     /// Lowest acceleration, m/s^2, finite and `< 0`.
     pub a_min: f64,
-    /// Jerk bound `|j| <= j_max`, m/s^3, finite and `> 0`.
+    /// Highest jerk, m/s^3, finite and `> 0`.
     pub j_max: f64,
+    /// Lowest jerk, m/s^3, finite and `< 0` (`-j_max` for symmetric limits).
+    pub j_min: f64,
     /// Lowest admissible position, m (may be `-inf`).
     pub position_min: f64,
     /// Highest admissible position, m (may be `+inf`, `>= position_min`).
@@ -143,6 +166,7 @@ impl Limits {
             a_max,
             a_min: -a_max,
             j_max,
+            j_min: -j_max,
             position_min: f64::NEG_INFINITY,
             position_max: f64::INFINITY,
         }
@@ -154,6 +178,7 @@ impl Limits {
         positive("a_max", self.a_max)?;
         positive("-a_min", -self.a_min)?;
         positive("j_max", self.j_max)?;
+        positive("-j_min", -self.j_min)?;
         if self.position_min.is_nan() || self.position_max.is_nan() {
             return Err(Error::InvalidParameter {
                 name: "position limits",
@@ -201,7 +226,7 @@ pub struct Phases {
     pub brake_jerks_m_s3: [f64; 2],
     /// Durations of P1..P7 (Figure 6.11), s.
     pub durations_s: [f64; 7],
-    /// Jerks in P1..P7, m/s^3 (`+-j_max` or 0).
+    /// Jerks in P1..P7, m/s^3 (`j_max`, `j_min` or 0).
     pub jerks_m_s3: [f64; 7],
 }
 
@@ -233,6 +258,27 @@ impl Trajectory {
     /// ([`Error::PositionLimitsViolated`]), and a numerical failure of the
     /// profile search ([`Error::Infeasible`]).
     pub fn plan(start: &State, target: &State, limits: &Limits) -> Result<Self, Error> {
+        Self::plan_with(start, target, limits, Solver::Auto)
+    }
+
+    /// [`Self::plan`] with the general solver of `asymmetric.rs` even for
+    /// symmetric jerk limits, where [`Self::plan`] uses Ruckig's closed forms.
+    /// For cross-checking the two (tests, benchmarks); not a stable API.
+    #[doc(hidden)]
+    pub fn plan_with_general_solver(
+        start: &State,
+        target: &State,
+        limits: &Limits,
+    ) -> Result<Self, Error> {
+        Self::plan_with(start, target, limits, Solver::General)
+    }
+
+    fn plan_with(
+        start: &State,
+        target: &State,
+        limits: &Limits,
+        solver: Solver,
+    ) -> Result<Self, Error> {
         finite("start.position", start.position)?;
         finite("start.velocity", start.velocity)?;
         finite("start.acceleration", start.acceleration)?;
@@ -246,6 +292,7 @@ impl Trajectory {
             a_max,
             a_min,
             j_max,
+            j_min,
             position_min,
             position_max,
         } = *limits;
@@ -261,7 +308,7 @@ impl Trajectory {
             });
         }
         // A target with a != 0 must have been reached from inside the velocity limits.
-        if (af < 0.0 && v_at_a_zero(vf, af, j_max) > v_max)
+        if (af < 0.0 && v_at_a_zero(vf, af, -j_min) > v_max)
             || (af > 0.0 && v_at_a_zero(vf, af, -j_max) < v_min)
         {
             return Err(Error::Infeasible {
@@ -281,6 +328,7 @@ impl Trajectory {
             a_max,
             a_min,
             j_max,
+            j_min,
         );
         let (mut p0, mut v0, mut a0) = (start.position, start.velocity, start.acceleration);
         brake.finalize(&mut p0, &mut v0, &mut a0);
@@ -295,19 +343,38 @@ impl Trajectory {
             ..Profile::default()
         };
 
-        let mut step1 = ExtremalProfiles::default();
-        step1.reset(p0, v0, a0, pf, vf, af, v_max, v_min, a_max, a_min, j_max);
-        let mut block = Block::default();
-        if !step1.get_profile(&input, &mut block) || !block.t_min.is_finite() {
-            return Err(Error::Infeasible {
-                reason: "no time-optimal profile found (numerically degenerate request)",
-            });
-        }
+        let (profile, duration_s) = if j_min == -j_max && solver == Solver::Auto {
+            let mut step1 = ExtremalProfiles::default();
+            step1.reset(p0, v0, a0, pf, vf, af, v_max, v_min, a_max, a_min, j_max);
+            let mut block = Block::default();
+            if !step1.get_profile(&input, &mut block) || !block.t_min.is_finite() {
+                return Err(NO_PROFILE);
+            }
+            (block.p_min, block.t_min)
+        } else {
+            let problem = Problem {
+                p0,
+                v0,
+                a0,
+                pf,
+                vf,
+                af,
+                v_max,
+                v_min,
+                a_max,
+                a_min,
+                j_max,
+                j_min,
+            };
+            let mut profile = time_optimal_profile(&problem).ok_or(NO_PROFILE)?;
+            profile.brake = brake;
+            (profile, profile.total_duration())
+        };
 
         let trajectory = Self {
-            profile: block.p_min,
+            profile,
             start: *start,
-            duration_s: block.t_min,
+            duration_s,
         };
         let range = trajectory.position_range();
         if range.lowest < position_min - POSITION_LIMIT_TOL

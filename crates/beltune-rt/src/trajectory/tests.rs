@@ -52,6 +52,7 @@ fn samples_are_continuous_and_jerk_limited() {
         a_max: 8.0,
         a_min: -5.0,
         j_max: 50.0,
+        j_min: -50.0,
         position_min: f64::NEG_INFINITY,
         position_max: f64::INFINITY,
     };

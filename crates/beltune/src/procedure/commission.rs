@@ -218,6 +218,7 @@ fn positioning_limits(ds: &DataSheet) -> Limits {
         a_max: 4.0,
         a_min: -4.0,
         j_max: 40.0,
+        j_min: -40.0,
         position_min: ds.travel_min_m,
         position_max: ds.travel_max_m,
     }
@@ -309,6 +310,7 @@ pub fn commission(
         a_max: a_stop,
         a_min: -a_stop,
         j_max: 20.0 * a_stop,
+        j_min: -20.0 * a_stop,
         ..positioning_limits(datasheet)
     };
     let line = format!(
@@ -676,6 +678,7 @@ fn holding_torque(
         a_max: 4.0,
         a_min: -4.0,
         j_max: 100.0,
+        j_min: -100.0,
         position_min: ds.travel_min_m,
         position_max: ds.travel_max_m,
     };
@@ -772,6 +775,7 @@ fn friction_runs(
                 a_max: a_run,
                 a_min: -a_run,
                 j_max: 20.0 * a_run,
+                j_min: -20.0 * a_run,
                 position_min: ds.travel_min_m,
                 position_max: ds.travel_max_m,
             };

@@ -49,6 +49,7 @@ pub fn table_a8_limits() -> Limits {
         a_max: 45.0,
         a_min: -45.0,
         j_max: 40.0,
+        j_min: -40.0,
         position_min: -0.01,
         position_max: 0.57,
     }
