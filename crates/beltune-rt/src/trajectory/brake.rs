@@ -100,8 +100,16 @@ impl BrakePhase {
         let t_to_a_min = (a0 - a_min) / j_pull;
         let t_to_v_max =
             a0 / j_pull + (a0 * a0 + 2.0 * j_pull * (v0 - v_max)).sqrt() / j_pull.abs();
-        let t_to_v_min =
-            a0 / j_pull + (a0 * a0 / 2.0 + j_pull * (v0 - v_min)).sqrt() / j_pull.abs();
+        // Pull for t, then return the acceleration to zero with `j_back`,
+        // ending at v_min: `(j_pull/2) t^2 - a0 t + (v_min - v0 + a0^2/(2 j_back))
+        // / (1 + j_pull/j_back) = 0`; with `j_back = j_pull` this is the
+        // reference's `a0/j + sqrt(a0^2/2 + j (v0 - v_min))/|j|`.
+        let t_to_v_min = if j_back == j_pull {
+            a0 / j_pull + (a0 * a0 / 2.0 + j_pull * (v0 - v_min)).sqrt() / j_pull.abs()
+        } else {
+            let c = (v_min - v0 + a0 * a0 / (2.0 * j_back)) / (1.0 + j_pull / j_back);
+            a0 / j_pull + (a0 * a0 - 2.0 * j_pull * c).sqrt() / j_pull.abs()
+        };
         let t_min_to_v_max = t_to_v_max.min(t_to_v_min);
 
         if t_to_a_min < t_min_to_v_max {
@@ -188,38 +196,41 @@ mod tests {
 
     #[test]
     fn brake_ends_inside_the_limits() {
-        // Too fast and too strongly accelerating (v > v_max, a > a_max).
-        for &(v0, a0) in &[
-            (7.0, 0.0),
-            (4.0, 60.0),
-            (-8.0, -10.0),
-            (0.0, -70.0),
-            (4.9, 20.0),
-        ] {
-            let (v_max, v_min, a_max, a_min, j_max) = (5.0, -4.0, 45.0, -30.0, 40.0);
-            let mut b = BrakePhase::plan(v0, a0, v_max, v_min, a_max, a_min, j_max, -j_max);
-            let (mut p, mut v, mut a) = (0.0, v0, a0);
-            b.finalize(&mut p, &mut v, &mut a);
-            assert!(b.duration > 0.0, "start ({v0}, {a0}) needs a brake");
-            assert!(a <= a_max + LIMIT_TOL && a >= a_min - LIMIT_TOL, "a = {a}");
-            // The brake may end with |v| still above the limit, but then
-            // decelerating so that ramping a to 0 ends exactly inside.
-            if v > v_max + LIMIT_TOL {
-                assert!(
-                    a < 0.0 && v_at_a_zero(v, a, -j_max) <= v_max + LIMIT_TOL,
-                    "v = {v}, a = {a}"
-                );
-            }
-            if v < v_min - LIMIT_TOL {
-                assert!(
-                    a > 0.0 && v_at_a_zero(v, a, j_max) >= v_min - LIMIT_TOL,
-                    "v = {v}, a = {a}"
-                );
-            }
-            if a > 0.0 && v <= v_max {
-                assert!(v_at_a_zero(v, a, j_max) <= v_max + LIMIT_TOL);
-            } else if a < 0.0 && v >= v_min {
-                assert!(v_at_a_zero(v, a, -j_max) >= v_min - LIMIT_TOL);
+        // Too fast and too strongly accelerating (v > v_max, a > a_max), with
+        // symmetric jerk and with the jerk downwards 3x weaker or stronger.
+        let (v_max, v_min, a_max, a_min, j_max) = (5.0, -4.0, 45.0, -30.0, 40.0);
+        for j_min in [-j_max, -j_max / 3.0, -3.0 * j_max] {
+            for &(v0, a0) in &[
+                (7.0, 0.0),
+                (4.0, 60.0),
+                (-8.0, -10.0),
+                (0.0, -70.0),
+                (4.9, 20.0),
+            ] {
+                let mut b = BrakePhase::plan(v0, a0, v_max, v_min, a_max, a_min, j_max, j_min);
+                let (mut p, mut v, mut a) = (0.0, v0, a0);
+                b.finalize(&mut p, &mut v, &mut a);
+                assert!(b.duration > 0.0, "start ({v0}, {a0}) needs a brake");
+                assert!(a <= a_max + LIMIT_TOL && a >= a_min - LIMIT_TOL, "a = {a}");
+                for j in b.j {
+                    assert!(j == 0.0 || j == j_max || j == j_min, "jerk {j}");
+                }
+                // The brake may end with v still outside, but then returning
+                // so that ramping a to 0 (with +j_max from a < 0, with j_min
+                // from a > 0) ends inside.
+                let v_up = v_at_a_zero(v, a, -j_max); // a < 0 ramped up
+                let v_down = v_at_a_zero(v, a, -j_min); // a > 0 ramped down
+                if v > v_max + LIMIT_TOL {
+                    assert!(a < 0.0 && v_up <= v_max + LIMIT_TOL, "v = {v}, a = {a}");
+                }
+                if v < v_min - LIMIT_TOL {
+                    assert!(a > 0.0 && v_down >= v_min - LIMIT_TOL, "v = {v}, a = {a}");
+                }
+                if a > 0.0 && v <= v_max {
+                    assert!(v_down <= v_max + LIMIT_TOL, "({v0}, {a0}), j_min {j_min}");
+                } else if a < 0.0 && v >= v_min {
+                    assert!(v_up >= v_min - LIMIT_TOL, "({v0}, {a0}), j_min {j_min}");
+                }
             }
         }
     }
