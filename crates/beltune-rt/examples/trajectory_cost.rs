@@ -4,7 +4,7 @@
 //! ```text
 //! cargo build -p beltune-rt --release --example trajectory_cost
 //! valgrind --tool=callgrind --callgrind-out-file=/dev/null \
-//!     target/release/examples/trajectory_cost <plan|plan-general|sample> <n>
+//!     target/release/examples/trajectory_cost <plan|plan-general|plan-asymmetric|sample> <n>
 //! ```
 //!
 //! Run with `n` and `2 n`; the difference of the total instruction counts
@@ -44,6 +44,17 @@ fn main() {
                 acc += traj.map(|t| t.duration_s()).unwrap_or(0.0);
             }
         }
+        "plan-asymmetric" => {
+            let slow_down = Limits {
+                j_min: -20.0,
+                ..limits
+            };
+            for _ in 0..n {
+                let traj =
+                    Trajectory::plan(black_box(&start), black_box(&target), black_box(&slow_down));
+                acc += traj.map(|t| t.duration_s()).unwrap_or(0.0);
+            }
+        }
         "sample" => {
             let traj = Trajectory::plan(&start, &target, &limits).expect("plannable");
             let ts = 1e-4;
@@ -57,7 +68,7 @@ fn main() {
             }
         }
         other => {
-            eprintln!("unknown method `{other}` (plan | plan-general | sample)");
+            eprintln!("unknown method `{other}` (plan | plan-general | plan-asymmetric | sample)");
             std::process::exit(2);
         }
     }

@@ -31,6 +31,17 @@
 //! # Ok::<(), beltune_rt::Error>(())
 //! ```
 //!
+//! Two solvers find the seven phases. For symmetric jerk limits
+//! (`j_min = -j_max`) the closed forms of Ruckig (`step1.rs`, a port); they are
+//! bit-identical to the reference rsruckig. For asymmetric jerk, where no
+//! closed forms exist, the general solver of `asymmetric.rs`: the same profile
+//! families, each reduced to one polynomial equation whose real roots are all
+//! taken (about 60,000 instructions per plan against 4,400). It reproduces
+//! rsruckig on the symmetric test cases too (`tests/trajectory_vs_ruckig.rs`),
+//! and its asymmetric plans are checked for invariances and against a
+//! discretized linear program (`tests/trajectory_asymmetric.rs`,
+//! `tests/discrete_lp_oracle.rs`).
+//!
 //! | file | step |
 //! | --- | --- |
 //! | `brake.rs` | brake pre-phase for start states outside the limits |
