@@ -48,18 +48,12 @@ use super::math::integrate;
 #[cfg_attr(test, allow(unused_imports))]
 use super::math::F64Math;
 use super::poly::{real_roots, Poly, Surd};
-use super::profile::{Direction, Profile};
+// The target precision, limit slack and longest profile of Ruckig's check;
+// `A_EPS` here is relative to `1 + |a|`.
+use super::profile::{
+    Direction, Profile, A_EPS, A_PRECISION, P_PRECISION, T_MAX, V_EPS, V_PRECISION,
+};
 
-/// Final position must match the target to this (m), as in `profile.rs`.
-const P_PRECISION: f64 = 1e-8;
-/// Final velocity must match the target to this (m/s).
-const V_PRECISION: f64 = 1e-8;
-/// Final acceleration must match the target to this (m/s^2).
-const A_PRECISION: f64 = 1e-10;
-/// Slack on the velocity limits (m/s) and acceleration limits (relative to
-/// `1 + |a|`), as Ruckig's profile check allows.
-const V_EPS: f64 = 1e-12;
-const A_EPS: f64 = 1e-12;
 /// A phase duration computed from a root may come out negative by rounding;
 /// up to this fraction of the whole profile it is taken as zero (the target
 /// check afterwards decides whether the profile is still exact).
@@ -73,8 +67,6 @@ const A_SNAP: f64 = 1e-12;
 /// Integrated velocity at the start of a cruise this close (relative to
 /// `1 + |v_max| + |v_0|`) to `v_max` is taken as `v_max`.
 const V_SNAP: f64 = 1e-12;
-/// Longest admissible profile (s), as in `profile.rs`.
-const T_MAX: f64 = 1e12;
 
 /// The boundary value problem after the brake pre-phase: start, target and
 /// limits (m, m/s, m/s^2, m/s^3).

@@ -12,18 +12,20 @@ use super::math::integrate;
 #[cfg_attr(test, allow(unused_imports))]
 use super::math::F64Math;
 
-const V_EPS: f64 = 1e-12;
-const A_EPS: f64 = 1e-12;
+/// Slack on the velocity limits (m/s).
+pub(crate) const V_EPS: f64 = 1e-12;
+/// Slack on the acceleration limits (m/s^2).
+pub(crate) const A_EPS: f64 = 1e-12;
 
 /// Final position must match the target to this (m).
-const P_PRECISION: f64 = 1e-8;
+pub(crate) const P_PRECISION: f64 = 1e-8;
 /// Final velocity must match the target to this (m/s).
-const V_PRECISION: f64 = 1e-8;
+pub(crate) const V_PRECISION: f64 = 1e-8;
 /// Final acceleration must match the target to this (m/s^2).
-const A_PRECISION: f64 = 1e-10;
+pub(crate) const A_PRECISION: f64 = 1e-10;
 
 /// Longest admissible profile (s).
-const T_MAX: f64 = 1e12;
+pub(crate) const T_MAX: f64 = 1e12;
 
 /// Which limits a profile family reaches: `Acc0` = acceleration limit held in
 /// P2, `Acc1` = in P6, `Vel` = velocity limit held in P4.
