@@ -18,127 +18,18 @@
 //! Time optimality itself is checked against a discretized linear program in
 //! `discrete_lp_oracle.rs`.
 
+mod support;
+
 use beltune_rt::trajectory::{Limits, State, Trajectory};
-use rand::{Rng, SeedableRng};
-use rand_xoshiro::Xoshiro256PlusPlus;
+use support::cases::{check_samples, random_case, rng, Case, Jerk, FAMILIES};
 
 /// Durations of mirrored / time-reversed moves agree to this (relative):
 /// both are computed from roots found to machine precision.
 const DURATION_REL_TOL: f64 = 1e-9;
 /// Absolute floor for (near-)zero durations, s.
 const DURATION_ABS_FLOOR: f64 = 1e-12;
-/// The final state must equal the target to this (issue 3).
-const FINAL_STATE_TOL: f64 = 1e-8;
-/// Slack on the limits when sampling (the profile check allows 1e-12 on v
-/// and a; the brake keeps 2.2e-14 s margins).
-const LIMIT_TOL: f64 = 1e-9;
-/// Cases per family; 5 families.
-const CASES_PER_FAMILY: usize = 2_000;
-
-#[derive(Clone, Copy, Debug)]
-struct Case {
-    start: State,
-    target: State,
-    limits: Limits,
-}
-
-fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
-    (rng.random_range(lo.ln()..hi.ln())).exp()
-}
-
-fn random_limits(rng: &mut Xoshiro256PlusPlus) -> Limits {
-    let j_max = log_uniform(rng, 1.0, 2000.0);
-    Limits {
-        v_max: log_uniform(rng, 0.05, 10.0),
-        v_min: -log_uniform(rng, 0.05, 10.0),
-        a_max: log_uniform(rng, 0.2, 100.0),
-        a_min: -log_uniform(rng, 0.2, 100.0),
-        j_max,
-        // From a tenth to ten times j_max.
-        j_min: -j_max * log_uniform(rng, 0.1, 10.0),
-        position_min: f64::NEG_INFINITY,
-        position_max: f64::INFINITY,
-    }
-}
-
-/// A state strictly inside the limits from which (and towards which) ramping
-/// the acceleration to zero with either jerk keeps the velocity inside:
-/// admissible as a start without brake and as a target, also time-reversed.
-fn admissible_state(
-    rng: &mut Xoshiro256PlusPlus,
-    l: &Limits,
-    position: f64,
-    moving: bool,
-) -> State {
-    if !moving {
-        return State::at_rest(position);
-    }
-    let j_small = l.j_max.min(-l.j_min);
-    loop {
-        let v = rng.random_range(l.v_min..l.v_max);
-        let a = rng.random_range(l.a_min..l.a_max);
-        let dv = a * a / (2.0 * j_small);
-        if v + dv <= l.v_max && v - dv >= l.v_min {
-            return State {
-                position,
-                velocity: v,
-                acceleration: a,
-            };
-        }
-    }
-}
-
-fn random_case(rng: &mut Xoshiro256PlusPlus, family: usize) -> Case {
-    let limits = random_limits(rng);
-    let p0 = rng.random_range(-1.0..1.0);
-    let (distance, start_moving, target_moving) = match family {
-        // Short moves from rest to rest (limits rarely reached).
-        0 => (log_uniform(rng, 1e-6, 1e-2), false, false),
-        // Rest to rest over all scales: none, a, v, a and v limits reached.
-        1 => (log_uniform(rng, 1e-4, 100.0), false, false),
-        // Moving start and target, short.
-        2 => (log_uniform(rng, 1e-5, 0.1), true, true),
-        // Moving start and target over all scales.
-        _ => (log_uniform(rng, 1e-3, 100.0), true, true),
-    };
-    let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-    let start = admissible_state(rng, &limits, p0, start_moving);
-    let target = admissible_state(rng, &limits, p0 + sign * distance, target_moving);
-    Case {
-        start,
-        target,
-        limits,
-    }
-}
-
-/// A start that violates a limit (brake pre-phase), target inside.
-fn braking_case(rng: &mut Xoshiro256PlusPlus) -> Case {
-    let mut c = random_case(rng, 3);
-    let l = c.limits;
-    let factor = rng.random_range(1.01..2.5);
-    match rng.random_range(0..3) {
-        0 => {
-            c.start.velocity = if rng.random_bool(0.5) {
-                l.v_max
-            } else {
-                l.v_min
-            } * factor
-        }
-        1 => {
-            c.start.acceleration = if rng.random_bool(0.5) {
-                l.a_max
-            } else {
-                l.a_min
-            } * factor
-        }
-        _ => {
-            let s = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-            c.start.velocity = l.v_max * factor * s;
-            c.start.acceleration = l.a_max * rng.random_range(0.5..2.0) * s;
-        }
-    }
-    c
-}
+/// Cases per family.
+const CASES_PER_FAMILY: usize = 5_000;
 
 fn plan(c: &Case) -> Trajectory {
     Trajectory::plan(&c.start, &c.target, &c.limits)
@@ -150,46 +41,6 @@ fn assert_same_duration(a: f64, b: f64, what: &str, c: &Case) {
         (a - b).abs() <= DURATION_REL_TOL * a.max(b) + DURATION_ABS_FLOOR,
         "{what}: {a} vs {b} for {c:?}"
     );
-}
-
-/// Ends in the target; jerk within `[j_min, j_max]` throughout; acceleration
-/// inside after the brake, velocity inside once it has come back.
-fn check_samples(c: &Case, traj: &Trajectory) {
-    let l = &c.limits;
-    let end = traj.sample(traj.duration_s());
-    assert!(
-        (end.position - c.target.position).abs() < FINAL_STATE_TOL
-            && (end.velocity - c.target.velocity).abs() < FINAL_STATE_TOL
-            && (end.acceleration - c.target.acceleration).abs() < FINAL_STATE_TOL,
-        "{c:?}: ends in {end:?}"
-    );
-    let n = 300;
-    let t_brake = traj.brake_duration_s();
-    let mut velocity_inside = false;
-    let a_tol = LIMIT_TOL * (1.0 + l.a_max.max(-l.a_min));
-    for k in 0..=n {
-        let t = traj.duration_s() * k as f64 / n as f64;
-        let s = traj.sample(t);
-        assert!(
-            s.jerk <= l.j_max * (1.0 + 1e-12) && s.jerk >= l.j_min * (1.0 + 1e-12),
-            "{c:?}: jerk {} at {t}",
-            s.jerk
-        );
-        if t < t_brake {
-            continue;
-        }
-        assert!(
-            s.acceleration <= l.a_max + a_tol && s.acceleration >= l.a_min - a_tol,
-            "{c:?}: a = {} at {t}",
-            s.acceleration
-        );
-        let inside = s.velocity <= l.v_max + LIMIT_TOL && s.velocity >= l.v_min - LIMIT_TOL;
-        if velocity_inside {
-            assert!(inside, "{c:?}: v = {} left the limits at {t}", s.velocity);
-        }
-        velocity_inside |= inside;
-    }
-    assert!(velocity_inside, "{c:?}: velocity never came back inside");
 }
 
 fn mirrored(c: &Case) -> Case {
@@ -246,12 +97,12 @@ fn symmetric(c: &Case, j: f64) -> Case {
 
 #[test]
 fn asymmetric_jerk_moves_are_exact_mirror_and_time_reversal_invariant_and_bracketed() {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(0xA5_1E_E7);
+    let mut rng = rng(0xA5_1E_E7);
     let mut reached = [0usize; 3];
     let mut slow_jerk_phases = 0;
-    for family in 0..4 {
+    for family in 0..FAMILIES - 2 {
         for _ in 0..CASES_PER_FAMILY {
-            let c = random_case(&mut rng, family);
+            let c = random_case(&mut rng, family, Jerk::Asymmetric);
             let traj = plan(&c);
             let t = traj.duration_s();
             check_samples(&c, &traj);
@@ -293,10 +144,10 @@ fn asymmetric_jerk_moves_are_exact_mirror_and_time_reversal_invariant_and_bracke
 
 #[test]
 fn braking_starts_come_back_inside_with_the_asymmetric_jerks() {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(0xB8_A4E);
+    let mut rng = rng(0xB8_A4E);
     let mut braked = 0;
-    for _ in 0..CASES_PER_FAMILY {
-        let c = braking_case(&mut rng);
+    for i in 0..CASES_PER_FAMILY {
+        let c = random_case(&mut rng, 4 + i % 2, Jerk::Asymmetric);
         let traj = plan(&c);
         check_samples(&c, &traj);
         let mirror = plan(&mirrored(&c));
@@ -319,9 +170,9 @@ fn braking_starts_come_back_inside_with_the_asymmetric_jerks() {
 fn duration_is_continuous_as_the_jerk_limits_become_symmetric() {
     // Relative change of the duration per relative change of j_min stays
     // O(1); 1e-7 in j_min moves the duration by well under 1e-6.
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+    let mut rng = rng(5);
     for i in 0..2_000 {
-        let mut c = random_case(&mut rng, i % 4);
+        let mut c = random_case(&mut rng, i % 4, Jerk::Symmetric);
         c.limits.j_min = -c.limits.j_max;
         let ruckig = plan(&c).duration_s();
         for factor in [1.0 - 1e-7, 1.0 + 1e-7] {

@@ -58,15 +58,20 @@ use super::profile::{
 /// up to this fraction of the whole profile it is taken as zero (the target
 /// check afterwards decides whether the profile is still exact).
 const T_REL_TOL: f64 = 1e-9;
+/// Position precision relative to the largest position of the move, for
+/// moves beyond 10^6 m (see [`build`]).
+const P_REL_PRECISION: f64 = 1e-14;
 /// Search intervals for the unknown accelerations are widened by this
 /// fraction of `a_max - a_min` so that roots on their ends are not lost.
 const A_REL_WIDEN: f64 = 1e-9;
 /// Integrated phase-end accelerations this close (relative to `1 + |a|`)
 /// to the designed ones are taken as the designed ones.
 const A_SNAP: f64 = 1e-12;
-/// Integrated velocity at the start of a cruise this close (relative to
-/// `1 + |v_max| + |v_0|`) to `v_max` is taken as `v_max`.
-const V_SNAP: f64 = 1e-12;
+/// Rounding of velocities relative to `1 +` [`Problem::v_scale`]: the slack
+/// of the velocity limits, and how close the integrated velocity at the start
+/// of a cruise must be to `v_max` to be taken as `v_max`. (A brake pre-phase
+/// through 10^4 m/s leaves the start state accurate to about 1e-11 m/s.)
+const V_ROUND: f64 = 1e-12;
 
 /// The boundary value problem after the brake pre-phase: start, target and
 /// limits (m, m/s, m/s^2, m/s^3).
@@ -84,6 +89,9 @@ pub(crate) struct Problem {
     pub a_min: f64,
     pub j_max: f64,
     pub j_min: f64,
+    /// Largest speed of the move including the brake pre-phase (m/s): the
+    /// scale of the rounding in the velocities.
+    pub v_scale: f64,
 }
 
 impl Problem {
@@ -102,7 +110,13 @@ impl Problem {
             a_min: -self.a_max,
             j_max: -self.j_min,
             j_min: -self.j_max,
+            v_scale: self.v_scale,
         }
+    }
+
+    /// Velocity rounding tolerance, m/s (see [`V_ROUND`]).
+    fn v_round(&self) -> f64 {
+        V_ROUND * (1.0 + self.v_scale.max(self.v_max).max(-self.v_min))
     }
 
     /// `k = 1/(2 j_max) - 1/(2 j_min)`, s^3/m.
@@ -263,8 +277,7 @@ fn build(pb: &Problem, s: &Shape<f64>) -> Option<Profile> {
         if i == 2 && s.cruise > 0.0 {
             // P4 cruises at v_max by design; a rounding error of P1-P3 would
             // be multiplied by the cruise time (1e-13 m/s over 1e5 s).
-            let v_snap = V_SNAP * (1.0 + pb.v_max.abs() + pb.v0.abs());
-            if (k.velocity - pb.v_max).abs() <= v_snap {
+            if (k.velocity - pb.v_max).abs() <= pb.v_round() {
                 pr.v[3] = pb.v_max;
             }
         }
@@ -284,7 +297,8 @@ fn build(pb: &Problem, s: &Shape<f64>) -> Option<Profile> {
     }
     // As in Ruckig's check, P1 and P2 are exempt: after a brake pre-phase the
     // velocity may still be outside its limits there, coming back inside.
-    let v_ok = |v: f64| v <= pb.v_max + V_EPS && v >= pb.v_min - V_EPS;
+    let v_slack = V_EPS.max(pb.v_round());
+    let v_ok = |v: f64| v <= pb.v_max + v_slack && v >= pb.v_min - v_slack;
     if !pr.v[3..7].iter().all(|&v| v_ok(v)) {
         return None;
     }
@@ -296,7 +310,13 @@ fn build(pb: &Problem, s: &Shape<f64>) -> Option<Profile> {
             }
         }
     }
-    let reached = (pr.p[7] - pb.pf).abs() < P_PRECISION
+    // Beyond 10^6 m the absolute precision of f64 itself (1e-10 m) nears
+    // the required 1e-8 m: there the position must match to 1e-14 of the
+    // largest position the move passes (a brake pre-phase from far outside
+    // the limits with a weak jerk can run for an hour).
+    let p_scale = pr.p.iter().fold(0.0_f64, |m, p| m.max(p.abs()));
+    let p_precision = P_PRECISION.max(P_REL_PRECISION * p_scale);
+    let reached = (pr.p[7] - pb.pf).abs() < p_precision
         && (pr.v[7] - pb.vf).abs() < V_PRECISION
         && (pr.a[7] - pb.af).abs() < A_PRECISION;
     reached.then_some(pr)
@@ -307,20 +327,23 @@ fn velocity_family(pb: &Problem, emit: &mut impl FnMut(&Shape<f64>)) {
     let k = pb.k();
     let d1 = pb.v_max - pb.v0 + pb.a0 * pb.a0 * 0.5 / pb.j_max;
     let d2 = pb.v_max - pb.vf + pb.af * pb.af * 0.5 / pb.j_max;
-    if d1 < -V_EPS || d2 < -V_EPS {
+    if d1 < -pb.v_round() || d2 < -pb.v_round() {
         return;
     }
     let peak = (d1.max(0.0) / k).sqrt();
     let (a_peak, hold0) = if peak > pb.a_max {
         (pb.a_max, (d1 - k * pb.a_max * pb.a_max) / pb.a_max)
     } else {
-        (peak, 0.0)
+        // A start exactly on the brake's boundary gives `peak = a0` up to
+        // rounding; below `a0` P1 would be negative (an overshoot beyond
+        // rounding fails the velocity check of the profile).
+        (peak.max(pb.a0), 0.0)
     };
     let low = -(d2.max(0.0) / k).sqrt();
     let (a_low, hold1) = if low < pb.a_min {
         (pb.a_min, (k * pb.a_min * pb.a_min - d2) / pb.a_min)
     } else {
-        (low, 0.0)
+        (low.min(pb.af), 0.0)
     };
     let mut shape = Shape {
         a_peak,

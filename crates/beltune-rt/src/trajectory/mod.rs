@@ -376,6 +376,10 @@ impl Trajectory {
                 a_min,
                 j_max,
                 j_min,
+                v_scale: brake.v[..]
+                    .iter()
+                    .chain(&[start.velocity, v0, vf])
+                    .fold(0.0, |m: f64, v| m.max(v.abs())),
             };
             let mut profile = time_optimal_profile(&problem).ok_or(NO_PROFILE)?;
             profile.brake = brake;

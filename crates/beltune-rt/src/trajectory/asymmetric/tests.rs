@@ -25,6 +25,7 @@ fn random_problem(rng: &mut Xoshiro256PlusPlus) -> Problem {
         a_min: r(-10.0, -2.5),
         j_max: r(5.0, 100.0),
         j_min: r(-100.0, -5.0),
+        v_scale: 3.0,
     }
 }
 
