@@ -1,0 +1,305 @@
+//! Self-test of the discretized LP oracle (`tests/support/discrete_lp.rs`)
+//! against the reference `rsruckig` on symmetric jerk limits, and against a
+//! closed form on asymmetric ones.
+
+mod support;
+
+use rand::{Rng, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rsruckig::prelude::*;
+use std::time::Instant;
+use support::discrete_lp::{feasible, lp_stats, shortest_duration, Bounds, VelocityCheck};
+
+#[derive(Clone, Copy, Debug)]
+struct Case {
+    start: [f64; 3],
+    target: [f64; 3],
+    bounds: Bounds,
+}
+
+/// rsruckig's duration (symmetric jerk `+-j_max`), or `None` when it rejects.
+fn reference_duration(c: &Case) -> Option<f64> {
+    let b = &c.bounds;
+    assert_eq!(b.j_min, -b.j_max, "rsruckig needs symmetric jerk limits");
+    let mut otg = Ruckig::<1, ThrowErrorHandler>::new(None, 1e-4);
+    let mut input = InputParameter::new(None);
+    input.current_position[0] = c.start[0];
+    input.current_velocity[0] = c.start[1];
+    input.current_acceleration[0] = c.start[2];
+    input.target_position[0] = c.target[0];
+    input.target_velocity[0] = c.target[1];
+    input.target_acceleration[0] = c.target[2];
+    input.max_velocity[0] = b.v_max;
+    input.max_acceleration[0] = b.a_max;
+    input.max_jerk[0] = b.j_max;
+    input.min_velocity = Some(DataArrayOrVec::Stack([b.v_min]));
+    input.min_acceleration = Some(DataArrayOrVec::Stack([b.a_min]));
+    let mut traj = rsruckig::trajectory::Trajectory::new(None);
+    match otg.calculate(&input, &mut traj) {
+        Ok(RuckigResult::Working) => Some(traj.get_duration()),
+        _ => None,
+    }
+}
+
+fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
+    (rng.random_range(lo.ln()..hi.ln())).exp()
+}
+
+fn random_bounds(rng: &mut Xoshiro256PlusPlus, asymmetric: bool) -> Bounds {
+    let v_max = log_uniform(rng, 0.05, 10.0);
+    let a_max = log_uniform(rng, 0.2, 100.0);
+    let j_max = log_uniform(rng, 1.0, 2000.0);
+    let (v_min, a_min) = if asymmetric {
+        (-log_uniform(rng, 0.05, 10.0), -log_uniform(rng, 0.2, 100.0))
+    } else {
+        (-v_max, -a_max)
+    };
+    Bounds {
+        v_max,
+        v_min,
+        a_max,
+        a_min,
+        j_max,
+        j_min: -j_max,
+    }
+}
+
+/// `[p, v, a]` strictly inside the limits, admissible as start and target
+/// (ramping the acceleration to zero keeps the velocity inside).
+fn admissible_state(rng: &mut Xoshiro256PlusPlus, b: &Bounds, p: f64, moving: bool) -> [f64; 3] {
+    if !moving {
+        return [p, 0.0, 0.0];
+    }
+    loop {
+        let v = rng.random_range(0.9 * b.v_min..0.9 * b.v_max);
+        let a = rng.random_range(0.9 * b.a_min..0.9 * b.a_max);
+        let dv = a * a / (2.0 * b.j_max);
+        if v + dv <= 0.95 * b.v_max && v - dv >= 0.95 * b.v_min {
+            return [p, v, a];
+        }
+    }
+}
+
+/// Families: 0 short rest-to-rest (no limit reached), 1 long rest-to-rest
+/// (a and v limits reached), 2 moving start and target, 3 asymmetric v/a
+/// limits rest-to-rest, 4 asymmetric v/a limits moving.
+fn random_case(rng: &mut Xoshiro256PlusPlus, family: usize) -> Case {
+    let bounds = random_bounds(rng, family >= 3);
+    let p0 = rng.random_range(-1.0..1.0);
+    // Distances relative to the natural length scale v_max^2 / a_max.
+    let scale = bounds.v_max * bounds.v_max / bounds.a_max;
+    let (distance, moving) = match family {
+        0 => (scale * log_uniform(rng, 1e-4, 1e-2), false),
+        1 => (scale * log_uniform(rng, 2.0, 30.0), false),
+        2 => (scale * log_uniform(rng, 1e-2, 10.0), true),
+        3 => (scale * log_uniform(rng, 1e-2, 30.0), false),
+        _ => (scale * log_uniform(rng, 1e-2, 10.0), true),
+    };
+    let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+    let start = admissible_state(rng, &bounds, p0, moving);
+    let target = admissible_state(rng, &bounds, p0 + sign * distance, moving);
+    Case {
+        start,
+        target,
+        bounds,
+    }
+}
+
+const FAMILIES: usize = 5;
+const CASES_PER_FAMILY: usize = 8;
+
+fn cases() -> Vec<(Case, f64)> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x1b_0ac1e);
+    let mut out = Vec::new();
+    for family in 0..FAMILIES {
+        let mut n = 0;
+        while n < CASES_PER_FAMILY {
+            let c = random_case(&mut rng, family);
+            if let Some(t) = reference_duration(&c) {
+                if t > 0.0 {
+                    out.push((c, t));
+                    n += 1;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Measurement (run with `--ignored --nocapture`): the LP optimum over the
+/// reference duration for several grid sizes.
+#[test]
+#[ignore = "measurement, about 4 minutes"]
+fn measure_gap_to_rsruckig() {
+    let ns: Vec<usize> = std::env::var("LP_NS")
+        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
+        .unwrap_or(vec![100, 200, 400]);
+    for n in ns {
+        for check in [VelocityCheck::GridPointsOnly, VelocityCheck::Conservative] {
+            let (s0, e0) = lp_stats();
+            let started = Instant::now();
+            let mut lowest = f64::INFINITY;
+            let mut highest = f64::NEG_INFINITY;
+            for (c, t_ref) in cases() {
+                // Feasibility need not be monotone in T (blocked intervals of
+                // moving targets): bracket with the first feasible factor.
+                let first = [1.0, 1.001, 1.003, 1.01, 1.03, 1.1, 1.3]
+                    .into_iter()
+                    .find(|f| feasible(c.start, c.target, &c.bounds, f * t_ref, n, check));
+                let t = first
+                    .and_then(|f| {
+                        shortest_duration(
+                            c.start,
+                            c.target,
+                            &c.bounds,
+                            (0.9 * t_ref, f * t_ref),
+                            n,
+                            check,
+                            1e-4,
+                        )
+                    })
+                    .unwrap_or(f64::INFINITY);
+                let gap = t / t_ref - 1.0;
+                lowest = lowest.min(gap);
+                highest = highest.max(gap);
+            }
+            let (s1, e1) = lp_stats();
+            println!(
+                "N = {n:3} {check:?}: T_lp / T_ref - 1 in [{lowest:+.3e}, {highest:+.3e}], \
+                 {} solves, {} errors, {:.2} ms per solve",
+                s1 - s0,
+                e1 - e0,
+                started.elapsed().as_secs_f64() * 1e3 / (s1 - s0) as f64
+            );
+        }
+    }
+}
+
+/// Grid size of the checks (see `DELTA`).
+const N: usize = 200;
+/// Relative margin around the reference duration.
+///
+/// Measured with `measure_gap_to_rsruckig` on these 40 cases: the shortest
+/// LP duration over rsruckig's, `T_lp / T_ref - 1`, is never below 0 (to the
+/// bisection tolerance 1e-4) and at worst
+///
+/// | N   | GridPointsOnly | Conservative | ms per LP solve |
+/// | --- | -------------- | ------------ | --------------- |
+/// | 100 | 7.7e-2         | one case infeasible up to 1.3 T_ref | 10 |
+/// | 200 | 8.6e-3         | 3.8e-2       | 40              |
+/// | 400 | 3.0e-3         | 1.2e-2       | 170             |
+///
+/// (test profile, opt-level 2, 2 busy cores). N = 400 would allow DELTA =
+/// 0.02 but costs ~20 s here; N = 200 with DELTA = 0.05 keeps 1.2 points
+/// (30 %) above the worst Conservative gap, and the lower side (gap >= 0)
+/// has the full 5 % of slack.
+const DELTA: f64 = 0.05;
+
+#[test]
+fn oracle_brackets_rsruckig_on_40_symmetric_cases() {
+    let cases = cases();
+    let (s0, e0) = lp_stats();
+    let started = Instant::now();
+    for (i, (c, t_ref)) in cases.iter().enumerate() {
+        assert!(
+            feasible(
+                c.start,
+                c.target,
+                &c.bounds,
+                t_ref * (1.0 + DELTA),
+                N,
+                VelocityCheck::Conservative
+            ),
+            "case {i}: not feasible at T_ref (1 + DELTA), T_ref = {t_ref}: {c:?}"
+        );
+        assert!(
+            !feasible(
+                c.start,
+                c.target,
+                &c.bounds,
+                t_ref * (1.0 - DELTA),
+                N,
+                VelocityCheck::GridPointsOnly
+            ),
+            "case {i}: feasible at T_ref (1 - DELTA), T_ref = {t_ref}: {c:?}"
+        );
+    }
+    let (s1, e1) = lp_stats();
+    println!(
+        "{} cases, N = {N}: {} LP solves, {} solver errors, {:.1} ms per solve",
+        cases.len(),
+        s1 - s0,
+        e1 - e0,
+        started.elapsed().as_secs_f64() * 1e3 / (s1 - s0) as f64
+    );
+}
+
+/// Time-optimal rest-to-rest move over `distance > 0` with jerk in
+/// `[-j2, j1]`, no velocity or acceleration limit reached.
+///
+/// By Pontryagin's principle the jerk is bang-bang with at most two switches
+/// (its switching function is a quadratic polynomial in time), so the profile
+/// is `+j1` for `t1`, `-j2` for `t2`, `+j1` for `t3`. With `r = j1 / j2`:
+/// `a(T) = 0` gives `t2 = r (t1 + t3)`; the acceleration is then two
+/// triangles of areas `j1 t1^2 (1 + r) / 2` and `-j1 t3^2 (1 + r) / 2`, so
+/// `v(T) = 0` gives `t1 = t3 = t`, `t2 = 2 r t`. The acceleration is odd about
+/// `T / 2 = t (1 + r)`, the velocity even, so the distance is twice the
+/// position at `T / 2`: `D = j1 t^3 (1 + r)(1 + 2 r) / 3`. Hence
+/// `t = (3 D / (j1 (1 + r)(1 + 2 r)))^(1/3)`, `T = 2 t (1 + r)`, peak
+/// acceleration `+-j1 t`, peak velocity `j1 t^2 (1 + r) / 2`.
+/// (Check: `r = 1` gives the classic `D = 2 j t^3`, `T = 4 t`.)
+fn asymmetric_jerk_rest_to_rest(distance: f64, j1: f64, j2: f64) -> (f64, f64, f64) {
+    let r = j1 / j2;
+    let t = (3.0 * distance / (j1 * (1.0 + r) * (1.0 + 2.0 * r))).cbrt();
+    (2.0 * t * (1.0 + r), j1 * t, j1 * t * t * (1.0 + r) / 2.0)
+}
+
+#[test]
+fn oracle_brackets_closed_form_with_asymmetric_jerk() {
+    // Ratios whose switch times fall between grid points.
+    for (j1, j2) in [(70.0, 200.0), (290.0, 100.0), (100.0, 100.0)] {
+        let distance = 1e-3;
+        let b = Bounds {
+            v_max: 1.0,
+            v_min: -1.0,
+            a_max: 10.0,
+            a_min: -10.0,
+            j_max: j1,
+            j_min: -j2,
+        };
+        let (t_opt, a_peak, v_peak) = asymmetric_jerk_rest_to_rest(distance, j1, j2);
+        assert!(a_peak < b.a_max && v_peak < b.v_max, "limits reached");
+        let start = [0.2, 0.0, 0.0];
+        let target = [0.2 + distance, 0.0, 0.0];
+        let upper = feasible(
+            start,
+            target,
+            &b,
+            t_opt * (1.0 + DELTA),
+            N,
+            VelocityCheck::Conservative,
+        );
+        let lower = feasible(
+            start,
+            target,
+            &b,
+            t_opt * (1.0 - DELTA),
+            N,
+            VelocityCheck::GridPointsOnly,
+        );
+        let t_lp = shortest_duration(
+            start,
+            target,
+            &b,
+            (0.9 * t_opt, 1.2 * t_opt),
+            N,
+            VelocityCheck::GridPointsOnly,
+            1e-4,
+        );
+        println!(
+            "j_max {j1}, j_min -{j2}: T* = {t_opt:.6} s, GridPointsOnly LP optimum / T* - 1 = {:?}",
+            t_lp.map(|t| t / t_opt - 1.0)
+        );
+        assert!(upper && !lower, "j_max {j1}, j_min -{j2}: T* = {t_opt}");
+    }
+}

@@ -1,0 +1,290 @@
+//! A discretized linear program as an independent optimality oracle for
+//! jerk-limited 1-DOF trajectories, also for asymmetric jerk limits
+//! (`j_min != -j_max`), which the reference `rsruckig` cannot check.
+//!
+//! Self-contained on purpose: it does not use `beltune_rt::trajectory::Limits`.
+//!
+//! # Discretization (exact for piecewise-constant jerk)
+//!
+//! The duration `T` is cut into `N` intervals of `dt = T / N`; the jerk `j_k`
+//! is constant on interval `k`. With `a_k`, `v_k` the grid values,
+//!
+//! ```text
+//! a_{k+1} = a_k + j_k dt
+//! v_{k+1} = v_k + a_k dt + j_k dt^2 / 2
+//! p_N     = p_0 + sum_k (v_k dt + a_k dt^2 / 2 + j_k dt^3 / 6)
+//! ```
+//!
+//! hold exactly (with `p_{k+1} = p_k + v_k dt + a_k dt^2 / 2 + j_k dt^3 / 6`).
+//! The LP keeps `j_k`, `a_k`, `v_k`, `p_k` as (scaled) variables tied by these
+//! sparse equalities; the start and target states are fixed through the
+//! bounds of `a_0, v_0, p_0, a_N, v_N, p_N`. The acceleration is piecewise linear, so bounds on
+//! the grid values are exact for the continuous acceleration.
+//!
+//! # Scaling
+//!
+//! Variables are `u_k = j_k / J`, `alpha_k = a_k / A`, `nu_k = v_k / V` with
+//! `J = max(j_max, -j_min)`, `A = max(min(max|a limit|, J T), |a_0|, |a_f|)`,
+//! `V = max(min(max|v limit|, A T), |v_0|, |v_f|)`: the accelerations and
+//! velocities reachable within `T`, so every variable of a (nearly) feasible
+//! point is O(1) whether the limits are reached or not. The recurrences are
+//! divided by `A` and `V`, the position one by `V T` (positions relative to
+//! `p_0`), which keeps its coefficients `<= 1/N` and `rho_N` O(1).
+//!
+//! # Velocity between grid points ([`VelocityCheck::Conservative`])
+//!
+//! On an interval the velocity is a quadratic `v_k + a_k s + j s^2 / 2`. It
+//! can leave `[min(v_k, v_{k+1}), max(v_k, v_{k+1})]` only if the
+//! acceleration changes sign inside, at `s*`; above the grid values (a maximum
+//! needs `j < 0`, `|j| <= -j_min`) by `|j| s*^2 / 2` over `v_k` and by
+//! `|j| (dt - s*)^2 / 2` over `v_{k+1}`, so by at most
+//! `min(...) <= |j| dt^2 / 8` over the larger one. The interior grid
+//! velocities are therefore bounded by `v_max + j_min dt^2 / 8` and
+//! `v_min + j_max dt^2 / 8`. The first and last intervals touch the fixed
+//! start/target velocity, which is not tightened; there only the interior end
+//! is used (overshoot `<= |j| dt^2 / 2`), so `v_1` and `v_{N-1}` get the margin
+//! `|j| dt^2 / 2`. With it every feasible LP point is a continuous profile
+//! that respects all limits at all times (for start/target inside the limits).
+//!
+//! [`VelocityCheck::GridPointsOnly`] bounds the grid velocities only: a
+//! relaxation of the velocity constraint for piecewise-constant jerk. Note
+//! that it is not a proven relaxation of the continuous problem: the jerk is
+//! restricted to be constant on the grid, while the time-optimal bang-bang
+//! profile switches between grid points. Its optimum converges to the true one
+//! as `N` grows; `tests/discrete_lp_oracle.rs` measures how fast.
+
+use microlp::{ComparisonOp, OptimizationDirection, Problem};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Kinematic bounds: `v_min < 0 < v_max`, `a_min < 0 < a_max`,
+/// `j_min < 0 < j_max`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub v_max: f64,
+    pub v_min: f64,
+    pub a_max: f64,
+    pub a_min: f64,
+    pub j_max: f64,
+    pub j_min: f64,
+}
+
+/// How the velocity bounds are imposed (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VelocityCheck {
+    /// Velocity bounded at the grid points only (relaxation: use to show
+    /// that a duration is too short).
+    GridPointsOnly,
+    /// Grid velocities tightened so that the continuous velocity stays
+    /// inside (restriction: use to show that a duration is achievable).
+    Conservative,
+}
+
+static SOLVES: AtomicUsize = AtomicUsize::new(0);
+static ERRORS: AtomicUsize = AtomicUsize::new(0);
+
+/// LP solves so far and how many of them ended in a numerical error or a
+/// panic of the solver (counted as "infeasible"; set the environment
+/// variable `DISCRETE_LP_VERBOSE` to print each error).
+pub fn lp_stats() -> (usize, usize) {
+    (
+        SOLVES.load(Ordering::Relaxed),
+        ERRORS.load(Ordering::Relaxed),
+    )
+}
+
+/// Is there a jerk profile, piecewise constant on `intervals` equal intervals
+/// of total `duration_s`, with `j` in `[j_min, j_max]`, the acceleration within
+/// its bounds and the velocity within its bounds (as `check` says), from
+/// `start = [p0, v0, a0]` to exactly `target = [pf, vf, af]`?
+///
+/// Solver errors other than "infeasible" (and solver panics) count as
+/// infeasible; [`lp_stats`] counts them.
+pub fn feasible(
+    start: [f64; 3],
+    target: [f64; 3],
+    b: &Bounds,
+    duration_s: f64,
+    intervals: usize,
+    check: VelocityCheck,
+) -> bool {
+    assert!(intervals >= 2, "need at least two intervals");
+    assert!(
+        b.v_min < 0.0 && b.v_max > 0.0 && b.a_min < 0.0 && b.a_max > 0.0,
+        "{b:?}"
+    );
+    assert!(b.j_min < 0.0 && b.j_max > 0.0, "{b:?}");
+    if duration_s.is_nan() || duration_s <= 0.0 || duration_s.is_infinite() {
+        return false;
+    }
+    let n = intervals;
+    let t = duration_s;
+    let dt = t / n as f64;
+    let [p0, v0, a0] = start;
+    let [pf, vf, af] = target;
+
+    let j_s = b.j_max.max(-b.j_min);
+    let a_lim = b.a_max.max(-b.a_min);
+    let v_lim = b.v_max.max(-b.v_min);
+    let a_s = a_lim.min(j_s * t).max(a0.abs()).max(af.abs());
+    let v_s = v_lim.min(a_s * t).max(v0.abs()).max(vf.abs());
+
+    // Velocity bounds of the interior grid points.
+    let (margin_hi, margin_lo, margin_hi_end, margin_lo_end) = match check {
+        VelocityCheck::GridPointsOnly => (0.0, 0.0, 0.0, 0.0),
+        VelocityCheck::Conservative => {
+            let a_small = b.a_max.min(-b.a_min);
+            let a_big = b.a_max.max(-b.a_min).max(a0.abs()).max(af.abs());
+            (
+                (-b.j_min * dt * dt / 8.0).min(a_small * dt / 4.0),
+                (b.j_max * dt * dt / 8.0).min(a_small * dt / 4.0),
+                (-b.j_min * dt * dt / 2.0).min(a_big * dt / 2.0),
+                (b.j_max * dt * dt / 2.0).min(a_big * dt / 2.0),
+            )
+        }
+    };
+    let v_bounds = |k: usize| -> (f64, f64) {
+        if k == 0 {
+            (v0, v0)
+        } else if k == n {
+            (vf, vf)
+        } else if k == 1 || k == n - 1 {
+            (b.v_min + margin_lo_end, b.v_max - margin_hi_end)
+        } else {
+            (b.v_min + margin_lo, b.v_max - margin_hi)
+        }
+    };
+    for k in 1..n {
+        let (lo, hi) = v_bounds(k);
+        if lo > hi {
+            return false;
+        }
+    }
+
+    let mut lp = Problem::new(OptimizationDirection::Minimize);
+    let u: Vec<_> = (0..n)
+        .map(|_| lp.add_var(0.0, (b.j_min / j_s, b.j_max / j_s)))
+        .collect();
+    let alpha: Vec<_> = (0..=n)
+        .map(|k| {
+            let (lo, hi) = if k == 0 {
+                (a0, a0)
+            } else if k == n {
+                (af, af)
+            } else {
+                (b.a_min, b.a_max)
+            };
+            lp.add_var(0.0, (lo / a_s, hi / a_s))
+        })
+        .collect();
+    let nu: Vec<_> = (0..=n)
+        .map(|k| {
+            let (lo, hi) = v_bounds(k);
+            lp.add_var(0.0, (lo / v_s, hi / v_s))
+        })
+        .collect();
+
+    let c1 = dt * j_s / a_s;
+    let c2 = dt * a_s / v_s;
+    let c3 = dt * dt * j_s / (2.0 * v_s);
+    for k in 0..n {
+        lp.add_constraint(
+            [(alpha[k + 1], 1.0), (alpha[k], -1.0), (u[k], -c1)],
+            ComparisonOp::Eq,
+            0.0,
+        );
+        lp.add_constraint(
+            [
+                (nu[k + 1], 1.0),
+                (nu[k], -1.0),
+                (alpha[k], -c2),
+                (u[k], -c3),
+            ],
+            ComparisonOp::Eq,
+            0.0,
+        );
+    }
+    // Position as a recurrence too (a banded constraint matrix keeps the LU
+    // factors sparse; one dense row made the solve ~N^2.5):
+    // rho_k = (p_k - p0) / (V T), rho_0 = 0, rho_N = (pf - p0) / (V T).
+    let p_s = v_s * t;
+    let rho: Vec<_> = (0..=n)
+        .map(|k| {
+            if k == 0 {
+                lp.add_var(0.0, (0.0, 0.0))
+            } else if k == n {
+                let r = (pf - p0) / p_s;
+                lp.add_var(0.0, (r, r))
+            } else {
+                lp.add_var(0.0, (f64::NEG_INFINITY, f64::INFINITY))
+            }
+        })
+        .collect();
+    let d1 = dt * v_s / p_s;
+    let d2 = dt * dt * a_s / (2.0 * p_s);
+    let d3 = dt * dt * dt * j_s / (6.0 * p_s);
+    for k in 0..n {
+        lp.add_constraint(
+            [
+                (rho[k + 1], 1.0),
+                (rho[k], -1.0),
+                (nu[k], -d1),
+                (alpha[k], -d2),
+                (u[k], -d3),
+            ],
+            ComparisonOp::Eq,
+            0.0,
+        );
+    }
+
+    SOLVES.fetch_add(1, Ordering::Relaxed);
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| lp.solve()));
+    match outcome {
+        Ok(Ok(o)) => o.solution().is_some(),
+        Ok(Err(microlp::Error::Infeasible)) => false,
+        Ok(Err(e)) => {
+            ERRORS.fetch_add(1, Ordering::Relaxed);
+            if std::env::var_os("DISCRETE_LP_VERBOSE").is_some() {
+                eprintln!("discrete_lp: solver error {e:?} (T = {t}, N = {n}, {check:?})");
+            }
+            false
+        }
+        Err(_) => {
+            ERRORS.fetch_add(1, Ordering::Relaxed);
+            false
+        }
+    }
+}
+
+/// Bisection on the duration: the shortest duration in `[lo, hi]` (to the
+/// relative tolerance `rel_tol`) at which [`feasible`] holds, or `None` when
+/// it does not hold at `hi`. Returns `lo` when it already holds there.
+/// Assumes feasibility is monotone in the duration (true for the continuous
+/// problem; with a fixed `N` the grid can make it slightly non-monotone, so
+/// the result is one feasible duration near the boundary).
+pub fn shortest_duration(
+    start: [f64; 3],
+    target: [f64; 3],
+    b: &Bounds,
+    (lo, hi): (f64, f64),
+    intervals: usize,
+    check: VelocityCheck,
+    rel_tol: f64,
+) -> Option<f64> {
+    let ok = |t: f64| feasible(start, target, b, t, intervals, check);
+    if !ok(hi) {
+        return None;
+    }
+    if ok(lo) {
+        return Some(lo);
+    }
+    let (mut lo, mut hi) = (lo, hi);
+    while hi - lo > rel_tol * hi {
+        let mid = 0.5 * (lo + hi);
+        if ok(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Some(hi)
+}

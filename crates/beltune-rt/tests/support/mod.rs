@@ -1,0 +1,3 @@
+//! Shared test support (include with `mod support;`).
+
+pub mod discrete_lp;
