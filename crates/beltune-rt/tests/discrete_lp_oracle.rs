@@ -8,7 +8,9 @@ use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rsruckig::prelude::*;
 use std::time::Instant;
-use support::discrete_lp::{feasible, lp_stats, shortest_duration, Bounds, VelocityCheck};
+use support::discrete_lp::{
+    feasible, lp_retries, lp_stats, shortest_duration, Bounds, VelocityCheck,
+};
 
 #[derive(Clone, Copy, Debug)]
 struct Case {
@@ -137,6 +139,7 @@ fn measure_gap_to_rsruckig() {
     for n in ns {
         for check in [VelocityCheck::GridPointsOnly, VelocityCheck::Conservative] {
             let (s0, e0) = lp_stats();
+            let r0 = lp_retries();
             let started = Instant::now();
             let mut lowest = f64::INFINITY;
             let mut highest = f64::NEG_INFINITY;
@@ -170,8 +173,9 @@ fn measure_gap_to_rsruckig() {
             let (s1, e1) = lp_stats();
             println!(
                 "N = {n:3} {check:?}: T_lp / T_ref - 1 in [{lowest:+.3e}, {highest:+.3e}] (worst case {worst}), \
-                 {} solves, {} errors, {:.2} ms per solve",
+                 {} solves, {} retried, {} errors, {:.2} ms per solve",
                 s1 - s0,
+                lp_retries() - r0,
                 e1 - e0,
                 started.elapsed().as_secs_f64() * 1e3 / (s1 - s0) as f64
             );

@@ -84,10 +84,13 @@ pub enum VelocityCheck {
 
 static SOLVES: AtomicUsize = AtomicUsize::new(0);
 static ERRORS: AtomicUsize = AtomicUsize::new(0);
+static RETRIES: AtomicUsize = AtomicUsize::new(0);
 
-/// LP solves so far and how many of them ended in a numerical error or a
-/// panic of the solver (counted as "infeasible"; set the environment
-/// variable `DISCRETE_LP_VERBOSE` to print each error).
+/// LP solves so far (calls of [`feasible`] that reached the solver) and how
+/// many of them ended in a numerical error or a panic of the solver even
+/// after one retry with other variable scales (counted as "infeasible"; the
+/// environment variable `DISCRETE_LP_VERBOSE` prints each error).
+/// Process-wide: tests running in parallel add up.
 pub fn lp_stats() -> (usize, usize) {
     (
         SOLVES.load(Ordering::Relaxed),
@@ -95,13 +98,19 @@ pub fn lp_stats() -> (usize, usize) {
     )
 }
 
+/// How many solves needed the retry (process-wide, like [`lp_stats`]).
+pub fn lp_retries() -> usize {
+    RETRIES.load(Ordering::Relaxed)
+}
+
 /// Is there a jerk profile, piecewise constant on `intervals` equal intervals
 /// of total `duration_s`, with `j` in `[j_min, j_max]`, the acceleration within
 /// its bounds and the velocity within its bounds (as `check` says), from
 /// `start = [p0, v0, a0]` to exactly `target = [pf, vf, af]`?
 ///
-/// Solver errors other than "infeasible" (and solver panics) count as
-/// infeasible; [`lp_stats`] counts them.
+/// A solver error other than "infeasible" (or a solver panic) is retried once
+/// with other variable scales and constraint order; if that fails too it counts as infeasible;
+/// [`lp_stats`] and [`lp_retries`] count them.
 pub fn feasible(
     start: [f64; 3],
     target: [f64; 3],
@@ -124,12 +133,6 @@ pub fn feasible(
     let dt = t / n as f64;
     let [p0, v0, a0] = start;
     let [pf, vf, af] = target;
-
-    let j_s = b.j_max.max(-b.j_min);
-    let a_lim = b.a_max.max(-b.a_min);
-    let v_lim = b.v_max.max(-b.v_min);
-    let a_s = a_lim.min(j_s * t).max(a0.abs()).max(af.abs());
-    let v_s = v_lim.min(a_s * t).max(v0.abs()).max(vf.abs());
 
     let v_bounds = |k: usize| -> (f64, f64) {
         if k == 0 {
@@ -163,115 +166,144 @@ pub fn feasible(
         }
     }
 
-    let mut lp = Problem::new(OptimizationDirection::Minimize);
-    let u: Vec<_> = j_bounds
-        .iter()
-        .map(|&(lo, hi)| lp.add_var(0.0, (lo / j_s, hi / j_s)))
-        .collect();
-    let alpha: Vec<_> = (0..=n)
-        .map(|k| {
-            let (lo, hi) = if k == 0 {
-                (a0, a0)
-            } else if k == n {
-                (af, af)
-            } else {
-                (b.a_min, b.a_max)
-            };
-            lp.add_var(0.0, (lo / a_s, hi / a_s))
-        })
-        .collect();
-    let nu: Vec<_> = (0..=n)
-        .map(|k| {
-            let (lo, hi) = v_bounds(k);
-            lp.add_var(0.0, (lo / v_s, hi / v_s))
-        })
-        .collect();
+    // One LP solve (`scale` 1, or other scales and constraint order for the
+    // retry: the same feasible set, other numerics): Ok(feasible) or the
+    // solver's error.
+    let attempt = |scale: f64| -> Result<bool, String> {
+        // `scale` changes the jerk and velocity scales in opposite directions:
+        // the matrix changes, not only the bounds.
+        let j_ref = b.j_max.max(-b.j_min);
+        let a_lim = b.a_max.max(-b.a_min);
+        let v_lim = b.v_max.max(-b.v_min);
+        let a_s = a_lim.min(j_ref * t).max(a0.abs()).max(af.abs());
+        let v_s = v_lim.min(a_s * t).max(v0.abs()).max(vf.abs()) / scale;
+        let j_s = j_ref * scale;
+        // The retry also adds the constraints in the reverse order.
+        let order: Vec<usize> = if scale == 1.0 {
+            (0..n).collect()
+        } else {
+            (0..n).rev().collect()
+        };
+        let mut lp = Problem::new(OptimizationDirection::Minimize);
+        let u: Vec<_> = j_bounds
+            .iter()
+            .map(|&(lo, hi)| lp.add_var(0.0, (lo / j_s, hi / j_s)))
+            .collect();
+        let alpha: Vec<_> = (0..=n)
+            .map(|k| {
+                let (lo, hi) = if k == 0 {
+                    (a0, a0)
+                } else if k == n {
+                    (af, af)
+                } else {
+                    (b.a_min, b.a_max)
+                };
+                lp.add_var(0.0, (lo / a_s, hi / a_s))
+            })
+            .collect();
+        let nu: Vec<_> = (0..=n)
+            .map(|k| {
+                let (lo, hi) = v_bounds(k);
+                lp.add_var(0.0, (lo / v_s, hi / v_s))
+            })
+            .collect();
 
-    let c1 = dt * j_s / a_s;
-    let c2 = dt * a_s / v_s;
-    let c3 = dt * dt * j_s / (2.0 * v_s);
-    for k in 0..n {
-        lp.add_constraint(
-            [(alpha[k + 1], 1.0), (alpha[k], -1.0), (u[k], -c1)],
-            ComparisonOp::Eq,
-            0.0,
-        );
-        lp.add_constraint(
-            [
-                (nu[k + 1], 1.0),
-                (nu[k], -1.0),
-                (alpha[k], -c2),
-                (u[k], -c3),
-            ],
-            ComparisonOp::Eq,
-            0.0,
-        );
-    }
-    if check == VelocityCheck::Conservative {
-        // Between grid points of the inner intervals (see the module docs):
-        // v_min <= v_k + a_k dt / 2 <= v_max.
-        let c = dt * a_s / (2.0 * v_s);
-        for k in 1..n - 1 {
+        let c1 = dt * j_s / a_s;
+        let c2 = dt * a_s / v_s;
+        let c3 = dt * dt * j_s / (2.0 * v_s);
+        for &k in &order {
             lp.add_constraint(
-                [(nu[k], 1.0), (alpha[k], c)],
-                ComparisonOp::Le,
-                b.v_max / v_s,
+                [(alpha[k + 1], 1.0), (alpha[k], -1.0), (u[k], -c1)],
+                ComparisonOp::Eq,
+                0.0,
             );
             lp.add_constraint(
-                [(nu[k], 1.0), (alpha[k], c)],
-                ComparisonOp::Ge,
-                b.v_min / v_s,
+                [
+                    (nu[k + 1], 1.0),
+                    (nu[k], -1.0),
+                    (alpha[k], -c2),
+                    (u[k], -c3),
+                ],
+                ComparisonOp::Eq,
+                0.0,
             );
         }
-    }
-    // Position as a recurrence too (a banded constraint matrix keeps the LU
-    // factors sparse; one dense row made the solve ~N^2.5):
-    // rho_k = (p_k - p0) / (V T), rho_0 = 0, rho_N = (pf - p0) / (V T).
-    let p_s = v_s * t;
-    let rho: Vec<_> = (0..=n)
-        .map(|k| {
-            if k == 0 {
-                lp.add_var(0.0, (0.0, 0.0))
-            } else if k == n {
-                let r = (pf - p0) / p_s;
-                lp.add_var(0.0, (r, r))
-            } else {
-                lp.add_var(0.0, (f64::NEG_INFINITY, f64::INFINITY))
+        if check == VelocityCheck::Conservative {
+            // Between grid points of the inner intervals (see the module docs):
+            // v_min <= v_k + a_k dt / 2 <= v_max.
+            let c = dt * a_s / (2.0 * v_s);
+            for k in 1..n - 1 {
+                lp.add_constraint(
+                    [(nu[k], 1.0), (alpha[k], c)],
+                    ComparisonOp::Le,
+                    b.v_max / v_s,
+                );
+                lp.add_constraint(
+                    [(nu[k], 1.0), (alpha[k], c)],
+                    ComparisonOp::Ge,
+                    b.v_min / v_s,
+                );
             }
-        })
-        .collect();
-    let d1 = dt * v_s / p_s;
-    let d2 = dt * dt * a_s / (2.0 * p_s);
-    let d3 = dt * dt * dt * j_s / (6.0 * p_s);
-    for k in 0..n {
-        lp.add_constraint(
-            [
-                (rho[k + 1], 1.0),
-                (rho[k], -1.0),
-                (nu[k], -d1),
-                (alpha[k], -d2),
-                (u[k], -d3),
-            ],
-            ComparisonOp::Eq,
-            0.0,
-        );
-    }
+        }
+        // Position as a recurrence too (a banded constraint matrix keeps the LU
+        // factors sparse; one dense row made the solve ~N^2.5):
+        // rho_k = (p_k - p0) / (V T), rho_0 = 0, rho_N = (pf - p0) / (V T).
+        let p_s = v_s * t;
+        let rho: Vec<_> = (0..=n)
+            .map(|k| {
+                if k == 0 {
+                    lp.add_var(0.0, (0.0, 0.0))
+                } else if k == n {
+                    let r = (pf - p0) / p_s;
+                    lp.add_var(0.0, (r, r))
+                } else {
+                    lp.add_var(0.0, (f64::NEG_INFINITY, f64::INFINITY))
+                }
+            })
+            .collect();
+        let d1 = dt * v_s / p_s;
+        let d2 = dt * dt * a_s / (2.0 * p_s);
+        let d3 = dt * dt * dt * j_s / (6.0 * p_s);
+        for &k in &order {
+            lp.add_constraint(
+                [
+                    (rho[k + 1], 1.0),
+                    (rho[k], -1.0),
+                    (nu[k], -d1),
+                    (alpha[k], -d2),
+                    (u[k], -d3),
+                ],
+                ComparisonOp::Eq,
+                0.0,
+            );
+        }
 
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| lp.solve()));
+        match outcome {
+            Ok(Ok(o)) => Ok(o.solution().is_some()),
+            Ok(Err(microlp::Error::Infeasible)) => Ok(false),
+            Ok(Err(e)) => Err(format!("{e:?}")),
+            Err(_) => Err("solver panicked".to_string()),
+        }
+    };
+
+    let verbose = std::env::var_os("DISCRETE_LP_VERBOSE").is_some();
     SOLVES.fetch_add(1, Ordering::Relaxed);
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| lp.solve()));
-    match outcome {
-        Ok(Ok(o)) => o.solution().is_some(),
-        Ok(Err(microlp::Error::Infeasible)) => false,
-        Ok(Err(e)) => {
-            ERRORS.fetch_add(1, Ordering::Relaxed);
-            if std::env::var_os("DISCRETE_LP_VERBOSE").is_some() {
-                eprintln!("discrete_lp: solver error {e:?} (T = {t}, N = {n}, {check:?})");
+    match attempt(1.0) {
+        Ok(f) => f,
+        Err(e) => {
+            // Retry once with other scales (e.g. microlp's "Singular matrix").
+            RETRIES.fetch_add(1, Ordering::Relaxed);
+            let retry = attempt(0.5);
+            if verbose {
+                eprintln!(
+                    "discrete_lp: solver error {e} (T = {t}, N = {n}, {check:?}), retry: {retry:?}"
+                );
             }
-            false
-        }
-        Err(_) => {
-            ERRORS.fetch_add(1, Ordering::Relaxed);
-            false
+            retry.unwrap_or_else(|_| {
+                ERRORS.fetch_add(1, Ordering::Relaxed);
+                false
+            })
         }
     }
 }

@@ -1,3 +1,5 @@
-//! Shared test support (include with `mod support;`).
+//! Shared test support (include with `mod support;`); each test file uses a
+//! part of it.
+#![allow(dead_code)]
 
 pub mod discrete_lp;
