@@ -9,7 +9,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use rsruckig::prelude::*;
 use std::time::Instant;
 use support::discrete_lp::{
-    feasible, lp_retries, lp_stats, shortest_duration, Bounds, VelocityCheck,
+    feasible, feasible_profile, lp_retries, lp_stats, shortest_duration, Bounds, VelocityCheck,
 };
 
 #[derive(Clone, Copy, Debug)]
@@ -247,6 +247,59 @@ fn oracle_brackets_rsruckig_on_40_symmetric_cases() {
         e1, e0,
         "LP solver errors (DISCRETE_LP_VERBOSE=1 prints them)"
     );
+}
+
+/// The Conservative claim, checked: the jerk profile of a Conservative LP
+/// point, integrated exactly and sampled 16 times per interval, keeps the
+/// velocity and acceleration inside and ends at the target.
+#[test]
+fn conservative_profiles_stay_inside_between_grid_points() {
+    for (i, (c, t_ref)) in cases().iter().enumerate() {
+        let t = t_ref * (1.0 + DELTA);
+        let jerks = feasible_profile(
+            c.start,
+            c.target,
+            &c.bounds,
+            t,
+            N,
+            VelocityCheck::Conservative,
+        )
+        .unwrap_or_else(|| panic!("case {i}: infeasible"));
+        let b = &c.bounds;
+        let dt = t / N as f64;
+        let v_tol = 1e-7 * b.v_max.max(-b.v_min);
+        let a_tol = 1e-7 * b.a_max.max(-b.a_min);
+        let [mut p, mut v, mut a] = c.start;
+        for &j in &jerks {
+            assert!(j >= b.j_min * (1.0 + 1e-9) && j <= b.j_max * (1.0 + 1e-9));
+            for m in 1..=16 {
+                let s = dt * m as f64 / 16.0;
+                let vs = v + a * s + j * s * s / 2.0;
+                let as_ = a + j * s;
+                assert!(
+                    vs <= b.v_max + v_tol && vs >= b.v_min - v_tol,
+                    "case {i}: v = {vs} outside [{}, {}]",
+                    b.v_min,
+                    b.v_max
+                );
+                assert!(
+                    as_ <= b.a_max + a_tol && as_ >= b.a_min - a_tol,
+                    "case {i}: a = {as_}"
+                );
+            }
+            p += v * dt + a * dt * dt / 2.0 + j * dt * dt * dt / 6.0;
+            v += a * dt + j * dt * dt / 2.0;
+            a += j * dt;
+        }
+        let scale_p = 1e-7 * (1.0 + (c.target[0] - c.start[0]).abs());
+        assert!(
+            (p - c.target[0]).abs() <= scale_p
+                && (v - c.target[1]).abs() <= v_tol
+                && (a - c.target[2]).abs() <= a_tol,
+            "case {i}: ends at [{p}, {v}, {a}], target {:?}",
+            c.target
+        );
+    }
 }
 
 /// Time-optimal rest-to-rest move over `distance > 0` with jerk in

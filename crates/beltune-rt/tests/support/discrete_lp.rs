@@ -18,8 +18,9 @@
 //! hold exactly (with `p_{k+1} = p_k + v_k dt + a_k dt^2 / 2 + j_k dt^3 / 6`).
 //! The LP keeps `j_k`, `a_k`, `v_k`, `p_k` as (scaled) variables tied by these
 //! sparse equalities; the start and target states are fixed through the
-//! bounds of `a_0, v_0, p_0, a_N, v_N, p_N`. The acceleration is piecewise linear, so bounds on
-//! the grid values are exact for the continuous acceleration.
+//! bounds of `a_0, v_0, p_0, a_N, v_N, p_N`. The acceleration is piecewise
+//! linear, so bounds on the grid values are exact for the continuous
+//! acceleration.
 //!
 //! # Scaling
 //!
@@ -119,6 +120,19 @@ pub fn feasible(
     intervals: usize,
     check: VelocityCheck,
 ) -> bool {
+    feasible_profile(start, target, b, duration_s, intervals, check).is_some()
+}
+
+/// As [`feasible`], but returns the jerks `j_k` (m/s^3, one per interval) of
+/// the feasible point the LP found.
+pub fn feasible_profile(
+    start: [f64; 3],
+    target: [f64; 3],
+    b: &Bounds,
+    duration_s: f64,
+    intervals: usize,
+    check: VelocityCheck,
+) -> Option<Vec<f64>> {
     assert!(intervals >= 2, "need at least two intervals");
     assert!(
         b.v_min < 0.0 && b.v_max > 0.0 && b.a_min < 0.0 && b.a_max > 0.0,
@@ -126,7 +140,7 @@ pub fn feasible(
     );
     assert!(b.j_min < 0.0 && b.j_max > 0.0, "{b:?}");
     if duration_s.is_nan() || duration_s <= 0.0 || duration_s.is_infinite() {
-        return false;
+        return None;
     }
     let n = intervals;
     let t = duration_s;
@@ -162,14 +176,14 @@ pub fn feasible(
         let l = &mut j_bounds[n - 1];
         *l = (l.0.max(last.0), l.1.min(last.1));
         if j_bounds.iter().any(|(lo, hi)| lo > hi) {
-            return false;
+            return None;
         }
     }
 
     // One LP solve (`scale` 1, or other scales and constraint order for the
     // retry: the same feasible set, other numerics): Ok(feasible) or the
     // solver's error.
-    let attempt = |scale: f64| -> Result<bool, String> {
+    let attempt = |scale: f64| -> Result<Option<Vec<f64>>, String> {
         // `scale` changes the jerk and velocity scales in opposite directions:
         // the matrix changes, not only the bounds.
         let j_ref = b.j_max.max(-b.j_min);
@@ -280,8 +294,10 @@ pub fn feasible(
 
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| lp.solve()));
         match outcome {
-            Ok(Ok(o)) => Ok(o.solution().is_some()),
-            Ok(Err(microlp::Error::Infeasible)) => Ok(false),
+            Ok(Ok(o)) => Ok(o
+                .solution()
+                .map(|sol| u.iter().map(|&x| sol.var_value(x) * j_s).collect())),
+            Ok(Err(microlp::Error::Infeasible)) => Ok(None),
             Ok(Err(e)) => Err(format!("{e:?}")),
             Err(_) => Err("solver panicked".to_string()),
         }
@@ -302,7 +318,7 @@ pub fn feasible(
             }
             retry.unwrap_or_else(|_| {
                 ERRORS.fetch_add(1, Ordering::Relaxed);
-                false
+                None
             })
         }
     }
