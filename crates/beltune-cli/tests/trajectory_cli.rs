@@ -36,17 +36,22 @@ fn thesis_duration() -> f64 {
     4.0 * (0.5_f64 / 80.0).cbrt()
 }
 
-#[test]
-fn json_has_duration_and_seven_phases() {
-    let mut args = THESIS_MOVE.to_vec();
-    args.extend(["--position-limits", "-0.01,0.57", "--json"]);
-    let out = beltune(&args);
+/// Run `beltune` with `args` (which end in `--json`) and parse its output.
+fn json_of(args: &[&str]) -> serde_json::Value {
+    let out = beltune(args);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    serde_json::from_slice(&out.stdout).expect("JSON")
+}
+
+#[test]
+fn json_has_duration_and_seven_phases() {
+    let mut args = THESIS_MOVE.to_vec();
+    args.extend(["--position-limits", "-0.01,0.57", "--json"]);
+    let v = json_of(&args);
     let duration = v["duration_s"].as_f64().unwrap();
     let expected = thesis_duration();
     assert!(
@@ -68,13 +73,7 @@ fn json_has_duration_and_seven_phases() {
 fn asymmetric_jerk_matches_the_closed_form() {
     let mut args = THESIS_MOVE.to_vec();
     args.extend(["--j-min", "-20", "--json"]);
-    let out = beltune(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let v = json_of(&args);
     let (j1, j2, d) = (40.0_f64, 20.0_f64, 0.5_f64);
     let tau = (d / (j1 / 3.0 + j1 * j1 / j2 + 2.0 * j1.powi(3) / (3.0 * j2 * j2))).cbrt();
     let expected = 2.0 * tau + 2.0 * j1 * tau / j2;

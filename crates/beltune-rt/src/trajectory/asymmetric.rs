@@ -38,7 +38,8 @@
 //! valid candidate of both directions is the time-optimal profile. With
 //! `j_min = -j_max` this reproduces Ruckig's durations (tested against
 //! `rsruckig`); for asymmetric jerk it is checked against a discretized
-//! linear program in `tests/trajectory_asymmetric.rs`.
+//! linear program (`tests/discrete_lp_oracle.rs`) and for invariances
+//! (`tests/trajectory_asymmetric.rs`).
 
 use core::ops::{Add, Mul, Sub};
 
