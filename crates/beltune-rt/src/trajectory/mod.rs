@@ -4,7 +4,7 @@
 //! A move from any start state `(position, velocity, acceleration)` to any
 //! admissible target state is planned once ([`Trajectory::plan`], no
 //! allocation) and then sampled every `T_s` ([`Trajectory::sample`]). The
-//! profile has the seven phases P1-P7 of Figure 6.11 with jerk `+-j_max` or 0
+//! profile has the seven phases P1-P7 of Figure 6.11 with jerk `j_max`, `j_min` or 0
 //! in each; limits may be asymmetric (`v_min < 0 < v_max`,
 //! `a_min < 0 < a_max`, `j_min < 0 < j_max`). A start state
 //! that violates (or will inevitably violate) the velocity or acceleration

@@ -1,5 +1,7 @@
 //! A seven-phase jerk-limited profile (Figure 6.11: P1-P7 with jerk
-//! `+-j_max` or 0 in each phase) and its admissibility check.
+//! `+-j_max` or 0 in each phase: Ruckig's step 1, symmetric jerk) and its
+//! admissibility check; the general solver (`asymmetric.rs`) fills the same
+//! struct with `j_max`, `j_min` or 0.
 //!
 //! Ported from Ruckig's `Profile::check` (via rsruckig 3.0.1).
 //! Copyright (c) 2021 Lars Berscheid (Ruckig), Petri Koskinen (rsruckig);
