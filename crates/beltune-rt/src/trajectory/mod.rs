@@ -103,7 +103,7 @@ use asymmetric::{time_optimal_profile, Problem};
 use block::Block;
 use brake::{v_at_a_zero, BrakePhase};
 use math::integrate;
-use profile::Profile;
+use profile::{Profile, A_PRECISION, P_PRECISION, V_PRECISION};
 use step1::ExtremalProfiles;
 
 /// Tolerance (m) with which the planned position extrema may touch the
@@ -329,6 +329,15 @@ impl Trajectory {
         if pf < position_min || pf > position_max {
             return Err(Error::TargetOutsideLimits);
         }
+        if (pf - start.position).abs() < P_PRECISION
+            && (vf - start.velocity).abs() < V_PRECISION
+            && (af - start.acceleration).abs() < A_PRECISION
+        {
+            // Already at the target (to the precision every profile ends
+            // with): no move. Ruckig plans a loop back to a moving start
+            // state instead (0.64 s for (0.1, 0.5, 1) with Table A.8's limits).
+            return Ok(Self::stationary(start, target));
+        }
 
         // Brake pre-phase, then the seven phases from the braked state.
         let mut brake = BrakePhase::plan(
@@ -401,6 +410,24 @@ impl Trajectory {
             });
         }
         Ok(trajectory)
+    }
+
+    /// The zero-duration move of a start that is already at `target`.
+    fn stationary(start: &State, target: &State) -> Self {
+        let profile = Profile {
+            p: [start.position; 8],
+            v: [start.velocity; 8],
+            a: [start.acceleration; 8],
+            pf: target.position,
+            vf: target.velocity,
+            af: target.acceleration,
+            ..Profile::default()
+        };
+        Self {
+            profile,
+            start: *start,
+            duration_s: 0.0,
+        }
     }
 
     /// Total duration including the brake pre-phase, s.

@@ -139,3 +139,38 @@ fn zero_move_has_zero_duration() {
         (0.25, 0.0, 0.0)
     );
 }
+
+#[test]
+fn a_start_already_at_the_target_needs_no_move() {
+    // Rest and moving, symmetric and asymmetric jerk: zero duration, and the
+    // sample at 0 is the start. (Ruckig returns 0 s at rest but plans a
+    // 0.64 s loop for the moving state with these limits.)
+    for j_min in [-40.0, -20.0] {
+        let limits = Limits {
+            j_min,
+            ..Limits::default()
+        };
+        for state in [
+            State::at_rest(0.3),
+            State {
+                position: 0.1,
+                velocity: 0.5,
+                acceleration: 1.0,
+            },
+        ] {
+            let traj = Trajectory::plan(&state, &state, &limits).expect("plannable");
+            assert_eq!(traj.duration_s(), 0.0, "{state:?}, j_min {j_min}");
+            let s = traj.sample(0.0);
+            assert_eq!(
+                (s.position, s.velocity, s.acceleration, s.jerk),
+                (state.position, state.velocity, state.acceleration, 0.0)
+            );
+            assert_eq!(traj.end(), state);
+            let range = traj.position_range();
+            assert_eq!(
+                (range.lowest, range.highest),
+                (state.position, state.position)
+            );
+        }
+    }
+}
