@@ -8,9 +8,8 @@ mod support;
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
-use rsruckig::prelude::*;
 use std::time::Instant;
-use support::cases::{log_uniform, random_limits, Jerk};
+use support::cases::{self, log_uniform, random_limits, Jerk};
 use support::discrete_lp::{
     feasible, feasible_profile, lp_retries, lp_stats, shortest_duration, Bounds, VelocityCheck,
 };
@@ -22,27 +21,35 @@ struct Case {
     bounds: Bounds,
 }
 
-/// rsruckig's duration (symmetric jerk `+-j_max`), or `None` when it rejects.
+/// rsruckig's duration for the case, or `None` when it rejects it.
 fn reference_duration(c: &Case) -> Option<f64> {
-    let b = &c.bounds;
-    assert_eq!(b.j_min, -b.j_max, "rsruckig needs symmetric jerk limits");
-    let mut otg = Ruckig::<1, ThrowErrorHandler>::new(None, 1e-4);
-    let mut input = InputParameter::new(None);
-    input.current_position[0] = c.start[0];
-    input.current_velocity[0] = c.start[1];
-    input.current_acceleration[0] = c.start[2];
-    input.target_position[0] = c.target[0];
-    input.target_velocity[0] = c.target[1];
-    input.target_acceleration[0] = c.target[2];
-    input.max_velocity[0] = b.v_max;
-    input.max_acceleration[0] = b.a_max;
-    input.max_jerk[0] = b.j_max;
-    input.min_velocity = Some(DataArrayOrVec::Stack([b.v_min]));
-    input.min_acceleration = Some(DataArrayOrVec::Stack([b.a_min]));
-    let mut traj = rsruckig::trajectory::Trajectory::new(None);
-    match otg.calculate(&input, &mut traj) {
-        Ok(RuckigResult::Working) => Some(traj.get_duration()),
-        _ => None,
+    cases::reference_duration(&cases::Case {
+        start: state(c.start),
+        target: state(c.target),
+        limits: limits(&c.bounds),
+    })
+}
+
+/// `[p, v, a]` as the planner's state.
+fn state(s: [f64; 3]) -> State {
+    State {
+        position: s[0],
+        velocity: s[1],
+        acceleration: s[2],
+    }
+}
+
+/// The planner's limits for the oracle's bounds (no position limits).
+fn limits(b: &Bounds) -> Limits {
+    Limits {
+        v_max: b.v_max,
+        v_min: b.v_min,
+        a_max: b.a_max,
+        a_min: b.a_min,
+        j_max: b.j_max,
+        j_min: b.j_min,
+        position_min: f64::NEG_INFINITY,
+        position_max: f64::INFINITY,
     }
 }
 
@@ -385,26 +392,11 @@ fn oracle_brackets_closed_form_with_asymmetric_jerk() {
 fn planner_is_time_optimal_with_asymmetric_jerk() {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(0xA5_0AC1E);
     let (s0, e0) = lp_stats();
-    let state = |s: [f64; 3]| State {
-        position: s[0],
-        velocity: s[1],
-        acceleration: s[2],
-    };
     let mut finer = 0;
     for i in 0..FAMILIES * CASES_PER_FAMILY {
         let c = random_case(&mut rng, i % FAMILIES, Jerk::Asymmetric);
         let b = &c.bounds;
-        let limits = Limits {
-            v_max: b.v_max,
-            v_min: b.v_min,
-            a_max: b.a_max,
-            a_min: b.a_min,
-            j_max: b.j_max,
-            j_min: b.j_min,
-            position_min: f64::NEG_INFINITY,
-            position_max: f64::INFINITY,
-        };
-        let t = Trajectory::plan(&state(c.start), &state(c.target), &limits)
+        let t = Trajectory::plan(&state(c.start), &state(c.target), &limits(b))
             .unwrap_or_else(|e| panic!("case {i}: {e}: {c:?}"))
             .duration_s();
         // Jerk phases much shorter than T / N need a finer grid.

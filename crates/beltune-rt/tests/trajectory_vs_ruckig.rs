@@ -10,8 +10,9 @@ use beltune_rt::trajectory::{Limits, State, Trajectory};
 use beltune_rt::Error;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
-use rsruckig::prelude::*;
-use support::cases::{check_samples, random_case, Case, Jerk, FAMILIES, FINAL_STATE_TOL};
+use support::cases::{
+    check_samples, random_case, reference_duration, Jerk, FAMILIES, FINAL_STATE_TOL,
+};
 
 /// Durations must equal the reference's to this relative tolerance (issue 3).
 const DURATION_REL_TOL: f64 = 1e-9;
@@ -19,28 +20,6 @@ const DURATION_REL_TOL: f64 = 1e-9;
 const DURATION_ABS_FLOOR: f64 = 1e-12;
 /// Cases per family; 6 families -> 12,000 cases.
 const CASES_PER_FAMILY: usize = 2_000;
-
-/// The reference duration, or `None` when rsruckig rejects the request.
-fn reference_duration(c: &Case) -> Option<f64> {
-    let mut otg = Ruckig::<1, ThrowErrorHandler>::new(None, 1e-4);
-    let mut input = InputParameter::new(None);
-    input.current_position[0] = c.start.position;
-    input.current_velocity[0] = c.start.velocity;
-    input.current_acceleration[0] = c.start.acceleration;
-    input.target_position[0] = c.target.position;
-    input.target_velocity[0] = c.target.velocity;
-    input.target_acceleration[0] = c.target.acceleration;
-    input.max_velocity[0] = c.limits.v_max;
-    input.max_acceleration[0] = c.limits.a_max;
-    input.max_jerk[0] = c.limits.j_max;
-    input.min_velocity = Some(DataArrayOrVec::Stack([c.limits.v_min]));
-    input.min_acceleration = Some(DataArrayOrVec::Stack([c.limits.a_min]));
-    let mut traj = rsruckig::trajectory::Trajectory::new(None);
-    match otg.calculate(&input, &mut traj) {
-        Ok(RuckigResult::Working) => Some(traj.get_duration()),
-        _ => None,
-    }
-}
 
 /// A planner under test: [`Trajectory::plan`] or the general solver.
 type Planner = fn(&State, &State, &Limits) -> Result<Trajectory, Error>;

@@ -5,6 +5,7 @@
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use rsruckig::prelude::*;
 
 /// The final state must equal the target to this (issue 3).
 pub const FINAL_STATE_TOL: f64 = 1e-8;
@@ -143,6 +144,33 @@ pub fn random_case(rng: &mut Xoshiro256PlusPlus, family: usize, jerk: Jerk) -> C
         start,
         target,
         limits,
+    }
+}
+
+/// rsruckig's duration (it needs `j_min = -j_max`), or `None` when it
+/// rejects the request.
+pub fn reference_duration(c: &Case) -> Option<f64> {
+    assert_eq!(
+        c.limits.j_min, -c.limits.j_max,
+        "rsruckig needs symmetric jerk limits"
+    );
+    let mut otg = Ruckig::<1, ThrowErrorHandler>::new(None, 1e-4);
+    let mut input = InputParameter::new(None);
+    input.current_position[0] = c.start.position;
+    input.current_velocity[0] = c.start.velocity;
+    input.current_acceleration[0] = c.start.acceleration;
+    input.target_position[0] = c.target.position;
+    input.target_velocity[0] = c.target.velocity;
+    input.target_acceleration[0] = c.target.acceleration;
+    input.max_velocity[0] = c.limits.v_max;
+    input.max_acceleration[0] = c.limits.a_max;
+    input.max_jerk[0] = c.limits.j_max;
+    input.min_velocity = Some(DataArrayOrVec::Stack([c.limits.v_min]));
+    input.min_acceleration = Some(DataArrayOrVec::Stack([c.limits.a_min]));
+    let mut traj = rsruckig::trajectory::Trajectory::new(None);
+    match otg.calculate(&input, &mut traj) {
+        Ok(RuckigResult::Working) => Some(traj.get_duration()),
+        _ => None,
     }
 }
 
