@@ -352,18 +352,17 @@ impl Trajectory {
         );
         let (mut p0, mut v0, mut a0) = (start.position, start.velocity, start.acceleration);
         brake.finalize(&mut p0, &mut v0, &mut a0);
-        let input = Profile {
-            p: [p0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            v: [v0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            a: [a0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            brake,
-            pf,
-            vf,
-            af,
-            ..Profile::default()
-        };
-
         let (profile, duration_s) = if j_min == -j_max && solver == Solver::Auto {
+            let input = Profile {
+                p: [p0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                v: [v0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                a: [a0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                brake,
+                pf,
+                vf,
+                af,
+                ..Profile::default()
+            };
             let mut step1 = ExtremalProfiles::default();
             step1.reset(p0, v0, a0, pf, vf, af, v_max, v_min, a_max, a_min, j_max);
             let mut block = Block::default();
@@ -385,9 +384,11 @@ impl Trajectory {
                 a_min,
                 j_max,
                 j_min,
-                v_scale: brake.v[..]
+                // The start is brake.v[0] when braked, else v0.
+                v_scale: brake
+                    .v
                     .iter()
-                    .chain(&[start.velocity, v0, vf])
+                    .chain(&[v0, vf])
                     .fold(0.0, |m: f64, v| m.max(v.abs())),
             };
             let mut profile = time_optimal_profile(&problem).ok_or(NO_PROFILE)?;
