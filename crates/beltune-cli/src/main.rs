@@ -1,13 +1,11 @@
 //! `beltune`: self-commissioning of belt-driven servo axes.
 //!
-//! Each subcommand lives in its own file under `cmd/`, with its clap `Args`
-//! and a `run` function. Errors are printed as one line and exit non-zero.
+//! Each subcommand lives in its own file under `cmd/` of the `beltune_cli`
+//! library, with its clap `Args` and a `run` function. Errors are printed as
+//! one line and exit with the status of their kind (`beltune_cli::exit`).
 
+use beltune_cli::{cmd, exit};
 use clap::{Parser, Subcommand};
-
-mod cmd;
-mod progress;
-mod serve;
 
 #[derive(Parser)]
 #[command(
@@ -41,8 +39,24 @@ enum Command {
     Serve(cmd::serve::Args),
 }
 
+/// A command that prints to a pipe whose reader went away (`beltune ... | head`)
+/// ends quietly with the conventional SIGPIPE status, as `cat` does, instead of
+/// panicking in `println!`. Rust starts programs with SIGPIPE ignored; this
+/// restores the default action. Not for `serve`: a client that closes its
+/// connection must not end the server.
+fn die_quietly_on_closed_stdout() {
+    // SAFETY: `signal` with a valid signal number and `SIG_DFL` has no
+    // preconditions; it runs before any other thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() {
     let cli = Cli::parse();
+    if !matches!(cli.command, Command::Serve(_)) {
+        die_quietly_on_closed_stdout();
+    }
     let result = match cli.command {
         Command::Plant(c) => cmd::plant::run(c),
         Command::Trajectory(a) => cmd::trajectory::run(a),
@@ -54,12 +68,7 @@ fn main() {
     };
     if let Err(e) = result {
         // One line: the whole cause chain joined, no backtrace.
-        let msg = e
-            .chain()
-            .map(|c| c.to_string())
-            .collect::<Vec<_>>()
-            .join(": ");
-        eprintln!("error: {msg}");
-        std::process::exit(1);
+        eprintln!("error: {}", exit::one_line(&e));
+        std::process::exit(exit::status_of(&e).code());
     }
 }

@@ -180,14 +180,14 @@ fn unknown_plant_is_one_clear_line() {
     assert_eq!(err.trim().lines().count(), 1);
 }
 
-/// Commissioning from a real recorded measurement (shared/data, see its README):
+/// Commissioning from a real recorded measurement (data/twomass-bench, see its README):
 /// the identification and design run, the axis stages are skipped, the outputs
 /// are complete; the identified resonance/antiresonance are those of
 /// `beltune identify` on the same file (same library pipeline).
 #[test]
 fn commission_from_recorded_data_skips_the_axis_stages() {
-    let data = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/twomass-bench/multisine-a.csv");
+    let data =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/twomass-bench/multisine-a.csv.gz");
     assert!(data.is_file(), "measured data missing: {}", data.display());
     let dir = temp_dir("recorded");
     let out = dir.join("out");

@@ -144,19 +144,20 @@ fn bad_and_infeasible_requests_fail_with_one_line() {
     let broken = dir.join("broken.toml");
     std::fs::write(&broken, A4_TOML.replace("m_c = 13.44", "m_c = -2")).unwrap();
     let m = model.to_str().unwrap();
-    let cases: Vec<Vec<&str>> = vec![
-        vec!["--model", m, "--pm-position", "95"],
-        vec!["--model", m, "--resonance-suppression-db", "-150"],
-        vec!["--model", m, "--prefilter", "chebyshev"],
-        vec!["--model", m, "--dynamics", "turbo"],
-        vec!["--model", m, "--filter-attenuation-db", "2"],
-        vec!["--model", m, "--ts", "0.01"],
-        vec!["--model", broken.to_str().unwrap()],
-        vec!["--model", "/nonexistent/model.toml"],
+    // Exit statuses (beltune_cli::exit): 4 infeasible, 2 bad input, 1 I/O.
+    let cases: Vec<(Vec<&str>, i32)> = vec![
+        (vec!["--model", m, "--pm-position", "95"], 4),
+        (vec!["--model", m, "--resonance-suppression-db", "-150"], 4),
+        (vec!["--model", m, "--prefilter", "chebyshev"], 2),
+        (vec!["--model", m, "--dynamics", "turbo"], 2),
+        (vec!["--model", m, "--filter-attenuation-db", "2"], 2),
+        (vec!["--model", m, "--ts", "0.01"], 2),
+        (vec!["--model", broken.to_str().unwrap()], 2),
+        (vec!["--model", "/nonexistent/model.toml"], 1),
     ];
-    for args in cases {
+    for (args, status) in cases {
         let out = run(&args);
-        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        assert_eq!(out.status.code(), Some(status), "{args:?}");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(
             err.starts_with("error: ") && err.trim_end().lines().count() == 1,

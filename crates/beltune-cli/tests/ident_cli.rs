@@ -15,19 +15,20 @@ fn tmpdir(tag: &str) -> PathBuf {
 
 fn measured() -> PathBuf {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/twomass-bench/multisine-a.csv");
+        .join("../../data/twomass-bench/multisine-a.csv.gz");
     assert!(
         p.exists(),
-        "measured data missing: {} (expected /work/shared beside the repository root)",
+        "measured data missing: {} (it ships in the repository, data/twomass-bench)",
         p.display()
     );
     p
 }
 
-/// Run, expect failure with ONE stderr line containing all `needles`.
+/// Run, expect failure as bad input (exit status 2) with ONE stderr line
+/// containing all `needles`.
 fn expect_error(args: &[&str], needles: &[&str]) {
     let out = bin().args(args).output().unwrap();
-    assert_eq!(out.status.code(), Some(1), "{args:?}");
+    assert_eq!(out.status.code(), Some(2), "{args:?}");
     let err = String::from_utf8(out.stderr).unwrap();
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.starts_with("error: "), "{err}");
@@ -268,4 +269,51 @@ fn friction_from_a_recorded_motion() {
     let mut a = base.to_vec();
     a.push(&f);
     expect_error(&a, &["missing column `force_n`"]);
+}
+
+/// Issue 11: `beltune identify ... | head -3` panicked ("failed printing to
+/// stdout: Broken pipe"). The reader here closes its end before the command
+/// prints anything; the command must end quietly: exit 0 or killed by SIGPIPE,
+/// and no panic text on stderr.
+#[test]
+fn identify_into_a_closed_pipe_ends_quietly_issue_11() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::Stdio;
+    let mut child = bin()
+        .args(["identify", "--csv"])
+        .arg(measured())
+        .args([
+            "--time",
+            "t_s",
+            "--input",
+            "iq_ref_A",
+            "--output",
+            "theta_motor_rad",
+            "--period-samples",
+            "2500",
+            "--skip-periods",
+            "1",
+            "--free-inertia",
+            "--current-units",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The reader goes away at once, as `head` does after its lines.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!err.contains("Broken pipe"), "{err}");
+    assert!(
+        out.status.success() || out.status.signal() == Some(libc_sigpipe()),
+        "{:?}: {err}",
+        out.status
+    );
+}
+
+/// SIGPIPE's number on Linux.
+fn libc_sigpipe() -> i32 {
+    13
 }

@@ -5,9 +5,7 @@
 //! seam, so they can prove that a refused request never reaches the design; the
 //! design tests use the real library backend.
 
-#[allow(dead_code)]
-#[path = "../src/serve/mod.rs"]
-mod serve;
+use beltune_cli::serve;
 
 use serve::api::{
     DefaultAttenuation, DesignResponse, EffectiveKnobs, ErrorBody, Knobs, PrefilterKind,
@@ -639,7 +637,7 @@ const COMMISSIONING_JSON: &str = r#"{
     "relative_residual": 0.01, "holding_torque_nm": 0.0},
   "log": []
 }"#;
-/// THESIS-NOTES: (2.44) with Table A.4 gives f_r = 107.1 Hz (printed precision).
+/// docs/thesis-map.md: (2.44) with Table A.4 gives f_r = 107.1 Hz (printed precision).
 const TABLE_A4_F_R_HZ: f64 = 107.1;
 const PRINTED_PRECISION_HZ: f64 = 0.05;
 
@@ -697,8 +695,8 @@ fn commissioning_folder_model_is_designed_and_simulated() {
         m.static_error_m * 1e6,
         m.settling_time_s
     );
-    // Thesis chapter 5 (THESIS-NOTES reference values): 0 -> 500 mm with feedforward,
-    // dynamic error below 1 mm, static error below 100 um. (THESIS-NOTES' independent
+    // Thesis chapter 5 (docs/thesis-map.md reference values): 0 -> 500 mm with feedforward,
+    // dynamic error below 1 mm, static error below 100 um. (docs/thesis-map.md's independent
     // simulation with all refinements: 0.14 mm / < 1 um; this run gave 0.139 mm / 1.2 um.)
     const THESIS_MAX_ERROR_M: f64 = 1e-3;
     const THESIS_STATIC_ERROR_M: f64 = 100e-6;

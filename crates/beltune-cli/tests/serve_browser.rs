@@ -10,9 +10,7 @@
 //! and saves `controller.toml`. It prints the measured slider-to-redraw times
 //! (reported in the README; not asserted: no wall-clock assertions in tests).
 
-#[allow(dead_code)]
-#[path = "../src/serve/mod.rs"]
-mod serve;
+use beltune_cli::serve;
 
 use beltune::design::{self as bdesign, DesignInput, DesignKnobs, FrictionParams};
 use fantoccini::{Client, ClientBuilder, Locator};

@@ -136,9 +136,10 @@ fn samples_file_ends_at_the_target() {
     assert!((rows[1][0] - 0.001).abs() < 1e-15);
 }
 
-fn assert_one_line_error(args: &[&str], needle: &str) {
+/// `status`: the exit status (beltune_cli::exit: 2 bad input, 4 infeasible).
+fn assert_one_line_error(args: &[&str], needle: &str, status: i32) {
     let out = beltune(args);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(status), "{args:?}");
     let err = String::from_utf8(out.stderr).unwrap();
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.starts_with("error: ") && err.contains(needle), "{err}");
@@ -148,22 +149,22 @@ fn assert_one_line_error(args: &[&str], needle: &str) {
 fn invalid_requests_print_one_line_and_fail() {
     let mut negative_jerk = THESIS_MOVE.to_vec();
     negative_jerk[10] = "-40";
-    assert_one_line_error(&negative_jerk, "j_max");
+    assert_one_line_error(&negative_jerk, "j_max", 2);
 
     let mut positive_j_min = THESIS_MOVE.to_vec();
     positive_j_min.extend(["--j-min", "5"]);
-    assert_one_line_error(&positive_j_min, "j_min");
+    assert_one_line_error(&positive_j_min, "j_min", 2);
 
     let mut outside = THESIS_MOVE.to_vec();
     outside[4] = "0.7,0,0";
     outside.extend(["--position-limits", "-0.01,0.57"]);
-    assert_one_line_error(&outside, "outside the position limits");
+    assert_one_line_error(&outside, "outside the position limits", 2);
 
     // Stopping from 2 m/s at -0.2 m towards -1 m overshoots the -0.25 m limit.
     let mut overshoot = THESIS_MOVE.to_vec();
     overshoot[2] = "-0.2,-2,0";
     overshoot.extend(["--position-limits", "-0.25,0.57"]);
-    assert_one_line_error(&overshoot, "leaves the position limits");
+    assert_one_line_error(&overshoot, "leaves the position limits", 4);
 
     let mut bad_state = THESIS_MOVE.to_vec();
     bad_state[2] = "0,0";

@@ -1,7 +1,9 @@
 //! # beltune: self-commissioning of belt-driven servo axes
 //!
 //! The thesis (Gruber, "Self-Commissioning of Linear Toothed Belt Drives",
-//! TU Wien 2017) and `THESIS-NOTES.md` are the specification. Data flows one way:
+//! TU Wien 2017) is the specification; `docs/thesis-map.md` maps its sections
+//! to the modules, with the unit conventions, known typos and reference values.
+//! Data flows one way:
 //!
 //! ```text
 //! model (parameters, plant models) -> sim (a simulated axis behind the `Axis` trait)
@@ -13,7 +15,7 @@
 //! The per-sample real-time parts live in the `no_std` crate `beltune-rt`.
 //!
 //! Units are SI everywhere; the conventions (e.g. `d_m` in N s/m as a
-//! translational equivalent, `i_t = r / i_g` in m) are those of THESIS-NOTES.
+//! translational equivalent, `i_t = r / i_g` in m) are those of docs/thesis-map.md.
 
 pub mod design;
 pub mod error;
@@ -23,6 +25,7 @@ pub mod lti;
 pub mod model;
 pub mod plant;
 pub mod procedure;
+pub mod provenance;
 pub mod report;
 pub mod sim;
 

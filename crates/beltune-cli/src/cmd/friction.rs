@@ -3,6 +3,7 @@
 //! force), thesis 3.6 extended to arbitrary motions.
 
 use super::util::write_atomic;
+use anyhow::Context;
 use beltune::ident::{
     identify_from_motion, read_csv_columns, record::check_time, MotionFrictionConfig,
 };
@@ -67,7 +68,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             min_speed_fraction: args.min_speed_fraction,
         },
     )
-    .map_err(|e| anyhow::anyhow!("{}: {e}", args.csv.display()))?;
+    .with_context(|| args.csv.display().to_string())?;
     println!(
         "inertia {:.6e}, viscous {:.6e}, coulomb {:.6e}, offset {:.6e}",
         r.inertia, r.viscous, r.coulomb, r.offset

@@ -2,6 +2,7 @@
 
 use crate::serve::{self, AppState};
 use anyhow::Context;
+use std::io::Write;
 use std::net::{IpAddr, SocketAddr};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -74,7 +75,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .await
             .with_context(|| format!("binding {addr}"))?;
         let local = listener.local_addr().context("local address")?;
-        println!("beltune tuning page: http://{local}/  (Ctrl-C to stop)");
+        // A closed stdout must not end the server (issue 11): ignore the error.
+        let _ = writeln!(
+            std::io::stdout(),
+            "beltune tuning page: http://{local}/  (Ctrl-C to stop)"
+        );
         tokio::select! {
             r = serve::serve(listener, state) => r.context("serving")?,
             _ = tokio::signal::ctrl_c() => {}

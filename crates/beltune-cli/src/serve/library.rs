@@ -221,7 +221,7 @@ impl LibraryTuner {
                 let drive = rigs::builtin("egc70", None)?.info();
                 let mut two_mass = self.model.params;
                 two_mass.m_c += payload_kg;
-                // THESIS-NOTES: the FRF fit's d_m, d_c contain Coulomb friction seen as
+                // docs/thesis-map.md: the FRF fit's d_m, d_c contain Coulomb friction seen as
                 // small-signal damping; over a 0.5 m move the axis sees the friction of
                 // Section 3.6. So the linear move plant takes its viscous friction
                 // (translational equivalent on the motor side) and no cart damping.

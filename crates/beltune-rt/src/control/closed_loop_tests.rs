@@ -11,7 +11,7 @@ use crate::Real;
 use num_complex::Complex64 as C;
 
 const TS: f64 = 1e-4;
-/// Rigid inertia of Table A.4: `Theta_e + i_t^2 m_c = 2.14e-3 kg m^2` (THESIS-NOTES).
+/// Rigid inertia of Table A.4: `Theta_e + i_t^2 m_c = 2.14e-3 kg m^2` (docs/thesis-map.md).
 const J: f64 = 2.14e-3;
 /// Current-loop dead time (3.30): 1 ms = 10 samples.
 const DEAD_SAMPLES: usize = 10;
@@ -417,7 +417,7 @@ fn f32_controller_tracks_the_f64_one() {
 }
 
 /// Two-mass plant of Table A.4 with an undamped belt mode and the friction of
-/// Table A.10 on the motor side (THESIS-NOTES, "What the chapter-5 result needs"):
+/// Table A.10 on the motor side (docs/thesis-map.md, "What the chapter-5 result needs"):
 /// `Theta_e phi'' = tau - i_t c (i_t phi - xi) - d_v phi' - tau_c sgn(phi')`,
 /// `m_c xi'' = c (i_t phi - xi)`; 1 ms dead time; RK4 with two sub-steps per
 /// sample. The Coulomb sign is smoothed by `tanh(omega / 0.1 rad/s)` so that
@@ -527,9 +527,9 @@ fn thesis_move(preview_and_filter: bool, belt: BeltStretch<f64>) -> CartErrors {
     e
 }
 
-/// Each THESIS-NOTES refinement reduces the cart tracking error of the thesis
+/// Each docs/thesis-map.md refinement reduces the cart tracking error of the thesis
 /// move on the two-mass plant: (a)+(b) desired-velocity filter and dead-time
-/// preview, then (c) belt-stretch compensation. THESIS-NOTES' independent
+/// preview, then (c) belt-stretch compensation. docs/thesis-map.md's independent
 /// simulation (with gains meeting the Table A.7 conditions exactly) gave
 /// 1.3 mm -> 0.58 mm -> 0.14 mm; the printed Table A.7 gains used here differ
 /// by 15-40 %, so only the ordering and a clear improvement are asserted,

@@ -2,7 +2,7 @@
 //! trajectory sample (m) into a motor setpoint (rad), optionally with belt-stretch
 //! compensation.
 //!
-//! Belt-stretch compensation (THESIS-NOTES, "What the chapter-5 result needs";
+//! Belt-stretch compensation (docs/thesis-map.md, "What the chapter-5 result needs";
 //! beyond the thesis, which assumes a rigid belt for the feedforward): for the
 //! undamped two-mass model the cart obeys `m_c xi'' = c (i_t phi_m - xi)`, so the
 //! motor angle that makes the cart follow `xi_d` exactly is the flat output

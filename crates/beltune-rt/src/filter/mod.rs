@@ -4,7 +4,7 @@
 //!
 //! - the notch (4.1) `(s^2 + 2 w_r/d_n s + w_r^2) / (s^2 + 2 d_n w_r s + w_r^2)`,
 //! - the 2nd-order Butterworth low-pass (4.3) `1 / (s^2/w_bw^2 + sqrt(2) s/w_bw + 1)`
-//!   (the extra `s` printed in the thesis is a typo, see THESIS-NOTES),
+//!   (the extra `s` printed in the thesis is a typo, see docs/thesis-map.md),
 //! - the velocity filter (6.1) `G_R(s) = s / (T_R s + 1)`.
 //!
 //! The coefficient structs are plain data that the design code fills in; the

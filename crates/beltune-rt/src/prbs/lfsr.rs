@@ -58,7 +58,7 @@ pub const TAPS: [&[u8]; 31] = [
 ///
 /// Each bit `s(k)` of the maximal-length sequence (period `M = 2^n - 1`, (3.1))
 /// is held for `P_PRBS` samples and output as `A_PRBS (s(k) - 1/2)`, i.e. the
-/// signal takes the values `+A/2` and `-A/2` (THESIS-NOTES: `A = 0.3 N m`
+/// signal takes the values `+A/2` and `-A/2` (docs/thesis-map.md: `A = 0.3 N m`
 /// gives `+-0.15 N m`). One period has `2^(n-1)` values `+A/2` and
 /// `2^(n-1) - 1` values `-A/2`, so its mean is `A / (2 M)`, not zero (thesis,
 /// below (3.4)).

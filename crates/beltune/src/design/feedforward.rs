@@ -1,6 +1,6 @@
 //! Feedforward (thesis 4.4, (4.15)-(4.17)): rigid-body inertia from the FRF fit,
 //! viscous and Coulomb friction from the friction identification (Section 3.6;
-//! THESIS-NOTES: the FRF fit's `d_m`, `d_c` are small-signal damping, not friction).
+//! docs/thesis-map.md: the FRF fit's `d_m`, `d_c` are small-signal damping, not friction).
 
 use crate::error::require_non_negative;
 use crate::model::TwoMassParams;
@@ -72,7 +72,7 @@ impl Feedforward {
 mod tests {
     use super::*;
 
-    /// THESIS-NOTES: (4.15) with Table A.4 gives 2.14e-3 kg m^2 (the table's 0.02 is a typo).
+    /// docs/thesis-map.md: (4.15) with Table A.4 gives 2.14e-3 kg m^2 (the table's 0.02 is a typo).
     #[test]
     fn table_a4_inertia_and_table_a10_friction() {
         let fr = FrictionParams {

@@ -8,7 +8,7 @@
 //! - [`dynamics`]: the one-knob mode,
 //! - [`model_file`]: reading the identified model (TOML or `beltune identify` JSON).
 //!
-//! Interpretation (THESIS-NOTES, "The printed controller gains"): the prefilter sits
+//! Interpretation (docs/thesis-map.md, "The printed controller gains"): the prefilter sits
 //! inside the velocity loop in series with the PI controller and is part of the
 //! resonance condition (4.7); `G_R` has `T_R` (default 2 ms); the dead time is exact.
 //! The conditions (4.7)-(4.9) and (4.13)/(4.14) are the specification; the printed
@@ -37,7 +37,7 @@ use crate::{Error, Result};
 
 /// Default velocity filter time constant `T_R`, s (Table A.4 setup).
 pub const DEFAULT_T_R_S: f64 = 2e-3;
-/// Default sampling time `T_s`, s (10 kHz, THESIS-NOTES).
+/// Default sampling time `T_s`, s (10 kHz, docs/thesis-map.md).
 pub const DEFAULT_TS_S: f64 = 1e-4;
 /// Points per decade of the verification grid: the dead-time phase moves less
 /// than 0.03 rad between points up to Nyquist (1 ms, 10 kHz), and resonances with

@@ -172,7 +172,7 @@ mod tests {
     use super::*;
 
     /// Table A.7: `w_bw = 123.24 rad/s` for `A_bw = -3 dB`; 0.1 % as the issue asks
-    /// (the table's w_z is rounded, THESIS-NOTES computes 123.25).
+    /// (the table's w_z is rounded, docs/thesis-map.md computes 123.25).
     const W_BW_REL_TOL: f64 = 1e-3;
     /// Table A.6: `d_n = 4.60` for `A_Notch = -6 dB`; 0.5 % (two printed digits).
     const D_N_REL_TOL: f64 = 5e-3;

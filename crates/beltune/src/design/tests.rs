@@ -208,7 +208,7 @@ fn table_a4_filter_parameters_and_conditions() {
         assert!(d.discrete_stability.velocity_max_pole_magnitude < 1.0);
         assert!(d.discrete_stability.position_max_pole_magnitude < 1.0);
         // gains in the thesis' range (Tables A.6/A.7 print 0.08-0.12, 1.39-1.69, 6.29-10.91;
-        // not a target, THESIS-NOTES): same order of magnitude
+        // not a target, docs/thesis-map.md): same order of magnitude
         assert!(
             d.k_p > 0.03
                 && d.k_p < 0.3

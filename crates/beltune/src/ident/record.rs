@@ -44,7 +44,22 @@ pub fn line_of_row(r: usize) -> usize {
     r + 2
 }
 
-/// Read the named columns of a CSV file with a header row. Errors name the
+/// Open a file for reading; a name ending in `.gz` is decompressed on the fly
+/// (the bench recording ships as `data/twomass-bench/multisine-a.csv.gz`).
+pub fn open_maybe_gzip(path: &Path) -> std::io::Result<Box<dyn std::io::Read>> {
+    let file = std::io::BufReader::new(std::fs::File::open(path)?);
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"))
+    {
+        Ok(Box::new(flate2::read::MultiGzDecoder::new(file)))
+    } else {
+        Ok(Box::new(file))
+    }
+}
+
+/// Read the named columns of a CSV file with a header row (plain or gzip,
+/// see [`open_maybe_gzip`]). Errors name the
 /// missing column (and list the available ones), or the row and column of a
 /// cell that is empty, not a number, or not finite.
 pub fn read_csv_columns(path: &Path, names: &[&str]) -> Result<CsvColumns> {
@@ -56,8 +71,7 @@ pub fn read_csv_columns(path: &Path, names: &[&str]) -> Result<CsvColumns> {
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| csv_err(format!("cannot open: {e}")))?;
+        .from_reader(open_maybe_gzip(path).map_err(|e| csv_err(format!("cannot open: {e}")))?);
     let headers = reader
         .headers()
         .map_err(|e| csv_err(format!("cannot read the header row: {e}")))?

@@ -1,4 +1,4 @@
-//! Tests on the real measurement `twomass-bench/multisine-a.csv` (see the
+//! Tests on the real measurement `data/twomass-bench/multisine-a.csv.gz` (see the
 //! data README): 2500 Hz, 20 periods of 2500 samples, first period transient,
 //! rotary two-mass bench, current units, free inertia.
 
@@ -7,10 +7,10 @@ use std::path::PathBuf;
 
 fn data_path() -> PathBuf {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/twomass-bench/multisine-a.csv");
+        .join("../../data/twomass-bench/multisine-a.csv.gz");
     assert!(
         p.exists(),
-        "measured data missing: {} (expected /work/shared beside the repository root)",
+        "measured data missing: {} (it ships in the repository, data/twomass-bench)",
         p.display()
     );
     p

@@ -20,7 +20,7 @@
 //! segment's ends (tooth engagement at the pulley, clamp at the cart); the
 //! thesis' (2.10) is the special case `l_e = 0`.
 //!
-//! Conventions (THESIS-NOTES): viscous coefficients are translational
+//! Conventions (docs/thesis-map.md): viscous coefficients are translational
 //! equivalents in N s/m (motor torque `i_t^2 d_m omega_m`), `i_t = r / i_g`.
 
 use crate::error::{require_finite, require_non_negative, require_positive};
@@ -157,7 +157,7 @@ impl BeltSegments {
 /// `tau_R(omega_m) = d_v~ omega_m + tau_c~ sign(omega_m)`.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FrictionTotals {
-    /// `d_v~ = i_t^2 (d_m + d_c) (+ end pulley)`, N m s/rad (THESIS-NOTES: `d_m` translational).
+    /// `d_v~ = i_t^2 (d_m + d_c) (+ end pulley)`, N m s/rad (docs/thesis-map.md: `d_m` translational).
     pub viscous_nm_s_per_rad: f64,
     /// `tau_c~ = tau_c + i_t f_c (+ end pulley / i_g)`, N m.
     pub coulomb_nm: f64,
@@ -388,7 +388,7 @@ mod tests {
         }
     }
 
-    /// (3.36) with the THESIS-NOTES convention: `d_v~ = i_t^2 (d_m + d_c)`,
+    /// (3.36) with the docs/thesis-map.md convention: `d_v~ = i_t^2 (d_m + d_c)`,
     /// `tau_c~ = tau_c + i_t f_c` (end pulley zero here).
     #[test]
     fn friction_totals_follow_3_36() {

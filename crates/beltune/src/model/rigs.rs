@@ -16,7 +16,7 @@ pub const BUILTIN_NAMES: &[&str] = &["egc70", "sim-a", "sim-b", "sim-c"];
 /// Default payload of `egc70`, kg (the thesis' plant `G_A`, Table A.4).
 pub const EGC70_DEFAULT_PAYLOAD_KG: f64 = 11.2;
 
-/// Drive-side data shared by the built-ins (THESIS-NOTES): `T_s = 100 us`,
+/// Drive-side data shared by the built-ins (docs/thesis-map.md): `T_s = 100 us`,
 /// dead time 1 ms (3.30).
 const SAMPLE_TIME_S: f64 = 100e-6;
 const DEAD_TIME_S: f64 = 1e-3;
@@ -25,7 +25,7 @@ const DEAD_TIME_S: f64 = 1e-3;
 /// Assumption, documented in [`egc70_params`].
 const BELT_TRAVEL_PER_COUNT_M: f64 = 2.5e-6;
 /// Feed constant of the EGC-70-TB, 78 mm/rev (Table A.2); `r = 78 mm / (2 pi)`
-/// (THESIS-NOTES: Table A.2 prints 12.42 mm).
+/// (docs/thesis-map.md: Table A.2 prints 12.42 mm).
 const FEED_CONSTANT_M_PER_REV: f64 = 0.078;
 
 /// A plant the simulator can run and the CLI can show.
@@ -351,13 +351,13 @@ pub fn load_toml(path: &Path) -> Result<Plant> {
 /// EAMM-A-L38-70A coupling (thesis 1.1, Appendix A) with `payload_kg` on the cart.
 ///
 /// Sources of every number:
-/// - `Theta_m = 0.45 kg cm^2` (Table A.1, printed "kg/cm^2"; THESIS-NOTES).
+/// - `Theta_m = 0.45 kg cm^2` (Table A.1, printed "kg/cm^2"; docs/thesis-map.md).
 /// - pulley inertia `23.63 kg mm^2` (Table A.2, printed "kg/mm^2"), the same for
 ///   both pulleys (thesis 2.1).
-/// - coupling `3.10 kg mm^2`: Table A.3 lost its numbers; THESIS-NOTES: the
+/// - coupling `3.10 kg mm^2`: Table A.3 lost its numbers; docs/thesis-map.md: the
 ///   identified `Theta_e = 71.73 kg mm^2` (Table A.4) minus 45 and 23.63.
-/// - `r = 78 mm / (2 pi)` from the feed constant (Table A.2; THESIS-NOTES), `i_g = 1`.
-/// - `c_b = 106,250 N` (Table A.2, a specific stiffness, THESIS-NOTES).
+/// - `r = 78 mm / (2 pi)` from the feed constant (Table A.2; docs/thesis-map.md), `i_g = 1`.
+/// - `c_b = 106,250 N` (Table A.2, a specific stiffness, docs/thesis-map.md).
 /// - belt damping `d_b = c_b * 1e-4 s`: no data sheet value; Tables A.11-A.13 use
 ///   `d = 20 N s/m` at `c = 200 kN/m`, i.e. `d / c = 1e-4 s`.
 /// - stroke 0.6 m (Table A.2).
@@ -379,7 +379,7 @@ pub fn load_toml(path: &Path) -> Result<Plant> {
 ///   (bearings, shaft seal), 10 % on the end pulley, 50 % on the cart (guide);
 ///   the payload-dependent part (the difference G_A - G_B, linear in the payload)
 ///   on the cart. The totals at 0 and 11.2 kg reproduce Table A.10 exactly.
-/// - dead time 1 ms (3.30), `T_s = 100 us` (THESIS-NOTES).
+/// - dead time 1 ms (3.30), `T_s = 100 us` (docs/thesis-map.md).
 /// - encoder: not in the data sheets; 2.5 um of belt travel per count, the
 ///   thesis' (6.15) value (31,200 counts/rev). Assumption.
 /// - torque limit 3.1 N m: the motor's maximum torque (Table A.1) is what the
@@ -447,7 +447,7 @@ fn linear_set(two_mass: TwoMassParams) -> LinearPlant {
     }
 }
 
-/// Simulation set `S_A` (Table A.11; its caption was lost, THESIS-NOTES).
+/// Simulation set `S_A` (Table A.11; its caption was lost, docs/thesis-map.md).
 pub fn sim_a() -> TwoMassParams {
     TwoMassParams {
         theta_e: 44.90e-6,
@@ -538,7 +538,7 @@ mod tests {
                 p.f_z_hz(),
                 table.f_z_hz()
             );
-            // Theta_e is built to equal the identified 71.73 kg mm^2 (THESIS-NOTES).
+            // Theta_e is built to equal the identified 71.73 kg mm^2 (docs/thesis-map.md).
             assert!((p.theta_e - 71.73e-6).abs() < 1e-9);
         }
     }

@@ -101,7 +101,7 @@ impl ThreeMass {
         let s = p.belt_segments(x.xi_m);
         let (c1, c2, c3) = (s.c_1_n_per_m, s.c_2_n_per_m, s.c_3_n_per_m);
         let (d1, d2, d3) = (s.d_1_n_s_per_m, s.d_2_n_s_per_m, s.d_3_n_s_per_m);
-        // (2.21) with d_m as translational equivalent (THESIS-NOTES)
+        // (2.21) with d_m as translational equivalent (docs/thesis-map.md)
         let tau_mr = -it * it * p.d_m_n_s_per_m * x.omega_m_rad_s
             - p.tau_c_motor_nm * Real::sign(x.omega_m_rad_s);
         // end pulley friction "modeled in a similar fashion"

@@ -2,7 +2,7 @@
 //! (2.38)-(2.49), with resonance, antiresonance, inertia ratio and resonance
 //! ratio (2.44)-(2.47).
 //!
-//! Convention (THESIS-NOTES): `d_m` is a translational equivalent in N s/m; the
+//! Convention (docs/thesis-map.md): `d_m` is a translational equivalent in N s/m; the
 //! motor viscous torque is `i_t^2 d_m omega_m`. With it the coefficients
 //! (2.38b)-(2.38h) follow exactly from the equations of motion
 //!
@@ -164,7 +164,7 @@ impl TwoMassParams {
     }
 
     /// Thesis Table A.4 (plant `G_A`, 11.2 kg payload), identified on the test rig.
-    /// `i_t = 78 mm / (2 pi)` (THESIS-NOTES); belt damping not identified (0).
+    /// `i_t = 78 mm / (2 pi)` (docs/thesis-map.md); belt damping not identified (0).
     pub fn thesis_table_a4() -> Self {
         TwoMassParams {
             theta_e: 71.73e-6,
@@ -196,7 +196,7 @@ mod tests {
     use super::*;
     use crate::lti::C64;
 
-    /// THESIS-NOTES: Table A.4 gives f_r = 107.1 Hz and f_z = 19.60 Hz through (2.44)/(2.45)
+    /// docs/thesis-map.md: Table A.4 gives f_r = 107.1 Hz and f_z = 19.60 Hz through (2.44)/(2.45)
     /// (the table prints 107.11 / 19.59, rounded from the identified values).
     #[test]
     fn table_a4_resonance_and_antiresonance() {

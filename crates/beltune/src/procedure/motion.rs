@@ -14,7 +14,7 @@ use beltune_rt::trajectory::{Limits, State, Trajectory};
 pub struct TrackOptions {
     /// Feedforward preview in samples (the current-loop dead time `n_T`), 0 for none.
     pub preview_samples: usize,
-    /// Belt-stretch compensation (THESIS-NOTES): `Off` for a rigid belt.
+    /// Belt-stretch compensation (docs/thesis-map.md): `Off` for a rigid belt.
     pub belt_stretch: BeltStretch<f64>,
     /// Check the following error against the supervisor's limit.
     pub check_following_error: bool,

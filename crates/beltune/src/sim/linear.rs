@@ -1,7 +1,7 @@
 //! Exact zero-order-hold discretization of the linear two-mass model (2.33).
 //!
 //! State `x = [phi_m, omega_m, xi, xi']`; the matrix uses the
-//! transfer-function convention of THESIS-NOTES (motor viscous torque
+//! transfer-function convention of docs/thesis-map.md (motor viscous torque
 //! `i_t^2 d_m omega_m`), so its transfer functions are exactly (2.38)/(2.48).
 //! `Phi = e^{A T}`, `Gamma = int_0^T e^{A t} dt b` from the exponential of the
 //! augmented matrix `[[A, b], [0, 0]] T`.
