@@ -156,7 +156,9 @@ impl<'a> Runner<'a> {
     }
 
     /// Apply one torque command (saturated to the axis' limit) after the
-    /// supervisor approved the state; on a violation, stop and return the error.
+    /// supervisor approved the state; on a violation, stop and return the
+    /// error. A failed exchange ends in the drive's quick stop and
+    /// [`Error::Axis`].
     pub fn step(&mut self, torque_nm: f64, following_error_m: Option<f64>) -> Result<Sample> {
         let limit = self
             .info
@@ -175,23 +177,30 @@ impl<'a> Runner<'a> {
         ) {
             return Err(self.stop_after(v));
         }
-        Ok(self.raw_step(torque))
+        self.raw_step(torque)
     }
 
-    fn raw_step(&mut self, torque_nm: f64) -> Sample {
-        let m = self.axis.step(torque_nm);
+    fn raw_step(&mut self, torque_nm: f64) -> Result<Sample> {
+        let m = match self.axis.exchange(torque_nm) {
+            Ok(m) => m,
+            Err(error) => {
+                // The host can no longer control the axis: the drive stops it.
+                let quick_stop = self.axis.quick_stop().err();
+                return Err(Error::Axis { error, quick_stop });
+            }
+        };
         self.last = m;
         self.samples += 1;
         self.progress.advance(1);
         let pos = self.position_m();
         self.velocity_m_s = self.velocity.step(pos);
-        Sample {
+        Ok(Sample {
             torque_command_nm: torque_nm,
             torque_actual_nm: m.torque_actual_nm,
             motor_angle_rad: self.motor_angle_rad(),
             position_m: pos,
             cart_position_m: m.cart_position_m,
-        }
+        })
     }
 
     /// Stop after a violation and turn it into the error that ends the command.
@@ -246,7 +255,7 @@ impl<'a> Runner<'a> {
             } else {
                 0.0
             };
-            self.raw_step(tau);
+            self.raw_step(tau)?;
         }
         Ok(self.position_m())
     }

@@ -29,7 +29,7 @@ use crate::error::{require_finite, require_non_negative, require_positive};
 use crate::model::params::{FrictionTotals, PhysicalParams};
 use crate::model::three_mass::ThreeMassState;
 use crate::model::{Plant, TwoMassParams};
-use crate::plant::{Axis, AxisInfo, Measurement};
+use crate::plant::{Axis, AxisError, AxisInfo, Measurement};
 use crate::{Error, Result};
 use mech::Mech;
 use nalgebra::{SMatrix, SVector};
@@ -371,12 +371,11 @@ impl SimAxis {
     }
 }
 
-impl Axis for SimAxis {
-    fn info(&self) -> AxisInfo {
-        self.info
-    }
-
-    fn step(&mut self, torque_command_nm: f64) -> Measurement {
+impl SimAxis {
+    /// One sample: apply `torque_command_nm` (saturated, through the
+    /// current-loop dead time) for one sample period and measure. A simulated
+    /// exchange cannot fail; [`Axis::exchange`] wraps this.
+    pub fn step(&mut self, torque_command_nm: f64) -> Measurement {
         let cmd = if torque_command_nm.is_finite() {
             torque_command_nm
         } else {
@@ -415,6 +414,23 @@ impl Axis for SimAxis {
             torque_actual_nm: tau + noise,
             cart_position_m: Some(cart),
         }
+    }
+}
+
+impl Axis for SimAxis {
+    fn info(&self) -> AxisInfo {
+        self.info
+    }
+
+    fn exchange(&mut self, torque_command_nm: f64) -> Result<Measurement, AxisError> {
+        Ok(self.step(torque_command_nm))
+    }
+
+    /// The simulated drive has no stop function of its own: it removes the
+    /// torque that is still on its way through the current-loop dead time.
+    fn quick_stop(&mut self) -> Result<(), AxisError> {
+        self.delay.iter_mut().for_each(|t| *t = 0.0);
+        Ok(())
     }
 }
 
