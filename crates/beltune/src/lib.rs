@@ -28,5 +28,6 @@ pub mod procedure;
 pub mod provenance;
 pub mod report;
 pub mod sim;
+pub mod study;
 
 pub use error::{Error, Result};

@@ -278,5 +278,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             println!("wrote {}", f.display());
         }
     }
-    Ok(())
+    limits_verdict(&run.verdict)
+}
+
+/// A commissioning that does not meet its own limits ends with exit status 5
+/// (issue 12), after its results were written.
+fn limits_verdict(verdict: &beltune::procedure::verdict::Verdict) -> anyhow::Result<()> {
+    if verdict.meets_limits {
+        return Ok(());
+    }
+    Err(anyhow::Error::new(crate::exit::Failure::new(
+        crate::exit::ExitStatus::LimitsNotMet,
+        format!(
+            "the commissioning does not meet its limits: {}",
+            verdict.failures.join("; ")
+        ),
+    )))
 }

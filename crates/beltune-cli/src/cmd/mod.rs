@@ -5,6 +5,7 @@ pub mod design;
 pub mod friction;
 pub mod identify;
 pub mod knobs;
+pub mod montecarlo;
 pub mod plant;
 pub mod serve;
 pub mod trajectory;

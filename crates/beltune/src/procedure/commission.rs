@@ -23,6 +23,7 @@
 use super::progress::Progress;
 use super::result::{FrictionResult, IdentifiedModel, Validation};
 use super::runner::Runner;
+use super::safety::StopCapability;
 use super::stages::{self, Stages};
 use super::validation::{MoveResult, MoveSpec};
 use crate::design::{ControllerDesign, DesignKnobs, FrictionParams};
@@ -288,6 +289,11 @@ pub struct Commissioning {
     pub moves: [MoveResult; 3],
     /// Summaries of the moves.
     pub validation: Validation,
+    /// The validation move run (Table A.8's or the fastest the axis can do).
+    pub validation_move: stages::validation_moves::PlannedMove,
+    /// Whether the commissioning met its own limits, and the margins it
+    /// guarantees over the identification's uncertainty (issue 12).
+    pub verdict: super::verdict::Verdict,
     /// Time the axis was busy, s.
     pub experiment_time_s: f64,
     /// Wall-clock time spent computing (FFT, fit, design), s.
@@ -327,12 +333,15 @@ pub fn commission(
     let pos_limits = positioning_limits(datasheet);
 
     // ---- 2. take the axis, identification position ----
-    let taken = stages::take_axis::take_axis(&mut st, plaus.bootstrap, datasheet)?;
+    let taken = stages::take_axis::take_axis(&mut st, plaus.bootstrap, datasheet, torque_max)?;
     let boot = taken.bootstrap;
     let id_pos = taken.identification_position_m;
 
     // ---- 3. holding torque ----
-    let holding = stages::holding_torque::holding_torque_stage(&mut st, &boot, id_pos, datasheet)?;
+    let held = stages::holding_torque::holding_torque_stage(
+        &mut st, &boot, id_pos, datasheet, torque_max,
+    )?;
+    let holding = held.holding_nm;
     let mut boot_hold = boot;
     boot_hold.torque_offset_nm = holding;
     st.runner.set_stop_controller(boot_hold);
@@ -361,6 +370,14 @@ pub fn commission(
         datasheet,
     )?;
     let p = ident.fit.params;
+    // The stops now brake the identified inertia (issue 12).
+    st.runner.set_stop_capability(StopCapability::from_axis(
+        torque_max,
+        p.rigid_inertia(),
+        datasheet.i_t_m,
+        holding,
+        held.friction_nm,
+    )?)?;
 
     // ---- 6. design ----
     let designed = stages::design::design_stage(
@@ -372,6 +389,7 @@ pub fn commission(
         cfg,
     )?;
     let feedback = designed.feedback;
+    let des_first = designed.design.clone();
 
     // ---- 7. friction ----
     let n_t = (ident.dead_time.seconds / ts).round() as usize;
@@ -386,23 +404,80 @@ pub fn commission(
         ident.fit.f_z_hz,
         holding,
     )?;
+    st.runner.set_stop_capability(StopCapability::from_axis(
+        torque_max,
+        p.rigid_inertia(),
+        datasheet.i_t_m,
+        holding,
+        fr.result.coulomb,
+    )?)?;
+    // ---- 7b. redesign on the damping the friction runs support (issue 12) ----
+    // The FRF's motor and cart damping d_m, d_c lump the Coulomb friction
+    // the small-signal excitation meets into viscous damping; the friction
+    // runs measure the real viscous part. A design on the over-damped fit
+    // meets its margins on the fit only.
+    let bounded = stages::design::bound_damping(&p, fr.result.viscous);
+    let (designed, guaranteed) = st.compute(|| {
+        stages::design::robust_design(
+            &designed.design,
+            &bounded,
+            ident.identified.m_c_sigma,
+            ident.identified.c_sigma,
+            &cfg.knobs,
+        )
+    })?;
+    let feedback = if designed == des_first {
+        feedback
+    } else {
+        let f = cascade_from_design(&designed, torque_max, holding)?;
+        st.runner.set_stop_controller(f);
+        f
+    };
+    st.start("robust design", 0);
+    let robust_line = format!(
+        "{:?} prefilter ({:.1} dB), K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s, velocity loop {:.1} Hz; guaranteed over the uncertainty: velocity {:.1} deg, position {:.1} deg",
+        designed.knobs.prefilter,
+        designed.knobs.attenuation_db(),
+        designed.k_p,
+        designed.k_i,
+        designed.k_pp,
+        designed.velocity_margins.crossover_rad_s / (2.0 * std::f64::consts::PI),
+        guaranteed.velocity_phase_margin_deg,
+        guaranteed.position_phase_margin_deg
+    );
+    st.finish("robust design", robust_line);
     let input = crate::design::DesignInput {
         friction: Some(FrictionParams {
             viscous_n_m_s_per_rad: fr.result.viscous,
             coulomb_n_m: fr.result.coulomb,
         }),
-        ..designed.design.input
+        ..designed.input
     };
     let des = ControllerDesign {
         feedforward: crate::design::Feedforward::design(&p, input.friction.as_ref())?,
         input,
-        ..designed.design
+        ..designed
     };
 
     // ---- 8. validation ----
     let val = stages::validation_moves::validation_moves(
         &mut st, &feedback, &ident.fit, &fr.result, n_t, holding, datasheet, cfg,
     )?;
+    let verdict = super::verdict::judge(
+        &val.validation.nonlinear,
+        torque_max,
+        guaranteed,
+        val.planned.reduced,
+    );
+    st.log.push(format!(
+        "verdict: {}; guaranteed velocity-loop phase margin {:.1} deg over the identification's uncertainty",
+        if verdict.meets_limits {
+            "meets its limits".to_string()
+        } else {
+            format!("does NOT meet its limits: {}", verdict.failures.join("; "))
+        },
+        verdict.guaranteed.velocity_phase_margin_deg
+    ));
     let experiment_time_s = st.runner.busy_time_s();
     let log = std::mem::take(&mut st.log);
     let computation_time_s = st.compute_s;
@@ -421,6 +496,8 @@ pub fn commission(
         friction: fr.result,
         moves: val.moves,
         validation: val.validation,
+        validation_move: val.planned,
+        verdict,
         experiment_time_s,
         computation_time_s,
         log,

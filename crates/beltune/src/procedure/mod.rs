@@ -16,3 +16,4 @@ pub mod result;
 pub mod runner;
 pub mod stages;
 pub mod validation;
+pub mod verdict;

@@ -142,26 +142,158 @@ impl std::fmt::Display for Violation {
     }
 }
 
+/// What the axis can be relied on to do when it must stop: the deceleration
+/// in each direction of travel and the time before it acts.
+///
+/// A tilted axis brakes harder uphill than downhill: with the holding torque
+/// `tau_h` (gravity) and a stop budget `beta T_max` of the torque limit, the
+/// command while braking a move towards +x is `tau_h - J a / i_t` and towards
+/// -x `tau_h + J a / i_t`; both must stay within `beta T_max`, so
+/// `a_+ = (beta T_max + tau_h) i_t / J` and `a_- = (beta T_max - tau_h) i_t / J`
+/// (friction, which helps the stop, counted at half its estimate). See
+/// [`StopCapability::from_axis`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StopCapability {
+    /// Deceleration available while moving towards +x, m/s^2.
+    pub deceleration_positive_m_s2: f64,
+    /// Deceleration available while moving towards -x, m/s^2.
+    pub deceleration_negative_m_s2: f64,
+    /// Time during which the axis keeps its speed before the deceleration
+    /// builds up (dead time, velocity-filter lag, the stop's jerk ramp), s.
+    pub reaction_time_s: f64,
+}
+
+/// Fraction of the torque limit a stop may use (the rest is margin for the
+/// loop's transient and the model's errors).
+pub const STOP_TORQUE_FRACTION: f64 = 0.6;
+/// Largest stop deceleration used, m/s^2 (a stop need not be violent).
+pub const STOP_DECELERATION_MAX_M_S2: f64 = 20.0;
+/// Jerk of the stop trajectory relative to its deceleration, 1/s.
+pub const STOP_JERK_PER_DECELERATION: f64 = 20.0;
+/// Reaction time besides the stop's jerk ramp: the largest dead time the
+/// commissioning accepts (2 ms) and the supervision velocity filter (2 ms), s.
+pub const STOP_LATENCY_S: f64 = 4e-3;
+
+impl StopCapability {
+    /// The same deceleration both ways, with the latency and jerk ramp.
+    pub fn symmetric(deceleration_m_s2: f64) -> Self {
+        StopCapability {
+            deceleration_positive_m_s2: deceleration_m_s2,
+            deceleration_negative_m_s2: deceleration_m_s2,
+            reaction_time_s: STOP_LATENCY_S + 0.5 / STOP_JERK_PER_DECELERATION,
+        }
+    }
+
+    /// The capability of an axis with torque limit `torque_max_nm`, rigid
+    /// inertia `inertia_kg_m2` (kg m^2), transmission `i_t_m` (m/rad), holding
+    /// torque `holding_nm` (gravity, N m) and Coulomb friction estimate
+    /// `coulomb_nm` (N m). [`Error::Infeasible`] when the stop budget cannot
+    /// even hold the load: such an axis cannot be commissioned safely.
+    pub fn from_axis(
+        torque_max_nm: f64,
+        inertia_kg_m2: f64,
+        i_t_m: f64,
+        holding_nm: f64,
+        coulomb_nm: f64,
+    ) -> Result<Self> {
+        require_positive("torque limit [N m]", torque_max_nm)?;
+        require_positive("inertia [kg m^2]", inertia_kg_m2)?;
+        require_positive("i_t [m/rad]", i_t_m)?;
+        require_finite("holding torque [N m]", holding_nm)?;
+        let friction = 0.5 * coulomb_nm.max(0.0);
+        let budget = STOP_TORQUE_FRACTION * torque_max_nm;
+        let a = |tau: f64| (tau * i_t_m / inertia_kg_m2).min(STOP_DECELERATION_MAX_M_S2);
+        let pos = budget + holding_nm + friction;
+        let neg = budget - holding_nm + friction;
+        // A stop that needs more than three quarters of its budget for gravity
+        // leaves too little to brake.
+        if pos.min(neg) < 0.25 * budget {
+            return Err(Error::Infeasible {
+                reason: format!(
+                    "the axis needs {:.3} N m to hold its load, too much of the torque limit {:.3} N m to stop it safely in both directions",
+                    holding_nm.abs(),
+                    torque_max_nm
+                ),
+            });
+        }
+        Ok(StopCapability {
+            deceleration_positive_m_s2: a(pos),
+            deceleration_negative_m_s2: a(neg),
+            ..StopCapability::symmetric(1.0)
+        })
+    }
+
+    /// The smaller deceleration of the two directions, m/s^2.
+    pub fn worst_deceleration_m_s2(&self) -> f64 {
+        self.deceleration_positive_m_s2
+            .min(self.deceleration_negative_m_s2)
+    }
+
+    /// Deceleration available while moving with `velocity_m_s`, m/s^2.
+    pub fn deceleration_for(&self, velocity_m_s: f64) -> f64 {
+        if velocity_m_s >= 0.0 {
+            self.deceleration_positive_m_s2
+        } else {
+            self.deceleration_negative_m_s2
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        require_positive(
+            "stop deceleration (+x) [m/s^2]",
+            self.deceleration_positive_m_s2,
+        )?;
+        require_positive(
+            "stop deceleration (-x) [m/s^2]",
+            self.deceleration_negative_m_s2,
+        )?;
+        require_finite("stop reaction time [s]", self.reaction_time_s)?;
+        if self.reaction_time_s < 0.0 {
+            return Err(Error::invalid(
+                "stop reaction time [s]",
+                self.reaction_time_s,
+                "must not be negative",
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The supervisor: call [`SafetySupervisor::check`] every sample.
 #[derive(Clone, Debug)]
 pub struct SafetySupervisor {
     limits: SafetyLimits,
-    /// Deceleration assumed for the "can it still stop?" look-ahead, m/s^2.
-    stop_deceleration_m_s2: f64,
+    capability: StopCapability,
 }
 
 impl SafetySupervisor {
     /// A supervisor for `limits`; `stop_deceleration_m_s2` is the deceleration
-    /// the jerk-limited stop can be relied on to reach (used for the
+    /// the jerk-limited stop can be relied on to reach in both directions (used for the
     /// look-ahead that stops the axis before it reaches the window edge; in
     /// open-loop stages the look-ahead assumes half of it).
     pub fn new(limits: SafetyLimits, stop_deceleration_m_s2: f64) -> Result<Self> {
-        limits.validate()?;
         require_positive("stop_deceleration_m_s2", stop_deceleration_m_s2)?;
-        Ok(SafetySupervisor {
-            limits,
-            stop_deceleration_m_s2,
-        })
+        Self::with_capability(limits, StopCapability::symmetric(stop_deceleration_m_s2))
+    }
+
+    /// A supervisor for `limits` with a direction-dependent stop capability.
+    pub fn with_capability(limits: SafetyLimits, capability: StopCapability) -> Result<Self> {
+        limits.validate()?;
+        capability.validate()?;
+        Ok(SafetySupervisor { limits, capability })
+    }
+
+    /// Replace the stop capability (when the holding torque, the inertia or
+    /// the friction become known).
+    pub fn set_capability(&mut self, capability: StopCapability) -> Result<()> {
+        capability.validate()?;
+        self.capability = capability;
+        Ok(())
+    }
+
+    /// The stop capability.
+    pub fn capability(&self) -> &StopCapability {
+        &self.capability
     }
 
     /// The limits.
@@ -169,9 +301,12 @@ impl SafetySupervisor {
         &self.limits
     }
 
-    /// Distance needed to stop from `velocity_m_s` with the stop deceleration, m.
+    /// Distance needed to stop from `velocity_m_s`, m: the reaction time at
+    /// full speed plus `v^2 / (2 a)` with the deceleration of that direction.
     pub fn stopping_distance_m(&self, velocity_m_s: f64) -> f64 {
-        velocity_m_s * velocity_m_s / (2.0 * self.stop_deceleration_m_s2)
+        let a = self.capability.deceleration_for(velocity_m_s);
+        velocity_m_s.abs() * self.capability.reaction_time_s
+            + velocity_m_s * velocity_m_s / (2.0 * a)
     }
 
     /// Judge one sample. `following_error_m` is `None` in open-loop stages.
@@ -198,7 +333,11 @@ impl SafetySupervisor {
         // queued in the dead time and the stop controller's lag come first.
         let distance = match following_error_m {
             Some(_) => self.stopping_distance_m(velocity_m_s),
-            None => 2.0 * self.stopping_distance_m(velocity_m_s),
+            None => {
+                self.stopping_distance_m(velocity_m_s)
+                    + velocity_m_s * velocity_m_s
+                        / (2.0 * self.capability.deceleration_for(velocity_m_s))
+            }
         };
         let stop = position_m + velocity_m_s.signum() * distance;
         if stop < l.travel_min_m || stop > l.travel_max_m {
@@ -249,9 +388,17 @@ mod tests {
         }
     }
 
+    /// The look-ahead of the thesis-era tests: no reaction time.
+    fn instant(a: f64) -> StopCapability {
+        StopCapability {
+            reaction_time_s: 0.0,
+            ..StopCapability::symmetric(a)
+        }
+    }
+
     #[test]
     fn each_limit_is_enforced() {
-        let s = SafetySupervisor::new(limits(), 10.0).unwrap();
+        let s = SafetySupervisor::with_capability(limits(), instant(10.0)).unwrap();
         assert!(s.check(0.25, 0.0, 0.5, Some(0.001)).is_ok());
         assert!(matches!(
             s.check(0.6, 0.0, 0.0, None),
@@ -266,6 +413,17 @@ mod tests {
             Err(Violation::TravelAhead { .. })
         ));
         // 0.48 m at 0.9 m/s needs 0.0405 m -> 0.5205 m: outside even in closed loop.
+        assert!(matches!(
+            s.check(0.48, 0.9, 0.0, Some(0.0)),
+            Err(Violation::TravelAhead { .. })
+        ));
+        // With the default reaction time (dead time, filter, jerk ramp: 29 ms)
+        // 0.449 m at 0.99 m/s stops at 0.498 + 0.029 m: outside.
+        let r = SafetySupervisor::new(limits(), 10.0).unwrap();
+        assert!(matches!(
+            r.check(0.449, 0.99, 0.0, Some(0.0)),
+            Err(Violation::TravelAhead { .. })
+        ));
         assert!(matches!(
             s.check(0.48, 0.9, 0.0, Some(0.0)),
             Err(Violation::TravelAhead { .. })
@@ -290,6 +448,35 @@ mod tests {
             s.check(f64::NAN, 0.0, 0.0, None),
             Err(Violation::NonFinite)
         ));
+    }
+
+    /// Issue 12 (stops that ended outside the window): on a tilted axis the
+    /// stop brakes downhill with the torque gravity leaves, uphill with the
+    /// torque plus gravity; the look-ahead uses the deceleration of the
+    /// direction of travel.
+    #[test]
+    fn stops_are_planned_with_the_deceleration_gravity_leaves_issue_12() {
+        let (t_max, j, i_t) = (3.1, 2e-3, 0.0124);
+        let hold = 1.0; // gravity pulls towards -x
+        let c = StopCapability::from_axis(t_max, j, i_t, hold, 0.0).unwrap();
+        let budget = STOP_TORQUE_FRACTION * t_max;
+        let expect_pos = ((budget + hold) * i_t / j).min(STOP_DECELERATION_MAX_M_S2);
+        let expect_neg = (budget - hold) * i_t / j;
+        assert!((c.deceleration_positive_m_s2 - expect_pos).abs() < 1e-12);
+        assert!((c.deceleration_negative_m_s2 - expect_neg).abs() < 1e-12);
+        assert!(c.deceleration_negative_m_s2 < c.deceleration_positive_m_s2);
+        let s = SafetySupervisor::with_capability(limits(), c).unwrap();
+        // downhill (towards -x) needs more room than uphill at the same speed
+        assert!(s.stopping_distance_m(-0.5) > s.stopping_distance_m(0.5));
+        let flat = StopCapability::from_axis(t_max, j, i_t, 0.0, 0.0).unwrap();
+        let level = SafetySupervisor::with_capability(limits(), flat).unwrap();
+        assert!(s.stopping_distance_m(-0.5) > level.stopping_distance_m(-0.5));
+        // a load that takes most of the stop budget is refused
+        assert!(matches!(
+            StopCapability::from_axis(t_max, j, i_t, 0.8 * budget, 0.0),
+            Err(Error::Infeasible { .. })
+        ));
+        assert!(StopCapability::from_axis(t_max, j, i_t, f64::NAN, 0.0).is_err());
     }
 
     #[test]

@@ -15,6 +15,12 @@ pub const SETTLING_BAND_M: f64 = 50e-6;
 /// Window at the end of the record over which the static error is averaged, s.
 pub const STATIC_WINDOW_S: f64 = 0.1;
 
+/// The return to the validation start stops this far inside the window
+/// before it creeps to the start, m.
+pub const APPROACH_DISTANCE_M: f64 = 0.02;
+/// Speed of the creep to the validation start, m/s.
+pub const CREEP_SPEED_M_S: f64 = 0.02;
+
 /// The validation move.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MoveSpec {
@@ -144,7 +150,29 @@ pub fn run_move(
     spec: &MoveSpec,
 ) -> Result<MoveResult> {
     if (runner.position_m() - spec.start_m).abs() > 1e-4 {
-        move_to(runner, positioning, spec.start_m, positioning_limits, 0.15)?;
+        // Issue 12: the start is 10 mm from the window's edge and the return
+        // runs without feedforward; approach it from inside the window and
+        // creep the last part, so that the feedback's overshoot cannot reach
+        // the edge.
+        let inside = if spec.target_m >= spec.start_m {
+            1.0
+        } else {
+            -1.0
+        };
+        let approach = spec.start_m + inside * APPROACH_DISTANCE_M;
+        if (runner.position_m() - approach).abs() > 1e-4 {
+            move_to(runner, positioning, approach, positioning_limits, 0.1)?;
+        }
+        let creep = Limits {
+            v_max: CREEP_SPEED_M_S,
+            v_min: -CREEP_SPEED_M_S,
+            a_max: positioning_limits.a_max.min(0.5),
+            a_min: -positioning_limits.a_max.min(0.5),
+            j_max: positioning_limits.j_max.min(5.0),
+            j_min: -positioning_limits.j_max.min(5.0),
+            ..*positioning_limits
+        };
+        move_to(runner, positioning, spec.start_m, &creep, 0.15)?;
     }
     let traj = Trajectory::plan(
         &State::at_rest(runner.position_m()),

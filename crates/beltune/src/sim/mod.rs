@@ -56,6 +56,10 @@ pub struct SimConfig {
     pub seed: u64,
     /// Standard deviation of the noise on the measured actual torque, N m.
     pub torque_noise_nm: f64,
+    /// Standard deviation of the motor encoder's position noise before
+    /// quantization, counts (interpolation noise of a sin/cos encoder; 0 for
+    /// an ideal incremental encoder). Seeded like the torque noise.
+    pub encoder_noise_counts: f64,
     /// Initial cart position, m (`None`: the middle of the stroke; 0 for a linear set).
     pub initial_cart_position_m: Option<f64>,
     /// Tilt override, rad (`None`: the plant's own tilt).
@@ -74,6 +78,7 @@ impl Default for SimConfig {
         SimConfig {
             seed: 0x5EED,
             torque_noise_nm: 2e-3,
+            encoder_noise_counts: 0.0,
             initial_cart_position_m: None,
             tilt_rad: None,
             model: SimModel::ThreeMass,
@@ -123,6 +128,7 @@ impl SimAxis {
     pub fn new(plant: &Plant, config: SimConfig) -> Result<Self> {
         plant.validate()?;
         require_non_negative("torque_noise_nm", config.torque_noise_nm)?;
+        require_non_negative("encoder_noise_counts", config.encoder_noise_counts)?;
         require_positive(
             "cart_encoder_resolution_m",
             config.cart_encoder_resolution_m,
@@ -404,8 +410,14 @@ impl SimAxis {
         } else {
             0.0
         };
+        let jitter = if self.config.encoder_noise_counts > 0.0 {
+            let z: f64 = StandardNormal.sample(&mut self.rng);
+            self.config.encoder_noise_counts * z
+        } else {
+            0.0
+        };
         let counts = floor_i64(
-            (self.motor_angle_rad() - self.phi_m_zero_rad) / self.info.motor_rad_per_count,
+            (self.motor_angle_rad() - self.phi_m_zero_rad) / self.info.motor_rad_per_count + jitter,
         );
         let cart = floor_i64(self.cart_position_m() / self.config.cart_encoder_resolution_m) as f64
             * self.config.cart_encoder_resolution_m;

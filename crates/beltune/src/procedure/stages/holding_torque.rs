@@ -6,6 +6,7 @@
 
 use super::super::commission::{positioning_limits, DataSheet};
 use super::super::motion::{move_to, track, TrackOptions};
+use super::super::safety::StopCapability;
 use super::friction::constant_velocity_point;
 use super::Stages;
 use crate::{Error, Result};
@@ -17,17 +18,43 @@ const RUN_SPEED_M_S: f64 = 0.1;
 /// Half the length of the runs, m (each run is twice this long).
 const RUN_HALF_M: f64 = 0.03;
 
-/// Stage 3: the holding torque, N m, measured with `ctrl` around `center_m`.
+/// What stage 3 hands on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Holding {
+    /// Holding torque (gravity), N m: the mean of the up and down runs.
+    pub holding_nm: f64,
+    /// Friction torque at the run speed, N m: half the difference of the up
+    /// and down runs (Coulomb plus a little viscous friction).
+    pub friction_nm: f64,
+}
+
+/// Stage 3: the holding torque measured with `ctrl` around `center_m`. The
+/// supervisor's stops then brake with what gravity leaves in each direction;
+/// an axis whose holding torque leaves too little torque to stop is refused
+/// ([`crate::Error::Infeasible`]).
 pub fn holding_torque_stage(
     st: &mut Stages,
     ctrl: &CascadeConfig<f64>,
     center_m: f64,
     ds: &DataSheet,
-) -> Result<f64> {
+    torque_max_nm: f64,
+) -> Result<Holding> {
     st.start("holding torque", 0);
-    let holding = holding_torque(st, ctrl, center_m, ds)?;
+    let (up, down) = holding_torque(st, ctrl, center_m, ds)?;
+    let holding = Holding {
+        holding_nm: 0.5 * (up + down),
+        friction_nm: (0.5 * (up - down)).max(0.0),
+    };
+    st.runner.set_stop_capability(StopCapability::from_axis(
+        torque_max_nm,
+        ds.rigid_inertia(),
+        ds.i_t_m,
+        holding.holding_nm,
+        holding.friction_nm,
+    )?)?;
     let line = format!(
-        "{holding:+.4} N m (mean of slow up and down runs: friction cancels; offset for the open-loop excitation)"
+        "{:+.4} N m (mean of slow up and down runs: friction cancels; offset for the open-loop excitation), friction {:.4} N m",
+        holding.holding_nm, holding.friction_nm
     );
     st.finish("holding torque", line);
     Ok(holding)
@@ -38,7 +65,7 @@ fn holding_torque(
     ctrl: &CascadeConfig<f64>,
     center_m: f64,
     ds: &DataSheet,
-) -> Result<f64> {
+) -> Result<(f64, f64)> {
     let v = RUN_SPEED_M_S;
     let half = RUN_HALF_M;
     let limits = Limits {
@@ -69,5 +96,5 @@ fn holding_torque(
         torques.push(point.mean_torque_nm);
     }
     move_to(runner, ctrl, center_m, &positioning_limits(ds), 0.05)?;
-    Ok(0.5 * (torques[0] + torques[1]))
+    Ok((torques[0], torques[1]))
 }

@@ -4,7 +4,9 @@
 
 use super::super::bootstrap::bootstrap_controller;
 use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
-use super::super::safety::{SafetyLimits, SafetySupervisor};
+use super::super::safety::{
+    SafetyLimits, SafetySupervisor, StopCapability, STOP_JERK_PER_DECELERATION,
+};
 use crate::plant::AxisInfo;
 use crate::Result;
 use beltune_rt::control::CascadeConfig;
@@ -46,15 +48,17 @@ pub fn plausibility(
         following_error_max_m: cfg.following_error_max_m,
     };
     // Stop deceleration: what 60 % of the torque limit gives on the data-sheet
-    // inertia (the rest is margin for friction, gravity and the loop), at most 20 m/s^2.
-    let a_stop = (0.6 * torque_max / j_ds * datasheet.i_t_m).min(20.0);
-    let supervisor = SafetySupervisor::new(limits, a_stop)?;
+    // inertia, at most 20 m/s^2; gravity and friction are not known yet (the
+    // later stages replace it with what the axis really has, issue 12).
+    let capability = StopCapability::from_axis(torque_max, j_ds, datasheet.i_t_m, 0.0, 0.0)?;
+    let a_stop = capability.worst_deceleration_m_s2();
+    let supervisor = SafetySupervisor::with_capability(limits, capability)?;
     let bootstrap = bootstrap_controller(j_ds, datasheet.i_t_m, ts, torque_max)?;
     let stop_limits = Limits {
         a_max: a_stop,
         a_min: -a_stop,
-        j_max: 20.0 * a_stop,
-        j_min: -20.0 * a_stop,
+        j_max: STOP_JERK_PER_DECELERATION * a_stop,
+        j_min: -STOP_JERK_PER_DECELERATION * a_stop,
         ..positioning_limits(datasheet)
     };
     let line = format!(

@@ -6,6 +6,7 @@
 use super::super::commission::{positioning_limits, DataSheet};
 use super::super::motion::move_to;
 use super::super::runner::{Runner, Sample};
+use super::super::safety::StopCapability;
 use super::Stages;
 use crate::Result;
 use beltune_rt::control::{CascadeConfig, CascadeController, Setpoint};
@@ -26,6 +27,7 @@ pub fn take_axis(
     st: &mut Stages,
     bootstrap: CascadeConfig<f64>,
     datasheet: &DataSheet,
+    torque_max_nm: f64,
 ) -> Result<TakenAxis> {
     st.start("take axis", 0);
     let start = st.runner.position_m();
@@ -35,6 +37,15 @@ pub fn take_axis(
     let mut boot = bootstrap;
     boot.torque_offset_nm = first_hold;
     st.runner.set_stop_controller(boot);
+    // The first holding torque is gravity (and friction): the stops brake
+    // with what is left of the torque in each direction (issue 12).
+    st.runner.set_stop_capability(StopCapability::from_axis(
+        torque_max_nm,
+        datasheet.rigid_inertia(),
+        datasheet.i_t_m,
+        first_hold,
+        0.0,
+    )?)?;
     let line = format!(
         "held at {:.1} mm (sag {:.2} mm) with {first_hold:+.3} N m",
         st.runner.position_m() * 1e3,

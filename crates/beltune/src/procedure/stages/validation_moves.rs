@@ -10,7 +10,7 @@ use super::Stages;
 use crate::ident::fit::TwoMassFit;
 use crate::{Error, Result};
 use beltune_rt::control::{BeltStretch, CascadeConfig, Feedforward};
-use beltune_rt::trajectory::Limits;
+use beltune_rt::trajectory::{Limits, State, Trajectory};
 
 /// What stage 8 hands on.
 pub struct ValidationMoves {
@@ -18,6 +18,123 @@ pub struct ValidationMoves {
     pub moves: [MoveResult; 3],
     /// Their summaries.
     pub validation: Validation,
+    /// The move actually run (Table A.8's, or the fastest the axis can do).
+    pub planned: PlannedMove,
+}
+
+/// Fraction of the torque limit the validation move may use for
+/// acceleration, gravity and friction together (the rest is the feedback's).
+pub const MOVE_TORQUE_FRACTION: f64 = 0.8;
+/// Distance the validation start keeps from the window's lower edge, m.
+const START_CLEARANCE_M: f64 = 0.01;
+/// Distance the validation target keeps from the window's upper edge, m
+/// (Table A.8: 0.5 m target in a window up to 0.57 m).
+const TARGET_CLEARANCE_M: f64 = 0.07;
+
+/// The validation move fitted to the axis (issue 12): Table A.8's limits
+/// where the axis can do them, else the fastest move it can do.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlannedMove {
+    /// Start, m.
+    pub start_m: f64,
+    /// Target, m.
+    pub target_m: f64,
+    /// The trajectory limits used.
+    pub limits: Limits,
+    /// Largest acceleration the torque budget allows, m/s^2.
+    pub acceleration_capability_m_s2: f64,
+    /// Whether the move is slower than Table A.8's (the axis cannot do it).
+    pub reduced: bool,
+}
+
+/// The validation move for an axis with rigid inertia `inertia_kg_m2`,
+/// transmission `i_t_m`, friction `friction` (at the motor), holding torque
+/// `holding_nm`, torque limit `torque_max_nm` and worst stop deceleration
+/// `stop_deceleration_m_s2`, inside the travel window of `ds`.
+#[allow(clippy::too_many_arguments)]
+pub fn plan_validation_move(
+    spec: &super::super::validation::MoveSpec,
+    ds: &DataSheet,
+    inertia_kg_m2: f64,
+    i_t_m: f64,
+    friction: &FrictionResult,
+    holding_nm: f64,
+    torque_max_nm: f64,
+    stop_deceleration_m_s2: f64,
+) -> Result<PlannedMove> {
+    let start = spec.start_m.max(ds.travel_min_m + START_CLEARANCE_M);
+    let target = spec.target_m.min(ds.travel_max_m - TARGET_CLEARANCE_M);
+    if !(target - start > 0.05) {
+        return Err(Error::Infeasible {
+            reason: format!(
+                "the travel window [{:.0}, {:.0}] mm leaves no room for a validation move",
+                ds.travel_min_m * 1e3,
+                ds.travel_max_m * 1e3
+            ),
+        });
+    }
+    let mut limits = Limits {
+        position_min: ds.travel_min_m,
+        position_max: ds.travel_max_m,
+        ..spec.limits
+    };
+    // Torque left after gravity and Coulomb friction; viscous friction at
+    // the move's top speed and the acceleration share it.
+    let budget = MOVE_TORQUE_FRACTION * torque_max_nm - holding_nm.abs() - friction.coulomb.abs();
+    if !(budget > 0.0) {
+        return Err(Error::Infeasible {
+            reason: format!(
+                "gravity and friction take {:.3} N m of the torque limit {torque_max_nm:.3} N m: the axis cannot accelerate",
+                holding_nm.abs() + friction.coulomb.abs()
+            ),
+        });
+    }
+    let viscous = friction.viscous.max(0.0);
+    let mut reduced = false;
+    let mut probe = Trajectory::plan(&State::at_rest(start), &State::at_rest(target), &limits)?;
+    let v_peak = peak_velocity(&probe);
+    // At most half the budget for viscous friction: cap the speed.
+    if viscous * v_peak / i_t_m > 0.5 * budget {
+        let v_cap = 0.5 * budget * i_t_m / viscous;
+        limits.v_max = v_cap;
+        limits.v_min = -v_cap;
+        probe = Trajectory::plan(&State::at_rest(start), &State::at_rest(target), &limits)?;
+        reduced = true;
+    }
+    let v_peak = peak_velocity(&probe);
+    let a_peak = peak_acceleration(&probe);
+    let a_cap =
+        ((budget - viscous * v_peak / i_t_m) * i_t_m / inertia_kg_m2).min(stop_deceleration_m_s2);
+    if a_peak > a_cap {
+        // The fastest move: the largest acceleration the torque allows, the
+        // jerk scaled with it (Table A.8's ratio).
+        let scale = a_cap / a_peak;
+        limits.a_max = a_cap;
+        limits.a_min = -a_cap;
+        limits.j_max = spec.limits.j_max * scale;
+        limits.j_min = spec.limits.j_min * scale;
+        reduced = true;
+    }
+    Ok(PlannedMove {
+        start_m: start,
+        target_m: target,
+        limits,
+        acceleration_capability_m_s2: a_cap,
+        reduced,
+    })
+}
+
+fn peak_velocity(t: &Trajectory) -> f64 {
+    sampled(t).map(|s| s.velocity.abs()).fold(0.0, f64::max)
+}
+
+fn peak_acceleration(t: &Trajectory) -> f64 {
+    sampled(t).map(|s| s.acceleration.abs()).fold(0.0, f64::max)
+}
+
+fn sampled(t: &Trajectory) -> impl Iterator<Item = beltune_rt::trajectory::Sample> + '_ {
+    let d = t.duration_s();
+    (0..=400).map(move |k| t.sample(d * k as f64 / 400.0))
 }
 
 /// Stage 8: the three validation moves with `feedback` plus each feedforward
@@ -53,10 +170,44 @@ pub fn validation_moves(
     let move_samples = ((cfg.validation.settle_s + 1.5) / ts) as u64 * variants.len() as u64;
     st.start("validation moves", move_samples);
     let mut moves: Vec<MoveResult> = Vec::with_capacity(3);
+    let planned = plan_validation_move(
+        &cfg.validation,
+        datasheet,
+        m_e,
+        p.i_t,
+        friction,
+        holding_nm,
+        st.runner.supervisor().limits().torque_max_nm,
+        st.runner
+            .supervisor()
+            .capability()
+            .worst_deceleration_m_s2(),
+    )?;
+    let spec = super::super::validation::MoveSpec {
+        start_m: planned.start_m,
+        target_m: planned.target_m,
+        limits: planned.limits,
+        ..cfg.validation
+    };
+    // The unmeasured return to the start runs without feedforward under the
+    // feedback alone: slowly (a quarter of the positioning speed, at most
+    // half the stop deceleration), so that the soft loop cannot overshoot the
+    // window edge 10 mm behind the start (issue 12).
+    let a_return = (0.5
+        * st.runner
+            .supervisor()
+            .capability()
+            .worst_deceleration_m_s2())
+    .min(2.0);
     let return_limits = Limits {
+        v_max: 0.25,
+        v_min: -0.25,
+        a_max: a_return,
+        a_min: -a_return,
+        j_max: 20.0 * a_return,
+        j_min: -20.0 * a_return,
         position_min: datasheet.travel_min_m,
         position_max: datasheet.travel_max_m,
-        ..cfg.validation.limits
     };
     for ff in variants {
         let mut c = *feedback;
@@ -70,7 +221,7 @@ pub fn validation_moves(
             &return_limits,
             &c,
             opts,
-            &cfg.validation,
+            &spec,
         )?);
     }
     let validation = Validation {
@@ -79,7 +230,22 @@ pub fn validation_moves(
         nonlinear: moves[2].summary.clone(),
     };
     let line = format!(
-        "max cart error: none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm; static (nonlinear) {:.1} um",
+        "{}; max cart error: none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm; static (nonlinear) {:.1} um",
+        if planned.reduced {
+            format!(
+                "the fastest move the axis can do {:.0} -> {:.0} mm (v <= {:.2} m/s, a <= {:.2} m/s^2; Table A.8's is beyond its torque)",
+                planned.start_m * 1e3,
+                planned.target_m * 1e3,
+                planned.limits.v_max,
+                planned.limits.a_max
+            )
+        } else {
+            format!(
+                "Table A.8 move {:.0} -> {:.0} mm",
+                planned.start_m * 1e3,
+                planned.target_m * 1e3
+            )
+        },
         validation.none.max_tracking_error_m * 1e3,
         validation.linear.max_tracking_error_m * 1e3,
         validation.nonlinear.max_tracking_error_m * 1e3,
@@ -91,5 +257,9 @@ pub fn validation_moves(
         needed: 3,
         got: 0,
     })?;
-    Ok(ValidationMoves { moves, validation })
+    Ok(ValidationMoves {
+        moves,
+        validation,
+        planned,
+    })
 }

@@ -1,0 +1,118 @@
+//! `beltune montecarlo`: the issue-12 robustness study. Generates `--plants`
+//! seeded random axes from egc70's data sheet, commissions each in
+//! simulation (in parallel, rayon), prints the table with every failure
+//! classified (correct refusal of an infeasible plant vs defect), and writes
+//! one JSON line per plant with `--out`.
+
+use beltune::procedure::commission::CommissioningConfig;
+use beltune::study::{run_plant, Class, Outcome, Ranges, Table};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use std::io::Write;
+use std::path::PathBuf;
+
+/// Arguments of `beltune montecarlo`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Number of plants.
+    #[arg(long, default_value_t = 1000)]
+    pub plants: u64,
+    /// Seed of the study (plant i of seed s is the same in every run).
+    #[arg(long, default_value_t = 12)]
+    pub seed: u64,
+    /// First plant index (to re-run a single plant: --first 824 --plants 1).
+    #[arg(long, default_value_t = 0)]
+    pub first: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Write one JSON line per plant to this file.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Run the subcommand.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.plants == 0 {
+        return Err(anyhow::Error::new(crate::exit::Failure::new(
+            crate::exit::ExitStatus::BadInput,
+            "--plants must be at least 1",
+        )));
+    }
+    let pool = {
+        let mut b = rayon::ThreadPoolBuilder::new();
+        if let Some(n) = args.threads {
+            b = b.num_threads(n);
+        }
+        b.build()?
+    };
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(args.plants)
+    };
+    bar.set_style(ProgressStyle::with_template(
+        "{bar:40} {pos}/{len} plants, {elapsed} (eta {eta}) {msg}",
+    )?);
+    let ranges = Ranges::default();
+    let cfg = CommissioningConfig::default();
+    let first = args.first;
+    let results: Vec<beltune::Result<Outcome>> = pool.install(|| {
+        (first..first + args.plants)
+            .into_par_iter()
+            .map(|i| {
+                let r = run_plant(args.seed, i, &ranges, &cfg);
+                bar.inc(1);
+                r
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    let mut outcomes = Vec::with_capacity(results.len());
+    for r in results {
+        outcomes.push(r?);
+    }
+    if let Some(path) = &args.out {
+        let mut text = String::new();
+        for o in &outcomes {
+            text.push_str(&serde_json::to_string(o)?);
+            text.push('\n');
+        }
+        beltune::io::write_atomic(path, text.as_bytes())?;
+    }
+    let table = Table::new(&outcomes);
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}", table.markdown())?;
+    for o in outcomes.iter().filter(|o| o.class != Class::Success) {
+        writeln!(
+            out,
+            "plant #{} [{}] payload {:.1} kg, tilt {:+.0} deg, c_b x{:.2}, viscous x{:.2}, Coulomb x{:.2}, noise x{:.1}, stroke {:.2} m; A.8 torque {:.2} of {:.2} N m, holding {:+.2} N m: {}{}",
+            o.index,
+            match o.class {
+                Class::Success => "success",
+                Class::CorrectRefusal => "correct refusal",
+                Class::Defect => "DEFECT",
+            },
+            o.plant.payload_kg,
+            o.plant.tilt_deg,
+            o.plant.stiffness_factor,
+            o.plant.viscous_factor,
+            o.plant.coulomb_factor,
+            o.plant.noise_factor,
+            o.plant.params.stroke_m,
+            o.feasibility.table_a8_torque_nm,
+            o.feasibility.torque_limit_nm,
+            o.feasibility.holding_nm,
+            if o.message.is_empty() { "(no message)" } else { &o.message },
+            if o.travel_violation {
+                format!("; the cart left the window by {:.1} mm", o.travel_excess_m * 1e3)
+            } else {
+                String::new()
+            }
+        )?;
+    }
+    Ok(())
+}
