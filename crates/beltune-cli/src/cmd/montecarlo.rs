@@ -32,6 +32,9 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Commission with the robust redesign after the friction runs.
+    #[arg(long)]
+    pub robust: bool,
 }
 
 /// Run the subcommand.
@@ -58,7 +61,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "{bar:40} {pos}/{len} plants, {elapsed} (eta {eta}) {msg}",
     )?);
     let ranges = Ranges::default();
-    let cfg = CommissioningConfig::default();
+    let cfg = CommissioningConfig {
+        robust_design: args.robust,
+        ..CommissioningConfig::default()
+    };
     let first = args.first;
     let results: Vec<beltune::Result<Outcome>> = pool.install(|| {
         (first..first + args.plants)

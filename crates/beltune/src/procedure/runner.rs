@@ -16,6 +16,10 @@ use beltune_rt::trajectory::{Limits, State, Trajectory};
 const SUPERVISION_T_R_S: f64 = 2e-3;
 /// How long the axis is held after a stop trajectory, s.
 const STOP_SETTLE_S: f64 = 0.2;
+/// Speed below which a stopped axis counts as at rest, m/s.
+const STOP_REST_SPEED_M_S: f64 = 1e-3;
+/// Longest extra hold after a stop's settling time, s.
+const STOP_REST_MAX_S: f64 = 1.0;
 /// Window of each of the two moving averages of the rigid-body velocity
 /// estimate used in open-loop stages, s (see [`RigidVelocity`]).
 const RIGID_VELOCITY_WINDOW_S: f64 = 20e-3;
@@ -335,7 +339,14 @@ impl<'a> Runner<'a> {
         ctrl.reset_to(self.motor_angle_rad());
         let n = ((traj.duration_s() + STOP_SETTLE_S) / ts).ceil() as u64;
         let limit = self.info.torque_limit_nm;
-        for k in 0..n {
+        // Hold on after the settling time until the axis is at rest (an
+        // open-loop stop starts from the rigid-body velocity, which lags a
+        // hard acceleration), at most STOP_REST_MAX_S longer.
+        let extra = (STOP_REST_MAX_S / ts).ceil() as u64;
+        for k in 0..n + extra {
+            if k >= n && self.velocity_m_s.abs() < STOP_REST_SPEED_M_S {
+                break;
+            }
             let s = traj.sample(k as f64 * ts);
             let sp = Setpoint::at(MotionSample {
                 angle_rad: self.position_to_angle_rad(s.position),

@@ -149,8 +149,9 @@ impl std::fmt::Display for Violation {
 /// `tau_h` (gravity) and a stop budget `beta T_max` of the torque limit, the
 /// command while braking a move towards +x is `tau_h - J a / i_t` and towards
 /// -x `tau_h + J a / i_t`; both must stay within `beta T_max`, so
-/// `a_+ = (beta T_max + tau_h) i_t / J` and `a_- = (beta T_max - tau_h) i_t / J`
-/// (friction, which helps the stop, counted at half its estimate). See
+/// `a_+ = min(gamma T_max + tau_h, beta T_max) i_t / J` and
+/// `a_- = min(gamma T_max - tau_h, beta T_max) i_t / J` with the total command
+/// fraction `gamma` (friction, which helps the stop, counted at half its estimate). See
 /// [`StopCapability::from_axis`].
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StopCapability {
@@ -166,6 +167,12 @@ pub struct StopCapability {
 /// Fraction of the torque limit a stop may use (the rest is margin for the
 /// loop's transient and the model's errors).
 pub const STOP_TORQUE_FRACTION: f64 = 0.6;
+/// Fraction of the torque limit the stop's command may reach in total,
+/// gravity compensation included.
+pub const STOP_COMMAND_FRACTION: f64 = 0.9;
+/// Smallest braking torque, as a fraction of the limit, with which an axis is
+/// still commissioned (below it: [`Error::Infeasible`]).
+pub const STOP_MIN_FRACTION: f64 = 0.15;
 /// Largest stop deceleration used, m/s^2 (a stop need not be violent).
 pub const STOP_DECELERATION_MAX_M_S2: f64 = 20.0;
 /// Jerk of the stop trajectory relative to its deceleration, 1/s.
@@ -203,11 +210,15 @@ impl StopCapability {
         let friction = 0.5 * coulomb_nm.max(0.0);
         let budget = STOP_TORQUE_FRACTION * torque_max_nm;
         let a = |tau: f64| (tau * i_t_m / inertia_kg_m2).min(STOP_DECELERATION_MAX_M_S2);
-        let pos = budget + holding_nm + friction;
-        let neg = budget - holding_nm + friction;
-        // A stop that needs more than three quarters of its budget for gravity
-        // leaves too little to brake.
-        if pos.min(neg) < 0.25 * budget {
+        // The stop may command up to STOP_COMMAND_FRACTION of the limit in
+        // total (gravity compensation included) and brakes with at most the
+        // stop budget: on a level axis `beta T_max`, downhill what gravity leaves.
+        let total = STOP_COMMAND_FRACTION * torque_max_nm;
+        let pos = (total + holding_nm + friction).min(budget);
+        let neg = (total - holding_nm + friction).min(budget);
+        // A load that leaves less than STOP_MIN_FRACTION of the limit to brake
+        // downhill cannot be stopped reliably.
+        if pos.min(neg) < STOP_MIN_FRACTION * torque_max_nm {
             return Err(Error::Infeasible {
                 reason: format!(
                     "the axis needs {:.3} N m to hold its load, too much of the torque limit {:.3} N m to stop it safely in both directions",
@@ -460,8 +471,9 @@ mod tests {
         let hold = 1.0; // gravity pulls towards -x
         let c = StopCapability::from_axis(t_max, j, i_t, hold, 0.0).unwrap();
         let budget = STOP_TORQUE_FRACTION * t_max;
-        let expect_pos = ((budget + hold) * i_t / j).min(STOP_DECELERATION_MAX_M_S2);
-        let expect_neg = (budget - hold) * i_t / j;
+        let total = STOP_COMMAND_FRACTION * t_max;
+        let expect_pos = ((total + hold).min(budget) * i_t / j).min(STOP_DECELERATION_MAX_M_S2);
+        let expect_neg = (total - hold).min(budget) * i_t / j;
         assert!((c.deceleration_positive_m_s2 - expect_pos).abs() < 1e-12);
         assert!((c.deceleration_negative_m_s2 - expect_neg).abs() < 1e-12);
         assert!(c.deceleration_negative_m_s2 < c.deceleration_positive_m_s2);
@@ -473,7 +485,7 @@ mod tests {
         assert!(s.stopping_distance_m(-0.5) > level.stopping_distance_m(-0.5));
         // a load that takes most of the stop budget is refused
         assert!(matches!(
-            StopCapability::from_axis(t_max, j, i_t, 0.8 * budget, 0.0),
+            StopCapability::from_axis(t_max, j, i_t, 0.8 * t_max, 0.0),
             Err(Error::Infeasible { .. })
         ));
         assert!(StopCapability::from_axis(t_max, j, i_t, f64::NAN, 0.0).is_err());

@@ -17,9 +17,9 @@ pub const STATIC_WINDOW_S: f64 = 0.1;
 
 /// The return to the validation start stops this far inside the window
 /// before it creeps to the start, m.
-pub const APPROACH_DISTANCE_M: f64 = 0.02;
+pub const APPROACH_DISTANCE_M: f64 = 0.015;
 /// Speed of the creep to the validation start, m/s.
-pub const CREEP_SPEED_M_S: f64 = 0.02;
+pub const CREEP_SPEED_M_S: f64 = 0.2;
 
 /// The validation move.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,7 +36,7 @@ pub struct MoveSpec {
 
 impl Default for MoveSpec {
     /// The thesis move 0 -> 0.5 m with Table A.8: j 40 m/s^3, a 45 m/s^2,
-    /// v 5 m/s, positions -0.01 .. 0.57 m; 0.4 s recorded after the move.
+    /// v 5 m/s, positions -0.01 .. 0.57 m; 1.0 s recorded after the move.
     fn default() -> Self {
         MoveSpec {
             start_m: 0.0,
@@ -161,18 +161,18 @@ pub fn run_move(
         };
         let approach = spec.start_m + inside * APPROACH_DISTANCE_M;
         if (runner.position_m() - approach).abs() > 1e-4 {
-            move_to(runner, positioning, approach, positioning_limits, 0.1)?;
+            move_to(runner, positioning, approach, positioning_limits, 0.0)?;
         }
         let creep = Limits {
             v_max: CREEP_SPEED_M_S,
             v_min: -CREEP_SPEED_M_S,
-            a_max: positioning_limits.a_max.min(0.5),
-            a_min: -positioning_limits.a_max.min(0.5),
-            j_max: positioning_limits.j_max.min(5.0),
-            j_min: -positioning_limits.j_max.min(5.0),
+            a_max: positioning_limits.a_max.min(2.0),
+            a_min: -positioning_limits.a_max.min(2.0),
+            j_max: positioning_limits.j_max.min(40.0),
+            j_min: -positioning_limits.j_max.min(40.0),
             ..*positioning_limits
         };
-        move_to(runner, positioning, spec.start_m, &creep, 0.15)?;
+        move_to(runner, positioning, spec.start_m, &creep, 0.02)?;
     }
     let traj = Trajectory::plan(
         &State::at_rest(runner.position_m()),

@@ -58,7 +58,7 @@ pub fn design_stage(
 }
 
 /// Guaranteed velocity phase margin the robust redesign aims for, deg.
-pub const ROBUST_PHASE_MARGIN_DEG: f64 = 45.0;
+pub const ROBUST_PHASE_MARGIN_DEG: f64 = 35.0;
 
 /// The prefilters the robust redesign tries besides the configured one:
 /// stronger Butterworth attenuation and notches of growing width at the
@@ -93,8 +93,10 @@ pub fn robust_design(
 ) -> Result<(
     ControllerDesign,
     crate::procedure::verdict::GuaranteedMargins,
+    String,
 )> {
     use crate::procedure::verdict::guaranteed_margins;
+    let mut tried = Vec::new();
     let input = DesignInput {
         model: *bounded,
         ..first.input
@@ -121,6 +123,13 @@ pub fn robust_design(
         let Ok(g) = guaranteed_margins(&d, bounded, m_c_sigma_kg, c_sigma_n_per_m) else {
             continue;
         };
+        tried.push(format!(
+            "{:?} {:.0} dB {:.1} Hz {:.0} deg",
+            d.knobs.prefilter,
+            d.knobs.attenuation_db(),
+            d.velocity_margins.crossover_rad_s / (2.0 * std::f64::consts::PI),
+            g.velocity_phase_margin_deg
+        ));
         let ok = |g: &crate::procedure::verdict::GuaranteedMargins| {
             g.velocity_phase_margin_deg >= ROBUST_PHASE_MARGIN_DEG
                 && g.position_phase_margin_deg >= ROBUST_PHASE_MARGIN_DEG
@@ -140,9 +149,10 @@ pub fn robust_design(
             best = Some((d, g));
         }
     }
-    best.ok_or_else(|| crate::Error::Infeasible {
+    let (d, g) = best.ok_or_else(|| crate::Error::Infeasible {
         reason: "no controller design exists for the identified model".into(),
-    })
+    })?;
+    Ok((d, g, tried.join(", ")))
 }
 
 /// The identified model with its motor and cart damping `d_m`, `d_c`

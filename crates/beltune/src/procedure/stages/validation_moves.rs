@@ -24,7 +24,7 @@ pub struct ValidationMoves {
 
 /// Fraction of the torque limit the validation move may use for
 /// acceleration, gravity and friction together (the rest is the feedback's).
-pub const MOVE_TORQUE_FRACTION: f64 = 0.8;
+pub const MOVE_TORQUE_FRACTION: f64 = 0.9;
 /// Distance the validation start keeps from the window's lower edge, m.
 const START_CLEARANCE_M: f64 = 0.01;
 /// Distance the validation target keeps from the window's upper edge, m
@@ -190,24 +190,16 @@ pub fn validation_moves(
         ..cfg.validation
     };
     // The unmeasured return to the start runs without feedforward under the
-    // feedback alone: slowly (a quarter of the positioning speed, at most
-    // half the stop deceleration), so that the soft loop cannot overshoot the
-    // window edge 10 mm behind the start (issue 12).
-    let a_return = (0.5
-        * st.runner
-            .supervisor()
-            .capability()
-            .worst_deceleration_m_s2())
-    .min(2.0);
+    // feedback alone, with the limits of the move fitted to the axis, to a
+    // point 15 mm inside the window from which it creeps to the start
+    // ([`super::super::validation::run_move`]): the soft loop's overshoot
+    // ends before that point, never at the window edge 10 mm behind the
+    // start (issue 12: at Table A.8's dynamics straight to the start it
+    // overshot into the edge).
     let return_limits = Limits {
-        v_max: 0.25,
-        v_min: -0.25,
-        a_max: a_return,
-        a_min: -a_return,
-        j_max: 20.0 * a_return,
-        j_min: -20.0 * a_return,
         position_min: datasheet.travel_min_m,
         position_max: datasheet.travel_max_m,
+        ..planned.limits
     };
     for ff in variants {
         let mut c = *feedback;
