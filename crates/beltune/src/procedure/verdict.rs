@@ -165,6 +165,11 @@ pub fn guaranteed_margins(
     Ok(out)
 }
 
+/// `x < limit`, false for NaN.
+fn below(x: f64, limit: f64) -> bool {
+    x.partial_cmp(&limit) == Some(std::cmp::Ordering::Less)
+}
+
 /// Judge a finished commissioning: the nonlinear-feedforward move against the
 /// thesis' limits, saturation against `torque_max_nm`, the guaranteed margins.
 pub fn judge(
@@ -174,14 +179,14 @@ pub fn judge(
     reduced_move: bool,
 ) -> Verdict {
     let mut failures = Vec::new();
-    if !(nonlinear.max_tracking_error_m < MAX_TRACKING_ERROR_M) {
+    if !below(nonlinear.max_tracking_error_m, MAX_TRACKING_ERROR_M) {
         failures.push(format!(
             "max cart error {:.3} mm is not below {:.1} mm",
             nonlinear.max_tracking_error_m * 1e3,
             MAX_TRACKING_ERROR_M * 1e3
         ));
     }
-    if !(nonlinear.static_error_m < MAX_STATIC_ERROR_M) {
+    if !below(nonlinear.static_error_m, MAX_STATIC_ERROR_M) {
         failures.push(format!(
             "static error {:.1} um is not below {:.0} um",
             nonlinear.static_error_m * 1e6,
@@ -197,7 +202,11 @@ pub fn judge(
         ));
     }
     let mut warnings = Vec::new();
-    if !(guaranteed.velocity_phase_margin_deg >= MIN_GUARANTEED_PHASE_MARGIN_DEG) {
+    if below(
+        guaranteed.velocity_phase_margin_deg,
+        MIN_GUARANTEED_PHASE_MARGIN_DEG,
+    ) || guaranteed.velocity_phase_margin_deg.is_nan()
+    {
         warnings.push(format!(
             "the velocity loop's phase margin over the identification's uncertainty is {:.1} deg, below {:.0} deg",
             guaranteed.velocity_phase_margin_deg, MIN_GUARANTEED_PHASE_MARGIN_DEG

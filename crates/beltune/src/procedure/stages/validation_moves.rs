@@ -64,7 +64,7 @@ pub fn plan_validation_move(
 ) -> Result<PlannedMove> {
     let start = spec.start_m.max(ds.travel_min_m + START_CLEARANCE_M);
     let target = spec.target_m.min(ds.travel_max_m - TARGET_CLEARANCE_M);
-    if !(target - start > 0.05) {
+    if (target - start).partial_cmp(&0.05) != Some(std::cmp::Ordering::Greater) {
         return Err(Error::Infeasible {
             reason: format!(
                 "the travel window [{:.0}, {:.0}] mm leaves no room for a validation move",
@@ -81,7 +81,7 @@ pub fn plan_validation_move(
     // Torque left after gravity and Coulomb friction; viscous friction at
     // the move's top speed and the acceleration share it.
     let budget = MOVE_TORQUE_FRACTION * torque_max_nm - holding_nm.abs() - friction.coulomb.abs();
-    if !(budget > 0.0) {
+    if budget.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(Error::Infeasible {
             reason: format!(
                 "gravity and friction take {:.3} N m of the torque limit {torque_max_nm:.3} N m: the axis cannot accelerate",
