@@ -6,11 +6,11 @@
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AxisInfo {
     /// Sampling time of the drive's control loop, s (thesis: 100 us).
-    pub sample_time_s: f64,
+    pub ts_s: f64,
     /// Motor angle per encoder count, rad/count.
     pub motor_rad_per_count: f64,
     /// Largest torque command the drive accepts, N m (commands beyond are saturated).
-    pub torque_limit_nm: f64,
+    pub torque_max_nm: f64,
 }
 
 /// What the drive measures in one sample.

@@ -111,7 +111,7 @@ impl DataSheet {
             origin_m,
             travel_min_m: lo,
             travel_max_m: hi,
-            torque_max_nm: plant.info().torque_limit_nm,
+            torque_max_nm: plant.info().torque_max_nm,
             velocity_max_m_s: 2.5,
         }
     }
@@ -291,8 +291,8 @@ pub fn commission(
     progress.stage_started("plausibility", 0);
     datasheet.validate()?;
     let info = axis.info();
-    let ts = info.sample_time_s;
-    let torque_max = datasheet.torque_max_nm.min(info.torque_limit_nm);
+    let ts = info.ts_s;
+    let torque_max = datasheet.torque_max_nm.min(info.torque_max_nm);
     let j_ds = datasheet.rigid_inertia();
     let limits = SafetyLimits {
         travel_min_m: datasheet.travel_min_m,
@@ -420,7 +420,7 @@ pub fn commission(
     let t0 = Instant::now();
     let f_max = 0.4 / ts; // below 0.4 f_s: the PRBS spectrum and the Tustin/ZOH effects stay mild
     let ecfg = EtfeConfig {
-        sample_time_s: ts,
+        ts_s: ts,
         period_samples: period,
         skip_periods: ex.skip_periods,
         integrator: true,
@@ -508,7 +508,7 @@ pub fn commission(
     let t0 = Instant::now();
     let mut friction_fit = fit_constant_velocity(&points)?;
     let linear_fit = fit_viscous_only(&points)?;
-    if friction_fit.coulomb_nm < 0.0 || friction_fit.viscous_nms_per_rad < 0.0 {
+    if friction_fit.coulomb_nm < 0.0 || friction_fit.viscous_nm_s_per_rad < 0.0 {
         // A physical friction model has both terms >= 0; a negative Coulomb
         // term means the runs show none (a purely viscous axis).
         friction_fit = FrictionFit {
@@ -521,25 +521,25 @@ pub fn commission(
         / points.len().max(1) as f64)
         .sqrt();
     let friction = FrictionResult {
-        viscous: friction_fit.viscous_nms_per_rad.max(0.0),
-        coulomb: friction_fit.coulomb_nm,
-        linear_viscous: linear_fit.viscous_nms_per_rad.max(0.0),
+        viscous_nm_s_per_rad: friction_fit.viscous_nm_s_per_rad.max(0.0),
+        coulomb_nm: friction_fit.coulomb_nm,
+        linear_viscous_nm_s_per_rad: linear_fit.viscous_nm_s_per_rad.max(0.0),
         relative_residual: friction_fit.rms_residual_nm / torque_rms.max(f64::MIN_POSITIVE),
         holding_torque_nm: holding,
     };
     let line = format!(
         "d_v {:.3e} N m s/rad, tau_c {:.4} N m (viscous-only fit {:.3e}), {} runs, residual {:.3}",
-        friction.viscous,
-        friction.coulomb,
-        friction.linear_viscous,
+        friction.viscous_nm_s_per_rad,
+        friction.coulomb_nm,
+        friction.linear_viscous_nm_s_per_rad,
         points.len(),
         friction.relative_residual
     );
     st.finish("friction", line);
     let input = DesignInput {
         friction: Some(FrictionParams {
-            viscous_n_m_s_per_rad: friction.viscous,
-            coulomb_n_m: friction.coulomb,
+            viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+            coulomb_nm: friction.coulomb_nm,
         }),
         ..input
     };
@@ -553,8 +553,8 @@ pub fn commission(
     let m_e = p.rigid_inertia();
     let variants = [
         Feedforward::none(),
-        Feedforward::linear(m_e, friction.linear_viscous),
-        Feedforward::nonlinear(m_e, friction.viscous, friction.coulomb),
+        Feedforward::linear(m_e, friction.linear_viscous_nm_s_per_rad),
+        Feedforward::nonlinear(m_e, friction.viscous_nm_s_per_rad, friction.coulomb_nm),
     ];
     let opts = TrackOptions {
         preview_samples: n_t,
@@ -646,7 +646,7 @@ pub fn cascade_from_design(
 /// Hold the current position with `ctrl` for `duration_s` (no following-error
 /// check: the load may sag while the integrator takes it).
 fn hold(runner: &mut Runner, ctrl: &CascadeConfig<f64>, duration_s: f64) -> Result<Vec<Sample>> {
-    let ts = runner.info().sample_time_s;
+    let ts = runner.info().ts_s;
     let mut c = CascadeController::new(*ctrl)?;
     let target = runner.motor_angle_rad();
     c.reset_to(target);
