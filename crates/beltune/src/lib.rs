@@ -28,5 +28,6 @@ pub mod procedure;
 pub mod provenance;
 pub mod report;
 pub mod sim;
+pub mod units;
 
 pub use error::{Error, Result};

@@ -3,11 +3,12 @@
 //! validation and the report; or, with `--csv`, from data recorded on a real
 //! drive (the stages that need the axis are skipped).
 
+use crate::exit::{ExitStatus, Failure};
 use crate::progress::BarProgress;
 use anyhow::Context;
 use beltune::design::DesignKnobs;
 use beltune::ident::{
-    identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig,
+    identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig, ModelUnits,
     MotionFrictionConfig, RecordedExcitation,
 };
 use beltune::model::rigs::{self, Plant};
@@ -17,6 +18,7 @@ use beltune::procedure::outputs::{
 };
 use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
+use beltune::provenance::Provenance;
 use beltune::report::render_html;
 use beltune::sim::{SimAxis, SimConfig};
 use std::path::PathBuf;
@@ -85,10 +87,15 @@ pub struct Args {
     /// Recorded data: transmission i_t in m/rad.
     #[arg(long, default_value_t = 1.0)]
     pub transmission: f64,
-    /// Recorded data: the drive's torque limit, in the unit of the input column
-    /// (N m, or A for a current record), written to controller.toml.
-    #[arg(long, default_value_t = 3.1)]
-    pub torque_limit: f64,
+    /// Recorded data (required): the drive's torque limit, in the unit of the
+    /// input column (N m, or A with --current-units), written to controller.toml.
+    /// The record's peak is not a limit, so there is no default.
+    #[arg(long)]
+    pub torque_limit: Option<f64>,
+    /// Recorded data: the input column is a motor current in A (torque constant
+    /// unknown): model, gains and limits in current units (A s/rad, A).
+    #[arg(long)]
+    pub current_units: bool,
     /// Recorded data: a CSV of any motion for the friction regression (same time column name).
     #[arg(long, requires_all = ["friction_torque", "friction_position"])]
     pub friction_csv: Option<PathBuf>,
@@ -134,8 +141,24 @@ fn load_plant(args: &Args) -> anyhow::Result<Plant> {
 
 /// Commission from recorded data (`--csv`).
 fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyhow::Result<()> {
+    let bad = |m: String| anyhow::Error::new(Failure::new(ExitStatus::BadInput, m));
     let (Some(input), Some(output)) = (&args.input, &args.output) else {
-        anyhow::bail!("--csv needs --input and --output column names");
+        return Err(bad("--csv needs --input and --output column names".into()));
+    };
+    let unit = if args.current_units { "A" } else { "N m" };
+    let torque_max = match args.torque_limit {
+        Some(t) if t.is_finite() && t > 0.0 => t,
+        Some(t) => return Err(bad(format!("--torque-limit {t}: must be a positive number ({unit})"))),
+        None => {
+            return Err(bad(format!(
+                "--csv needs --torque-limit: the drive's torque limit in {unit} (the record's peak is not a limit)"
+            )))
+        }
+    };
+    let units = if args.current_units {
+        ModelUnits::Current
+    } else {
+        ModelUnits::Torque
     };
     let id = identify_recorded(&RecordedExcitation {
         csv,
@@ -150,6 +173,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
             theta_e: args.inertia,
             free_inertia: args.inertia.is_none(),
             i_t: args.transmission,
+            units,
             ..FitConfig::default()
         },
     })?;
@@ -178,9 +202,10 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     };
     let run = commission_recorded(id, friction, knobs, 2e-3)?;
     let source = csv.display().to_string();
-    let (json, report) = recorded_outputs(&run, &source);
+    let provenance = Provenance::of_this_process(None);
+    let (json, report) = recorded_outputs(&run, &source, torque_max, provenance.clone());
     let friction = run.friction.clone().unwrap_or_default();
-    let toml = controller_toml(&run.design, &friction, args.torque_limit)?;
+    let toml = controller_toml(&run.design, &friction, torque_max, units, provenance)?;
     let html = render_html(&report)?;
     let files = write_outputs(&args.out, &json, &toml, &html)?;
     if !args.quiet {
@@ -235,8 +260,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         coulomb_nm: friction.coulomb_nm,
     };
     let name = args.plant.clone();
-    let json = commissioning_json(&run, &name, Some(truth.clone()));
-    let toml = controller_toml(&run.design, &run.friction, ds.torque_max_nm)?;
+    let provenance = Provenance::of_this_process(Some(args.seed));
+    let json = commissioning_json(&run, &name, Some(truth.clone()), provenance.clone());
+    let toml = controller_toml(
+        &run.design,
+        &run.friction,
+        ds.torque_max_nm,
+        ModelUnits::Torque,
+        provenance,
+    )?;
     let before = match &plant {
         Plant::Physical(p) => Some(p.linearize(run.identification_position_m)?),
         Plant::Linear(_) => None,
