@@ -37,6 +37,10 @@ enum Command {
     Commission(cmd::commission::Args),
     /// Serve the interactive tuning page.
     Serve(cmd::serve::Args),
+    /// Export a controller.toml as firmware source (Rust module or C header).
+    Export(cmd::export::Args),
+    /// Write an excitation signal (PRBS, chirp, multisine) to play on another drive.
+    Excitation(cmd::excitation::Args),
 }
 
 /// A command that prints to a pipe whose reader went away (`beltune ... | head`)
@@ -65,6 +69,8 @@ fn main() {
         Command::Design(a) => cmd::design::run(a),
         Command::Commission(a) => cmd::commission::run(a),
         Command::Serve(a) => cmd::serve::run(a),
+        Command::Export(a) => cmd::export::run(a),
+        Command::Excitation(a) => cmd::excitation::run(a),
     };
     if let Err(e) = result {
         // One line: the whole cause chain joined, no backtrace.

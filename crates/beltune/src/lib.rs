@@ -19,6 +19,7 @@
 
 pub mod design;
 pub mod error;
+pub mod export;
 pub mod ident;
 pub mod io;
 pub mod lti;
