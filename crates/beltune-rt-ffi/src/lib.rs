@@ -44,12 +44,15 @@ pub const BT_ANTI_WINDUP_CONDITIONAL: u32 = 0;
 /// [`BtCascadeConfig::anti_windup`]: plain integration (6.25).
 pub const BT_ANTI_WINDUP_OFF: u32 = 1;
 
-/// Bytes of opaque storage in [`BtCascade`].
-pub const BT_CASCADE_BYTES: usize = 512;
-/// Bytes of opaque storage in [`BtTrajectory`].
-pub const BT_TRAJECTORY_BYTES: usize = 768;
-/// Bytes of opaque storage in [`BtSetpointConversion`].
-pub const BT_SETPOINT_BYTES: usize = 64;
+/// 8-byte words of opaque storage in [`BtCascade`].
+pub const BT_CASCADE_WORDS: usize = 64;
+/// 8-byte words of opaque storage in [`BtTrajectory`].
+pub const BT_TRAJECTORY_WORDS: usize = 96;
+/// 8-byte words of opaque storage in [`BtSetpointConversion`].
+pub const BT_SETPOINT_WORDS: usize = 8;
+const BT_CASCADE_BYTES: usize = 8 * BT_CASCADE_WORDS;
+const BT_TRAJECTORY_BYTES: usize = 8 * BT_TRAJECTORY_WORDS;
+const BT_SETPOINT_BYTES: usize = 8 * BT_SETPOINT_WORDS;
 
 const MAGIC: u64 = 0x6265_6c74_756e_6531; // "beltune1"
 
@@ -299,25 +302,32 @@ pub struct BtSetpointConfig {
     pub c_n_per_m: f64,
 }
 
-/// Opaque storage of a controller (initialize with [`bt_cascade_init`]).
+/// Opaque storage of a controller (initialize with [`bt_cascade_init`]); e.g. a
+/// zero-initialized static variable.
 #[repr(C)]
 pub struct BtCascade {
-    magic: u64,
-    storage: [u64; BT_CASCADE_BYTES / 8],
+    /// Set by the initialization; do not touch.
+    pub magic: u64,
+    /// The Rust object; do not touch.
+    pub storage: [u64; BT_CASCADE_WORDS],
 }
 
 /// Opaque storage of a trajectory (initialize with [`bt_trajectory_plan`]).
 #[repr(C)]
 pub struct BtTrajectory {
-    magic: u64,
-    storage: [u64; BT_TRAJECTORY_BYTES / 8],
+    /// Set by the initialization; do not touch.
+    pub magic: u64,
+    /// The Rust object; do not touch.
+    pub storage: [u64; BT_TRAJECTORY_WORDS],
 }
 
 /// Opaque storage of a setpoint conversion (initialize with [`bt_setpoint_init`]).
 #[repr(C)]
 pub struct BtSetpointConversion {
-    magic: u64,
-    storage: [u64; BT_SETPOINT_BYTES / 8],
+    /// Set by the initialization; do not touch.
+    pub magic: u64,
+    /// The Rust object; do not touch.
+    pub storage: [u64; BT_SETPOINT_WORDS],
 }
 
 macro_rules! opaque {
@@ -650,7 +660,7 @@ mod tests {
     fn null_and_uninitialized_are_errors_not_crashes() {
         let mut c = BtCascade {
             magic: 0,
-            storage: [0; BT_CASCADE_BYTES / 8],
+            storage: [0; BT_CASCADE_WORDS],
         };
         let sp = BtSetpoint::default();
         // SAFETY: valid pointers or null.
