@@ -43,11 +43,11 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub kind: Kind,
     /// Sampling time of the drive that plays it, s.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub ts: f64,
     /// Amplitude in the unit of the drive's setpoint (N m or A): PRBS peak to
     /// peak (+-A/2), chirp peak, multisine peak per line.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub amplitude: f64,
     /// PRBS order n_PRBS (2..=20).
     #[arg(long, default_value_t = 9)]
