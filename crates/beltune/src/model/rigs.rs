@@ -61,16 +61,16 @@ impl LinearPlant {
         crate::error::require_non_negative("dead_time_s", self.dead_time_s)?;
         crate::error::require_positive("torque_limit_nm", self.torque_limit_nm)?;
         crate::error::require_positive("motor_rad_per_count", self.motor_rad_per_count)?;
-        crate::error::require_positive("sample_time_s", self.sample_time_s)?;
+        crate::error::require_range(
+            "torque_limit_nm",
+            self.torque_limit_nm,
+            0.0,
+            super::params::bounds::TORQUE_MAX_NM,
+        )?;
+        crate::error::require_range("motor_rad_per_count", self.motor_rad_per_count, 1e-9, 1.0)?;
+        super::params::check_sample_time(self.sample_time_s)?;
         if self.dead_time_s > 1.0 {
             return Err(Error::invalid("dead_time_s", self.dead_time_s, "above 1 s"));
-        }
-        if self.sample_time_s > 0.1 {
-            return Err(Error::invalid(
-                "sample_time_s",
-                self.sample_time_s,
-                "above 100 ms",
-            ));
         }
         Ok(())
     }
@@ -326,10 +326,7 @@ pub fn load_toml(path: &Path) -> Result<Plant> {
     let file = path.display().to_string();
     // `Error::Parse` rather than `Error::Io`: the CLI prints the cause chain,
     // and `Io` would repeat its source.
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Parse {
-        path: file.clone(),
-        message: format!("cannot read the plant file: {e}"),
-    })?;
+    let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
     let plant: Plant = toml::from_str(&text).map_err(|e| Error::Parse {
         path: file.clone(),
         message: e.message().to_string()
