@@ -148,13 +148,10 @@ pub fn check_readable_file(path: &Path, limit: u64) -> Result<()> {
     Ok(())
 }
 
-/// An I/O error's text without the "(os error N)" suffix.
+/// An I/O error's text, once (the error is not kept as a source, so that
+/// the one-line message does not repeat it).
 pub fn describe(e: &std::io::Error) -> String {
-    let s = e.to_string();
-    match s.find(" (os error") {
-        Some(i) => s[..i].to_string(),
-        None => s,
-    }
+    e.to_string()
 }
 
 /// A reader of at most `limit` bytes: reading more is an error naming `path`.

@@ -230,6 +230,7 @@ fn check_flag(flag: &str, v: Option<f64>, lo: f64, hi: f64, open: bool) -> anyho
             } else {
                 format!("[{lo}, {hi}]")
             };
+            let v = beltune::error::short_number(v);
             return Err(bad(format!("{flag} {v} is out of range {range}")));
         }
     }
@@ -243,9 +244,11 @@ fn load_plant(args: &Args) -> anyhow::Result<Plant> {
     if let Some(tilt) = args.tilt {
         match &mut plant {
             Plant::Physical(pp) => pp.tilt_rad = tilt.to_radians(),
-            Plant::Linear(_) => return Err(bad(format!(
+            Plant::Linear(_) => {
+                return Err(bad(format!(
                 "--tilt applies to physical plants only; `{name}` is a linear set without gravity"
-            ))),
+            )))
+            }
         }
     }
     plant.validate()?;

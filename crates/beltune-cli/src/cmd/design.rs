@@ -40,7 +40,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Err(e) = beltune::model::params::check_sample_time(args.ts) {
         return Err(anyhow::Error::new(crate::exit::Failure::new(
             crate::exit::ExitStatus::BadInput,
-            format!("--ts {}: {}", args.ts, e),
+            format!("--ts {}: {}", beltune::error::short_number(args.ts), e),
         )));
     }
     if let Some(out) = &args.json {

@@ -120,7 +120,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             if !(v.is_finite() && v > 0.0 && v <= 1e3) {
                 return Err(anyhow::Error::new(crate::exit::Failure::new(
                     crate::exit::ExitStatus::BadInput,
-                    format!("{flag} {v} is out of range (0, 1000]"),
+                    format!(
+                        "{flag} {} is out of range (0, 1000]",
+                        beltune::error::short_number(v)
+                    ),
                 )));
             }
         }

@@ -403,7 +403,7 @@ impl PhysicalParams {
 /// quantity (frequencies, inertia ratio) is finite.
 pub mod bounds {
     /// Smallest motor-side or pulley inertia, kg m^2.
-    pub const INERTIA_MIN_KG_M2: f64 = 1e-9;
+    pub const INERTIA_MIN_KG_M2: f64 = 1e-12;
     /// Largest inertia, kg m^2.
     pub const INERTIA_MAX_KG_M2: f64 = 10.0;
     /// Smallest cart mass, kg.
