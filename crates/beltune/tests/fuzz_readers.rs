@@ -3,8 +3,8 @@
 //! return a non-finite number; every input either gives a finite result or
 //! a typed error.
 //!
-//! Bounded for the test suite: the case counts below keep the four targets
-//! within about 30 s together in the dev profile (opt-level 2). A longer run:
+//! Bounded for the test suite: the case counts below keep the targets within
+//! about 30 s together in the dev profile (opt-level 2). A longer run:
 //! `PROPTEST_CASES=20000 cargo test -p beltune --test fuzz_readers`.
 
 use beltune::design::{design, DesignKnobs, ModelFile, PrefilterKind};
@@ -13,6 +13,18 @@ use beltune::model::rigs::{egc70_params, load_toml};
 use beltune::model::Plant;
 use proptest::prelude::*;
 use std::path::PathBuf;
+
+/// `n` cases, or `PROPTEST_CASES` when set (a longer run).
+fn cases(n: u32) -> ProptestConfig {
+    let n = std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(n);
+    ProptestConfig {
+        cases: n,
+        ..ProptestConfig::default()
+    }
+}
 
 /// A scratch file unique to this process and test.
 fn scratch(name: &str) -> PathBuf {
@@ -75,7 +87,7 @@ fn check_columns(cols: &beltune::ident::CsvColumns) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+    #![proptest_config(cases(3000))]
 
     /// Arbitrary bytes as a CSV file.
     #[test]
@@ -133,7 +145,7 @@ fn mutated_plant(key_index: usize, value: &str) -> String {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+    #![proptest_config(cases(2000))]
 
     /// A plant file with one value replaced: either a typed error, or a plant
     /// whose derived quantities are finite and whose simulator starts.
@@ -203,7 +215,7 @@ fn model_text(values: &[f64; 8], json: bool) -> String {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    #![proptest_config(cases(400))]
 
     /// Model files: parse errors or models whose design is finite or a typed error.
     #[test]
