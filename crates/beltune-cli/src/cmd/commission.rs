@@ -232,8 +232,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         m_c: truth_params.m_c,
         c: truth_params.c,
         dead_time_s: plant.dead_time_s(),
-        viscous: friction.viscous_nm_s_per_rad,
-        coulomb: friction.coulomb_nm,
+        viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+        coulomb_nm: friction.coulomb_nm,
     };
     let name = args.plant.clone();
     let json = commissioning_json(&run, &name, Some(truth.clone()));

@@ -17,7 +17,7 @@
 //! the configuration, the result and the order of the stages.
 //! Every setting is in seconds, hertz or SI units, never in samples: the
 //! sample counts are derived for the axis' cycle time
-//! ([`crate::plant::AxisInfo::sample_time_s`]), so the same configuration
+//! ([`crate::plant::AxisInfo::ts_s`]), so the same configuration
 //! commissions a 10 kHz simulator and a 1 kHz fieldbus master.
 
 use super::progress::Progress;
@@ -112,7 +112,7 @@ impl DataSheet {
             origin_m,
             travel_min_m: lo,
             travel_max_m: hi,
-            torque_max_nm: plant.info().torque_limit_nm,
+            torque_max_nm: plant.info().torque_max_nm,
             velocity_max_m_s: 2.5,
         }
     }
@@ -306,7 +306,7 @@ pub fn commission(
     // ---- 1. plausibility ----
     progress.stage_started("plausibility", 0);
     let info = axis.info();
-    let ts = info.sample_time_s;
+    let ts = info.ts_s;
     let plaus = stages::plausibility::plausibility(&info, datasheet, cfg)?;
     progress.stage_finished(&plaus.line);
     let torque_max = plaus.torque_max_nm;
@@ -388,8 +388,8 @@ pub fn commission(
     )?;
     let input = crate::design::DesignInput {
         friction: Some(FrictionParams {
-            viscous_n_m_s_per_rad: fr.result.viscous,
-            coulomb_n_m: fr.result.coulomb,
+            viscous_nm_s_per_rad: fr.result.viscous_nm_s_per_rad,
+            coulomb_nm: fr.result.coulomb_nm,
         }),
         ..designed.design.input
     };

@@ -33,13 +33,13 @@ pub fn validation_moves(
     datasheet: &DataSheet,
     cfg: &CommissioningConfig,
 ) -> Result<ValidationMoves> {
-    let ts = st.runner.info().sample_time_s;
+    let ts = st.runner.info().ts_s;
     let p = fit.params;
     let m_e = p.rigid_inertia();
     let variants = [
         Feedforward::none(),
-        Feedforward::linear(m_e, friction.linear_viscous),
-        Feedforward::nonlinear(m_e, friction.viscous, friction.coulomb),
+        Feedforward::linear(m_e, friction.linear_viscous_nm_s_per_rad),
+        Feedforward::nonlinear(m_e, friction.viscous_nm_s_per_rad, friction.coulomb_nm),
     ];
     let opts = TrackOptions {
         preview_samples: preview,
