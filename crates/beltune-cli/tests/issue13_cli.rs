@@ -199,8 +199,15 @@ fn sizes_that_would_abort_or_overflow_are_bad_input_issue_13_4() {
     for args in [
         &["commission", "--prbs-order", "24"][..],
         &["commission", "--prbs-order", "32"],
-        &["commission", "--prbs-clock", "4294967295"],
-        &["commission", "--prbs-order", "18", "--prbs-clock", "4096"],
+        &["commission", "--prbs-clock-ms", "429496729500"],
+        &["commission", "--prbs-clock-ms", "nan"],
+        &[
+            "commission",
+            "--prbs-order",
+            "18",
+            "--prbs-clock-ms",
+            "409.6",
+        ],
     ] {
         expect_bad_input(bin().args(args), &["prbs"]);
     }
@@ -238,17 +245,17 @@ fn sizes_that_would_abort_or_overflow_are_bad_input_issue_13_4() {
     }
     // The library itself: a skip count that overflows is "too short".
     let cfg = beltune::ident::EtfeConfig {
-        sample_time_s: 1e-3,
+        ts_s: 1e-3,
         period_samples: 8,
         skip_periods: usize::MAX,
         ..beltune::ident::EtfeConfig::default()
     };
     let x = vec![0.0; 64];
     assert!(beltune::ident::etfe::etfe(&x, &x, &cfg).is_err());
-    let plant = egc70_toml(&dir, "ts.toml", |t| set_key(t, "sample_time_s", "5e-324"));
+    let plant = egc70_toml(&dir, "ts.toml", |t| set_key(t, "ts_s", "5e-324"));
     expect_bad_input(
         bin().args(["plant", "show", "--plant"]).arg(&plant),
-        &["sample_time_s", "5e-324"],
+        &["ts_s", "5e-324"],
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -489,7 +496,7 @@ fn absurd_plant_values_are_refused_never_printed_as_inf_or_nan_issue_13_9() {
         ("theta_motor_kg_m2", "1e308"),
         ("payload_kg", "1e9"),
         ("stroke_m", "1e300"),
-        ("torque_limit_nm", "1e300"),
+        ("torque_max_nm", "1e300"),
         ("d_m_n_s_per_m", "1e308"),
     ] {
         let plant = egc70_toml(&dir, "p.toml", |t| set_key(t, key, value));

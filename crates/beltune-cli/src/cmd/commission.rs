@@ -62,9 +62,10 @@ pub struct Args {
     /// PRBS order n_PRBS (default 9; 2..=18).
     #[arg(long, value_parser = clap::value_parser!(u32).range(2..=MAX_PRBS_ORDER as i64))]
     pub prbs_order: Option<u32>,
-    /// PRBS clock period P_PRBS in samples (default 16; 1..=4096).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_PRBS_CLOCK as i64))]
-    pub prbs_clock: Option<u32>,
+    /// PRBS clock period P_PRBS in ms (default 1.6 ms = 16 samples at 10 kHz;
+    /// rounded to whole cycles of the axis).
+    #[arg(long, allow_negative_numbers = true)]
+    pub prbs_clock_ms: Option<f64>,
     /// Commission from recorded data instead of a plant: CSV of a periodic
     /// excitation (header row). Skips the stages that need the axis.
     #[arg(long, requires_all = ["input", "output"])]
@@ -113,7 +114,7 @@ pub struct Args {
 
 /// Largest `--prbs-order`: 2^18 - 1 bits.
 pub const MAX_PRBS_ORDER: u32 = 18;
-/// Largest `--prbs-clock`, samples.
+/// Largest PRBS clock period (`--prbs-clock-ms`), samples of the axis.
 pub const MAX_PRBS_CLOCK: u32 = 4096;
 /// Most samples in one PRBS period (`(2^n - 1) P`): 2^22, 419 s at 100 us.
 pub const MAX_PRBS_PERIOD_SAMPLES: u64 = 1 << 22;
@@ -196,7 +197,7 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
             args.excitation_amplitude.is_some(),
         ),
         ("--prbs-order", args.prbs_order.is_some()),
-        ("--prbs-clock", args.prbs_clock.is_some()),
+        ("--prbs-clock-ms", args.prbs_clock_ms.is_some()),
     ];
     let (given, mode, hint): (Vec<&str>, _, _) = if args.csv.is_some() {
         (
@@ -351,7 +352,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     let (json, report) = recorded_outputs(&run, &source);
     let friction = run.friction.clone().unwrap_or_default();
     for (name, v) in [
-        ("Coulomb friction", friction.coulomb),
+        ("Coulomb friction", friction.coulomb_nm),
         ("holding torque", friction.holding_torque_nm),
     ] {
         if !(v.is_finite() && v.abs() <= torque_limit) {
@@ -391,16 +392,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "--excitation-amplitude",
         args.excitation_amplitude,
         0.0,
-        plant.info().torque_limit_nm,
+        plant.info().torque_max_nm,
         true,
     )?;
     let order = args.prbs_order.unwrap_or(9);
-    let clock = args.prbs_clock.unwrap_or(16);
+    let ts_s = plant.info().ts_s;
+    let clock_limit_ms = f64::from(MAX_PRBS_CLOCK) * ts_s * 1e3;
+    check_flag(
+        "--prbs-clock-ms",
+        args.prbs_clock_ms,
+        0.0,
+        clock_limit_ms,
+        true,
+    )?;
+    let mut excitation = CommissioningConfig::default().excitation;
+    if let Some(ms) = args.prbs_clock_ms {
+        excitation.clock_period_s = ms * 1e-3;
+    }
+    let clock = excitation.clock_samples(ts_s);
     let period = ((1u64 << order) - 1) * u64::from(clock);
     if period > MAX_PRBS_PERIOD_SAMPLES {
         return Err(bad(format!(
-            "--prbs-order {order} with --prbs-clock {clock} makes a period of {period} samples \
-             (limit {MAX_PRBS_PERIOD_SAMPLES}); lower one of them"
+            "--prbs-order {order} with a PRBS clock of {clock} samples makes a period of {period} \
+             samples (limit {MAX_PRBS_PERIOD_SAMPLES}); lower one of them"
         )));
     }
     let start_position = args.start_position.unwrap_or(0.05);
@@ -414,8 +428,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(n) = args.prbs_order {
         cfg.excitation.prbs_order = n;
     }
-    if let Some(p) = args.prbs_clock {
-        cfg.excitation.clock_period = p;
+    if let Some(p) = args.prbs_clock_ms {
+        cfg.excitation.clock_period_s = p * 1e-3;
     }
     let sim_cfg = SimConfig {
         seed: args.seed.unwrap_or(1),
@@ -435,8 +449,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         m_c: truth_params.m_c,
         c: truth_params.c,
         dead_time_s: plant.dead_time_s(),
-        viscous: friction.viscous_nm_s_per_rad,
-        coulomb: friction.coulomb_nm,
+        viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+        coulomb_nm: friction.coulomb_nm,
     };
     let name = args.plant.clone().unwrap_or_else(|| "egc70".to_string());
     let json = commissioning_json(&run, &name, Some(truth.clone()));
