@@ -724,3 +724,24 @@ fn each_run_keeps_its_folder_and_latest_points_at_the_newest_issue_16_4() {
     assert!(o.status.success());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn absurd_friction_in_a_design_model_is_refused_issue_13_10() {
+    let dir = tmpdir("design-friction");
+    let model = dir.join("m.toml");
+    for (key, value) in [("coulomb_nm", "1e308"), ("viscous_nm_s_per_rad", "1e300")] {
+        std::fs::write(
+            &model,
+            format!(
+                "theta_e = 71.73e-6\nm_c = 13.44\nc = 203.74e3\nd_m = 33.17\nd_c = 226.42\n\
+                 i_t = 0.0124141\ndead_time_s = 1e-3\n{key} = {value}\n"
+            ),
+        )
+        .unwrap();
+        expect_bad_input(
+            bin().args(["design", "--model"]).arg(&model),
+            &["friction", "plausible"],
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -234,8 +234,18 @@ fn temporary_pid(name: &str) -> Option<u32> {
     if !name.starts_with('.') {
         return None;
     }
+    // Exactly our pattern `PID-N-NANOS` (three numbers), so that a user's
+    // own `.x.tmp-...` file is never taken for one of ours.
     let rest = &name[name.rfind(TMP_MARK)? + TMP_MARK.len()..];
-    rest.split('-').next()?.parse().ok()
+    let parts: Vec<&str> = rest.split('-').collect();
+    if parts.len() != 3
+        || !parts
+            .iter()
+            .all(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()))
+    {
+        return None;
+    }
+    parts[0].parse().ok()
 }
 
 /// Remove temporaries (`.NAME.tmp-PID-...`, files or folders) in `dir` whose
@@ -506,9 +516,11 @@ mod tests {
         std::fs::write(&live, b"x").unwrap();
         let keep = dir.join("controller.toml");
         std::fs::write(&keep, b"x").unwrap();
+        let users = dir.join(".notes.tmp-0");
+        std::fs::write(&users, b"x").unwrap();
         let removed = clean_stale_temporaries(&dir);
         assert_eq!(removed, vec![dead.clone()]);
-        assert!(live.exists() && keep.exists() && !dead.exists());
+        assert!(live.exists() && keep.exists() && users.exists() && !dead.exists());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

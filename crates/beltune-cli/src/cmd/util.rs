@@ -7,6 +7,15 @@ use std::path::Path;
 /// directory, then rename it over the target. A crash leaves either the old
 /// file or the new one, never half a file.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> anyhow::Result<()> {
+    // Temporaries a killed earlier run left beside the file go first.
+    if let Some(dir) = path.parent() {
+        let dir = if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        };
+        beltune::io::clean_stale_temporaries(dir);
+    }
     beltune::io::write_atomic(path, contents).with_context(|| format!("writing {}", path.display()))
 }
 
