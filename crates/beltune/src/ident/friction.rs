@@ -315,7 +315,7 @@ fn check_plausible(fit: &MotionFriction, tau_peak: f64, a_peak: f64, v_peak: f64
         ("coulomb", fit.coulomb),
         ("offset", fit.offset),
     ] {
-        if !(term.abs() <= bound) {
+        if !term.is_finite() || term.abs() > bound {
             return Err(Error::FitFailed {
                 reason: format!(
                     "friction fit is implausible: the {name} term reaches {term:.3e}, more than \

@@ -214,7 +214,7 @@ impl SimAxis {
                     h = h.min(hmax);
                 }
                 let n = (p.ts_s / h).ceil();
-                if !(n <= MAX_SUBSTEPS as f64) {
+                if !n.is_finite() || n > MAX_SUBSTEPS as f64 {
                     return Err(Error::invalid(
                         "plant",
                         n,
