@@ -10,7 +10,11 @@
 //!   socket or in-process against the virtual drive.
 
 pub mod cia402;
+pub mod drive;
 pub mod error;
+pub mod esc;
+pub mod master;
+pub mod od;
 pub mod pdo;
 pub mod scaling;
 
