@@ -17,5 +17,6 @@ pub mod master;
 pub mod od;
 pub mod pdo;
 pub mod scaling;
+pub mod serve;
 
 pub use error::Error;
