@@ -139,8 +139,8 @@ impl VirtualDrive {
         }
         let mut plant = plant.clone();
         match &mut plant {
-            Plant::Physical(p) => p.sample_time_s = cfg.cycle_s,
-            Plant::Linear(l) => l.sample_time_s = cfg.cycle_s,
+            Plant::Physical(p) => p.ts_s = cfg.cycle_s,
+            Plant::Linear(l) => l.ts_s = cfg.cycle_s,
         }
         let sim = SimAxis::new(&plant, cfg.sim.clone())?;
         let info = sim.info();
@@ -155,8 +155,8 @@ impl VirtualDrive {
                 reason: format!("{per_rev} counts per revolution is not a whole number"),
             });
         }
-        let rated_mnm = (info.torque_limit_nm * cfg.rated_fraction * 1e3).round() as u32;
-        let max_permille = (info.torque_limit_nm * 1e3 / f64::from(rated_mnm) * 1e3).floor() as u16;
+        let rated_mnm = (info.torque_max_nm * cfg.rated_fraction * 1e3).round() as u32;
+        let max_permille = (info.torque_max_nm * 1e3 / f64::from(rated_mnm) * 1e3).floor() as u16;
         let load_nm_per_inc = (cfg.sim.cart_encoder_resolution_m * 1e9).round().max(1.0) as u32;
         let scaling = Scaling::from_objects(
             rated_mnm,

@@ -17,6 +17,7 @@ use crate::cia402::{self, Command, State, MODE_CST};
 use crate::pdo::{self, Codec, Inputs, Outputs};
 use crate::scaling::{self, Scaling, Unwrap32};
 use crate::Error;
+use beltune::plant::{Axis, AxisError, AxisInfo, Measurement};
 use core::future::Future;
 use core::task::{Context, Poll};
 use ethercrab::subdevice_group::{DcConfiguration, HasDc, NoDc, Op};
@@ -35,47 +36,11 @@ pub const MAX_PDI: usize = 512;
 pub const MAX_FRAMES: usize = 16;
 /// Largest frame payload.
 pub const MAX_PDU_DATA: usize = PduStorage::element_size(1100);
+/// Consecutive lost frames after which a quick stop gives up (the drive's
+/// watchdog then removes the torque on its own).
+pub const QUICK_STOP_MAX_LOST: u32 = 50;
 /// The frame storage a caller owns for one axis (about 18 KiB).
 pub type Storage = PduStorage<MAX_FRAMES, MAX_PDU_DATA>;
-
-/// Why a cycle failed (the axis seam's error, small and `Copy`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CycleError {
-    /// More consecutive frames lost (timed out) than allowed.
-    LostFrames {
-        /// Consecutive lost frames.
-        count: u32,
-    },
-    /// The process data came back with a wrong working counter.
-    WorkingCounter {
-        /// Expected.
-        expected: u16,
-        /// Received.
-        got: u16,
-    },
-    /// The drive reports a fault (CiA 402 error code 0x603F).
-    DriveFault {
-        /// The error code.
-        code: u16,
-    },
-    /// The drive is not (or no longer) in OP / "operation enabled".
-    NotOperational,
-}
-
-impl core::fmt::Display for CycleError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            CycleError::LostFrames { count } => {
-                write!(f, "{count} consecutive EtherCAT frames lost")
-            }
-            CycleError::WorkingCounter { expected, got } => {
-                write!(f, "EtherCAT working counter {got}, expected {expected}")
-            }
-            CycleError::DriveFault { code } => write!(f, "drive fault, error code {code:#06x}"),
-            CycleError::NotOperational => f.write_str("drive not operational"),
-        }
-    }
-}
 
 /// Moves frames between ethercrab's `PduTx`/`PduRx` and a bus.
 pub trait Transport {
@@ -197,7 +162,7 @@ pub struct EthercatAxis<'sto, T: Transport> {
     load_zero: Option<i64>,
     last: DriveMeasurement,
     lost: u32,
-    failed: Option<CycleError>,
+    failed: Option<AxisError>,
 }
 
 fn bus(what: &'static str) -> impl Fn(ethercrab::error::Error) -> Error {
@@ -458,7 +423,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
     }
 
     /// One exchange of process data: the bus to OP (all SubDevices), the raw inputs.
-    fn cycle_raw(&mut self) -> Result<Inputs, CycleError> {
+    fn cycle_raw(&mut self) -> Result<Inputs, AxisError> {
         let n = self.cfg.subdevice;
         let md = &self.maindevice;
         let mut buf = [0u8; 16];
@@ -486,19 +451,13 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
                 Err(_) => {
                     self.lost += 1;
                     if self.lost > self.cfg.max_lost_frames {
-                        return Err(CycleError::LostFrames { count: self.lost });
+                        return Err(AxisError::Timeout { cycles: self.lost });
                     }
                     return Ok(self.last.inputs);
                 }
             }
         };
         self.lost = 0;
-        if wkc != self.expected_wkc {
-            return Err(CycleError::WorkingCounter {
-                expected: self.expected_wkc,
-                got: wkc,
-            });
-        }
         let inputs = match &self.group {
             Group::Dc(g) => g
                 .subdevice(md, n)
@@ -511,15 +470,24 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
         };
         let inputs = match inputs {
             Some(Ok(i)) => i,
-            _ => return Err(CycleError::NotOperational),
+            _ => return Err(AxisError::NotOperational),
         };
         if !all_op {
+            if wkc == 0 {
+                return Err(AxisError::NotOperational);
+            }
             // the drive left OP (e.g. its watchdog); a fault code tells why
             return Err(match State::from_statusword(inputs.statusword) {
-                State::Fault | State::FaultReactionActive => CycleError::DriveFault {
-                    code: inputs.error_code,
+                State::Fault | State::FaultReactionActive => AxisError::DriveFault {
+                    error_code: inputs.error_code,
                 },
-                _ => CycleError::NotOperational,
+                _ => AxisError::NotOperational,
+            });
+        }
+        if wkc != self.expected_wkc {
+            return Err(AxisError::WorkingCounter {
+                expected: self.expected_wkc,
+                received: wkc,
             });
         }
         Ok(inputs)
@@ -553,7 +521,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
             let inputs = match self.cycle_raw() {
                 Ok(i) => i,
                 // OP is reached a few cycles after the request
-                Err(CycleError::NotOperational) => continue,
+                Err(AxisError::NotOperational) => continue,
                 Err(e) => return Err(self.startup_error(e.to_string())),
             };
             let st = State::from_statusword(inputs.statusword);
@@ -585,7 +553,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
     /// mille of the rated torque) and return the measurement of the cycle.
     /// Up to `max_lost_frames` consecutive lost frames give the last
     /// measurement again. After an error the axis stays failed.
-    pub fn exchange(&mut self, torque_nm: f64) -> Result<DriveMeasurement, CycleError> {
+    pub fn exchange(&mut self, torque_nm: f64) -> Result<DriveMeasurement, AxisError> {
         if let Some(e) = self.failed {
             return Err(e);
         }
@@ -598,10 +566,10 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
             self.cycle_raw()
                 .and_then(|inputs| match State::from_statusword(inputs.statusword) {
                     State::OperationEnabled => Ok(inputs),
-                    State::Fault | State::FaultReactionActive => Err(CycleError::DriveFault {
-                        code: inputs.error_code,
+                    State::Fault | State::FaultReactionActive => Err(AxisError::DriveFault {
+                        error_code: inputs.error_code,
                     }),
-                    _ => Err(CycleError::NotOperational),
+                    _ => Err(AxisError::NotOperational),
                 });
         match r {
             Ok(i) => Ok(self.measure(i)),
@@ -615,15 +583,18 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
     /// Quick stop: command CiA 402 "quick stop" until the drive reports the
     /// stop complete ("switch on disabled"), then "disable voltage". Returns
     /// the state reached; a dead bus leaves the stop to the drive's watchdog.
-    pub fn quick_stop(&mut self) -> Result<State, CycleError> {
+    pub fn quick_stop(&mut self) -> Result<State, AxisError> {
         self.outputs = Outputs {
             controlword: Command::QuickStop.controlword(),
             mode: MODE_CST,
             target_torque_permille: 0,
         };
         let mut state = State::QuickStopActive;
+        self.lost = 0;
         for _ in 0..self.cfg.state_change_cycles {
             match self.cycle_raw() {
+                // keep trying through lost frames: the stop matters more than the cycle
+                Err(AxisError::Timeout { cycles }) if cycles < QUICK_STOP_MAX_LOST => continue,
                 Ok(i) => {
                     state = State::from_statusword(i.statusword);
                     self.measure(i);
@@ -632,13 +603,13 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
                     }
                 }
                 // a drive in fault or out of OP has removed its torque already
-                Err(CycleError::NotOperational | CycleError::DriveFault { .. }) => break,
+                Err(AxisError::NotOperational | AxisError::DriveFault { .. }) => break,
                 Err(e) => return Err(e),
             }
         }
         self.outputs.controlword = Command::DisableVoltage.controlword();
         let _ = self.cycle_raw();
-        self.failed.get_or_insert(CycleError::NotOperational);
+        self.failed.get_or_insert(AxisError::NotOperational);
         Ok(state)
     }
 
@@ -648,7 +619,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
     }
 
     /// The failure that ended the axis, if any.
-    pub fn failure(&self) -> Option<CycleError> {
+    pub fn failure(&self) -> Option<AxisError> {
         self.failed
     }
 
@@ -657,5 +628,28 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
         for _ in 0..cycles {
             self.transport.end_of_cycle(self.cycle_ns);
         }
+    }
+}
+
+impl<T: Transport> Axis for EthercatAxis<'_, T> {
+    fn info(&self) -> AxisInfo {
+        AxisInfo {
+            ts_s: self.cycle_s(),
+            motor_rad_per_count: self.scaling.motor_rad_per_inc(),
+            torque_max_nm: self.scaling.torque_limit_nm(),
+        }
+    }
+
+    fn exchange(&mut self, torque_command_nm: f64) -> Result<Measurement, AxisError> {
+        let m = EthercatAxis::exchange(self, torque_command_nm)?;
+        Ok(Measurement {
+            motor_counts: m.motor_counts,
+            torque_actual_nm: m.torque_actual_nm,
+            cart_position_m: m.cart_position_m,
+        })
+    }
+
+    fn quick_stop(&mut self) -> Result<(), AxisError> {
+        EthercatAxis::quick_stop(self).map(|_| ())
     }
 }
