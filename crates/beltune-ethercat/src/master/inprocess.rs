@@ -120,6 +120,10 @@ impl Transport for InProcess<'_> {
         }
     }
 
+    fn real_time(&self) -> bool {
+        false
+    }
+
     fn clock(&self) -> Clock {
         Clock::Simulated(Arc::clone(&self.clock))
     }

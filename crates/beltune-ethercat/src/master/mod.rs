@@ -52,6 +52,8 @@ pub trait Transport {
     fn end_of_cycle(&mut self, cycle_ns: u64);
     /// The master's clock for distributed clocks, ns.
     fn clock(&self) -> Clock;
+    /// Whether the bus' time runs in real time (see `Axis::runs_in_real_time`).
+    fn real_time(&self) -> bool;
 }
 
 /// The master's clock.
@@ -651,5 +653,9 @@ impl<T: Transport> Axis for EthercatAxis<'_, T> {
 
     fn quick_stop(&mut self) -> Result<(), AxisError> {
         EthercatAxis::quick_stop(self).map(|_| ())
+    }
+
+    fn runs_in_real_time(&self) -> bool {
+        self.transport.real_time()
     }
 }

@@ -77,6 +77,10 @@ impl Transport for RawSocket<'_> {
         self.next_cycle = Some(next);
     }
 
+    fn real_time(&self) -> bool {
+        true
+    }
+
     fn clock(&self) -> Clock {
         Clock::Monotonic
     }
