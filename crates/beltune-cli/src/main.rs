@@ -41,6 +41,8 @@ enum Command {
     Export(cmd::export::Args),
     /// Write an excitation signal (PRBS, chirp, multisine) to play on another drive.
     Excitation(cmd::excitation::Args),
+    /// Answer as a virtual CiA 402 servo drive (EtherCAT SubDevice) on a network interface.
+    VirtualDrive(cmd::virtual_drive::Args),
 }
 
 /// A command that prints to a pipe whose reader went away (`beltune ... | head`)
@@ -71,6 +73,7 @@ fn main() {
         Command::Serve(a) => cmd::serve::run(a),
         Command::Export(a) => cmd::export::run(a),
         Command::Excitation(a) => cmd::excitation::run(a),
+        Command::VirtualDrive(a) => cmd::virtual_drive::run(a),
     };
     if let Err(e) = result {
         // One line: the whole cause chain joined, no backtrace.

@@ -18,8 +18,8 @@ pub struct Args {
     model: PathBuf,
     #[command(flatten)]
     knobs: super::knobs::KnobArgs,
-    /// Sampling time of the controller in s (default: the model's `ts_s`, else 100 us).
-    #[arg(long)]
+    /// Sampling time of the controller in s, 1e-6 ..= 0.1 (default: the model's `ts_s`, else 100 us).
+    #[arg(long, allow_negative_numbers = true)]
     ts: Option<f64>,
     /// Write the design as JSON to this file.
     #[arg(long)]
@@ -39,7 +39,22 @@ struct JsonOut<'a> {
 
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let check_ts = |ts: f64, what: &str| -> anyhow::Result<()> {
+        beltune::model::params::check_sample_time(ts).map_err(|e| {
+            anyhow::Error::new(crate::exit::Failure::new(
+                crate::exit::ExitStatus::BadInput,
+                format!("{what} {}: {}", beltune::error::short_number(ts), e),
+            ))
+        })
+    };
+    if let Some(ts) = args.ts {
+        check_ts(ts, "--ts")?;
+    }
+    if let Some(out) = &args.json {
+        super::util::check_not_an_input("--json", out, &[&args.model])?;
+    }
     let model = ModelFile::load(&args.model)?;
+    check_ts(model.design_ts_s(args.ts), "the model's ts_s")?;
     let input = model.design_input(args.ts)?;
     let knobs = args.knobs.knobs()?;
     let d = design::design(&input, &knobs)?;

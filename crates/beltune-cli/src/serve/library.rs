@@ -77,8 +77,7 @@ pub struct DesignModel {
 /// Read `dir/commissioning.json`; every failure names the file.
 pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     let path = dir.join(COMMISSIONING_FILE);
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let text = beltune::io::read_to_string_capped(&path, beltune::io::MAX_TEXT_BYTES)?;
     let file = beltune::design::ModelFile::parse(&text, &path.display().to_string())
         .with_context(|| format!("parsing {}", path.display()))?;
     let id = file.identified;

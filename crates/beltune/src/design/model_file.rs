@@ -372,10 +372,7 @@ impl ModelFile {
 
     /// Read and parse a file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
         ModelFile::parse(&text, &path.display().to_string())
     }
 

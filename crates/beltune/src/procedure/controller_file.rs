@@ -351,10 +351,7 @@ impl ControllerFile {
 
     /// Read and parse a file.
     pub fn load(path: &std::path::Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
         ControllerFile::parse(&text, &path.display().to_string())
     }
 }

@@ -29,7 +29,7 @@ use crate::error::{require_finite, require_non_negative, require_positive};
 use crate::model::params::{FrictionTotals, PhysicalParams};
 use crate::model::three_mass::ThreeMassState;
 use crate::model::{Plant, TwoMassParams};
-use crate::plant::{Axis, AxisInfo, Measurement};
+use crate::plant::{Axis, AxisError, AxisInfo, Measurement};
 use crate::{Error, Result};
 use mech::Mech;
 use nalgebra::{SMatrix, SVector};
@@ -86,6 +86,11 @@ impl Default for SimConfig {
 /// RK4 accuracy target: the largest `w_max h` of a sub-step. RK4's relative
 /// frequency error is about `(w h)^4 / 120`, below 4e-5 at 0.25.
 const MAX_OMEGA_H: f64 = 0.25;
+
+/// Most RK4 sub-steps per sample. egc70 needs a few dozen; a plant that
+/// needs more (a stiffness or damping far beyond any belt axis) would run
+/// for hours, so it is refused instead.
+pub const MAX_SUBSTEPS: usize = 4096;
 
 #[derive(Clone, Debug)]
 enum Dynamics {
@@ -208,7 +213,20 @@ impl SimAxis {
                 if let Some(hmax) = self.config.max_substep_s {
                     h = h.min(hmax);
                 }
-                self.n_sub = ((p.ts_s / h).ceil() as usize).max(1);
+                let n = (p.ts_s / h).ceil();
+                if !n.is_finite() || n > MAX_SUBSTEPS as f64 {
+                    return Err(Error::invalid(
+                        "plant",
+                        n,
+                        format!(
+                            "too stiff or too damped to simulate: a sample of {} us needs {n:.0} \
+                             integration sub-steps (limit {MAX_SUBSTEPS}); check the stiffness, \
+                             damping and inertia values",
+                            p.ts_s * 1e6
+                        ),
+                    ));
+                }
+                self.n_sub = (n as usize).max(1);
                 self.h_sub = p.ts_s / self.n_sub as f64;
             }
             Plant::Linear(l) => {
@@ -371,12 +389,11 @@ impl SimAxis {
     }
 }
 
-impl Axis for SimAxis {
-    fn info(&self) -> AxisInfo {
-        self.info
-    }
-
-    fn step(&mut self, torque_command_nm: f64) -> Measurement {
+impl SimAxis {
+    /// One sample: apply `torque_command_nm` (saturated, through the
+    /// current-loop dead time) for one sample period and measure. A simulated
+    /// exchange cannot fail; [`Axis::exchange`] wraps this.
+    pub fn step(&mut self, torque_command_nm: f64) -> Measurement {
         let cmd = if torque_command_nm.is_finite() {
             torque_command_nm
         } else {
@@ -415,6 +432,23 @@ impl Axis for SimAxis {
             torque_actual_nm: tau + noise,
             cart_position_m: Some(cart),
         }
+    }
+}
+
+impl Axis for SimAxis {
+    fn info(&self) -> AxisInfo {
+        self.info
+    }
+
+    fn exchange(&mut self, torque_command_nm: f64) -> Result<Measurement, AxisError> {
+        Ok(self.step(torque_command_nm))
+    }
+
+    /// The simulated drive has no stop function of its own: it removes the
+    /// torque that is still on its way through the current-loop dead time.
+    fn quick_stop(&mut self) -> Result<(), AxisError> {
+        self.delay.iter_mut().for_each(|t| *t = 0.0);
+        Ok(())
     }
 }
 
