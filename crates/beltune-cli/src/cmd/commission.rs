@@ -8,7 +8,7 @@ use crate::progress::BarProgress;
 use anyhow::Context;
 use beltune::design::DesignKnobs;
 use beltune::ident::{
-    identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig,
+    identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig, ModelUnits,
     MotionFrictionConfig, RecordedExcitation,
 };
 use beltune::model::rigs::Plant;
@@ -19,6 +19,7 @@ use beltune::procedure::outputs::{
 use beltune::procedure::outputs::{write_outputs_to, OutputTarget};
 use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
+use beltune::provenance::Provenance;
 use beltune::report::render_html;
 use beltune::sim::{SimAxis, SimConfig};
 use std::path::PathBuf;
@@ -94,10 +95,15 @@ pub struct Args {
     /// Recorded data: transmission i_t in m/rad (default 1).
     #[arg(long, allow_negative_numbers = true)]
     pub transmission: Option<f64>,
-    /// Recorded data: the drive's torque limit, in the unit of the input column
-    /// (N m, or A for a current record), written to controller.toml (default 3.1).
+    /// Recorded data (required): the drive's torque limit, in the unit of the
+    /// input column (N m, or A with --current-units), written to controller.toml.
+    /// The record's peak is not a limit, so there is no default.
     #[arg(long, allow_negative_numbers = true)]
     pub torque_limit: Option<f64>,
+    /// Recorded data: the input column is a motor current in A (torque constant
+    /// unknown): model, gains and limits in current units (A s/rad, A).
+    #[arg(long)]
+    pub current_units: bool,
     /// Recorded data: a CSV of any motion for the friction regression (same time column name).
     #[arg(long, requires_all = ["friction_torque", "friction_position"])]
     pub friction_csv: Option<PathBuf>,
@@ -169,7 +175,7 @@ fn bad(msg: impl Into<String>) -> anyhow::Error {
 
 /// Error if any flag of the other mode was given: nothing is silently ignored.
 fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
-    let recorded_only: [(&str, bool); 11] = [
+    let recorded_only: [(&str, bool); 12] = [
         ("--time", args.time.is_some()),
         ("--input", args.input.is_some()),
         ("--output", args.output.is_some()),
@@ -179,6 +185,7 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
         ("--inertia", args.inertia.is_some()),
         ("--transmission", args.transmission.is_some()),
         ("--torque-limit", args.torque_limit.is_some()),
+        ("--current-units", args.current_units),
         ("--friction-csv", args.friction_csv.is_some()),
         (
             "--friction-torque/--friction-position",
@@ -297,6 +304,11 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     let (Some(input), Some(output)) = (&args.input, &args.output) else {
         return Err(bad("--csv needs --input and --output column names"));
     };
+    let units = if args.current_units {
+        ModelUnits::Current
+    } else {
+        ModelUnits::Torque
+    };
     check_flag("--inertia", args.inertia, 0.0, 1e3, true)?;
     check_flag("--transmission", args.transmission, 0.0, 1e3, true)?;
     check_flag(
@@ -307,7 +319,12 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
         true,
     )?;
     let time = args.time.clone().unwrap_or_else(|| "t_s".to_string());
-    let torque_limit = args.torque_limit.unwrap_or(3.1);
+    let unit = if args.current_units { "A" } else { "N m" };
+    let Some(torque_limit) = args.torque_limit else {
+        return Err(bad(format!(
+            "--csv needs --torque-limit: the drive's torque limit in {unit} (the record's peak is not a limit)"
+        )));
+    };
     let id = identify_recorded(&RecordedExcitation {
         csv,
         time: &time,
@@ -321,6 +338,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
             theta_e: args.inertia,
             free_inertia: args.inertia.is_none(),
             i_t: args.transmission.unwrap_or(1.0),
+            units,
             ..FitConfig::default()
         },
     })?;
@@ -349,7 +367,8 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     };
     let run = commission_recorded(id, friction, knobs, 2e-3)?;
     let source = csv.display().to_string();
-    let (json, report) = recorded_outputs(&run, &source);
+    let provenance = Provenance::of_this_process(None);
+    let (json, report) = recorded_outputs(&run, &source, torque_limit, provenance.clone());
     let friction = run.friction.clone().unwrap_or_default();
     for (name, v) in [
         ("Coulomb friction", friction.coulomb_nm),
@@ -365,7 +384,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
             )));
         }
     }
-    let toml = controller_toml(&run.design, &friction, torque_limit)?;
+    let toml = controller_toml(&run.design, &friction, torque_limit, units, provenance)?;
     let html = render_html(&report)?;
     let files = write_outputs_to(&target(args), &json, &toml, &html)?;
     if !args.quiet {
@@ -453,8 +472,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         coulomb_nm: friction.coulomb_nm,
     };
     let name = args.plant.clone().unwrap_or_else(|| "egc70".to_string());
-    let json = commissioning_json(&run, &name, Some(truth.clone()));
-    let toml = controller_toml(&run.design, &run.friction, ds.torque_max_nm)?;
+    let provenance = Provenance::of_this_process(Some(args.seed.unwrap_or(1)));
+    let json = commissioning_json(&run, &name, Some(truth.clone()), provenance.clone());
+    let toml = controller_toml(
+        &run.design,
+        &run.friction,
+        ds.torque_max_nm,
+        ModelUnits::Torque,
+        provenance,
+    )?;
     let before = match &plant {
         Plant::Physical(p) => Some(p.linearize(run.identification_position_m)?),
         Plant::Linear(_) => None,
