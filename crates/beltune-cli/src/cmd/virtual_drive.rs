@@ -60,8 +60,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut drive = VirtualDrive::new(&plant, cfg).context("virtual drive")?;
     // SAFETY: installing an async-signal-safe handler (an atomic store).
     unsafe {
-        libc::signal(libc::SIGINT, on_signal as libc::sighandler_t);
-        libc::signal(libc::SIGTERM, on_signal as libc::sighandler_t);
+        libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
+        libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
     }
     eprintln!(
         "virtual drive `{}` on {}: plant {}, cycle {} us; Ctrl-C stops",
