@@ -113,6 +113,18 @@ pub struct Args {
     /// Friction record: motor-angle column, rad.
     #[arg(long)]
     pub friction_position: Option<String>,
+    /// Commission a drive on EtherCAT: the network interface of the bus (a
+    /// CiA 402 drive in cyclic synchronous torque mode; raw sockets need root
+    /// or CAP_NET_RAW). `--plant` and `--payload` then only give the data
+    /// sheet (inertia, transmission, moving mass, travel, torque limit).
+    #[arg(long, value_name = "IFACE", conflicts_with = "csv")]
+    pub ethercat: Option<String>,
+    /// EtherCAT: position of the drive on the bus (0 = the first SubDevice).
+    #[arg(long, default_value_t = 0, requires = "ethercat")]
+    pub subdevice: usize,
+    /// EtherCAT: bus cycle (the drive's SYNC0 period), us.
+    #[arg(long, default_value_t = 1000, requires = "ethercat")]
+    pub cycle_us: u32,
     /// No progress bars or log lines.
     #[arg(long)]
     pub quiet: bool,
@@ -450,6 +462,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = args.prbs_clock_ms {
         cfg.excitation.clock_period_s = p * 1e-3;
     }
+    if let Some(interface) = args.ethercat.clone() {
+        return run_ethercat(&args, &interface, &ds, &cfg);
+    }
     let sim_cfg = SimConfig {
         seed: args.seed.unwrap_or(1),
         initial_cart_position_m: Some(start_position),
@@ -513,6 +528,95 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         println!(
             "axis busy {:.1} s, computation {:.2} s, wall time {:.1} s",
+            run.experiment_time_s,
+            run.computation_time_s,
+            started.elapsed().as_secs_f64()
+        );
+        for f in files {
+            println!("wrote {}", f.display());
+        }
+    }
+    Ok(())
+}
+
+/// Commission the drive on an EtherCAT bus (`--ethercat IFACE`).
+fn run_ethercat(
+    args: &Args,
+    interface: &str,
+    ds: &DataSheet,
+    cfg: &CommissioningConfig,
+) -> anyhow::Result<()> {
+    use beltune_ethercat::master::wire::RawSocket;
+    use beltune_ethercat::master::{EthercatAxis, MasterConfig, Storage};
+    let storage = Storage::new();
+    let master = MasterConfig {
+        subdevice: args.subdevice,
+        cycle_s: f64::from(args.cycle_us) * 1e-6,
+        frame_timeout_s: (3.0 * f64::from(args.cycle_us) * 1e-6).max(2e-3),
+        ..MasterConfig::default()
+    };
+    let mut axis = EthercatAxis::open(&storage, master, |tx, rx| {
+        RawSocket::open(interface, tx, rx)
+    })
+    .with_context(|| format!("EtherCAT on {interface}"))?;
+    let id = axis.identity().clone();
+    let sc = axis.scaling();
+    if !args.quiet {
+        eprintln!(
+            "EtherCAT {interface}: SubDevice {} of {}: {} (vendor {:#010x}, product {:#010x}, rev {:#010x}, serial {}), {}; rated torque {:.3} N m, limit {:.3} N m, {} increments per {} rev{}",
+            args.subdevice,
+            id.subdevices,
+            id.name,
+            id.vendor_id,
+            id.product_code,
+            id.revision,
+            id.serial,
+            if id.dc { "SYNC0" } else { "no distributed clocks" },
+            sc.rated_torque_nm,
+            sc.torque_limit_nm(),
+            sc.encoder_increments,
+            sc.motor_revolutions,
+            if sc.load_m_per_inc.is_some() { ", load-side encoder" } else { "" }
+        );
+    }
+    let mut progress = BarProgress::new(args.quiet);
+    let started = Instant::now();
+    let run = commission(&mut axis, ds, cfg, &mut progress).context("commissioning stopped")?;
+    // leave the drive switched off and at rest
+    let _ = axis.quick_stop();
+    let name = format!(
+        "EtherCAT {interface} SubDevice {} ({})",
+        args.subdevice, id.name
+    );
+    let json = commissioning_json(&run, &name, None);
+    let toml = controller_toml(&run.design, &run.friction, ds.torque_max_nm)?;
+    let report = build_report(&run, &name, None, None);
+    let html = render_html(&report)?;
+    let files = write_outputs(&args.out, &json, &toml, &html)?;
+    if !args.quiet {
+        let v = &run.validation;
+        println!(
+            "identified: f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.2} kg, c {:.1} kN/m, dead time {:.2} ms (drive and bus)",
+            run.identified.f_r_hz,
+            run.identified.f_z_hz,
+            run.identified.m_c,
+            run.identified.c / 1e3,
+            run.identified.dead_time_s * 1e3
+        );
+        println!(
+            "controller (host side, CST): K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s",
+            run.design.k_p, run.design.k_i, run.design.k_pp
+        );
+        println!(
+            "validation, max cart error ({}): none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm (static {:.1} um)",
+            if sc.load_m_per_inc.is_some() { "load-side encoder" } else { "motor side: the drive has no load-side encoder" },
+            v.none.max_tracking_error_m * 1e3,
+            v.linear.max_tracking_error_m * 1e3,
+            v.nonlinear.max_tracking_error_m * 1e3,
+            v.nonlinear.static_error_m * 1e6
+        );
+        println!(
+            "axis busy {:.1} s, computation {:.2} s (axis held meanwhile), wall time {:.1} s",
             run.experiment_time_s,
             run.computation_time_s,
             started.elapsed().as_secs_f64()
