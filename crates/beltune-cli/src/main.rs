@@ -37,6 +37,8 @@ enum Command {
     Commission(cmd::commission::Args),
     /// Serve the interactive tuning page.
     Serve(cmd::serve::Args),
+    /// Answer as a virtual CiA 402 servo drive (EtherCAT SubDevice) on a network interface.
+    VirtualDrive(cmd::virtual_drive::Args),
 }
 
 /// A command that prints to a pipe whose reader went away (`beltune ... | head`)
@@ -65,6 +67,7 @@ fn main() {
         Command::Design(a) => cmd::design::run(a),
         Command::Commission(a) => cmd::commission::run(a),
         Command::Serve(a) => cmd::serve::run(a),
+        Command::VirtualDrive(a) => cmd::virtual_drive::run(a),
     };
     if let Err(e) = result {
         // One line: the whole cause chain joined, no backtrace.
