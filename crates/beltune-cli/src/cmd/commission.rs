@@ -588,11 +588,18 @@ fn run_ethercat(
         "EtherCAT {interface} SubDevice {} ({})",
         args.subdevice, id.name
     );
-    let json = commissioning_json(&run, &name, None);
-    let toml = controller_toml(&run.design, &run.friction, ds.torque_max_nm)?;
+    let provenance = Provenance::of_this_process(None);
+    let json = commissioning_json(&run, &name, None, provenance.clone());
+    let toml = controller_toml(
+        &run.design,
+        &run.friction,
+        ds.torque_max_nm,
+        ModelUnits::Torque,
+        provenance,
+    )?;
     let report = build_report(&run, &name, None, None);
     let html = render_html(&report)?;
-    let files = write_outputs(&args.out, &json, &toml, &html)?;
+    let files = write_outputs_to(&target(args), &json, &toml, &html)?;
     if !args.quiet {
         let v = &run.validation;
         println!(
