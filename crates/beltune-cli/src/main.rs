@@ -37,6 +37,10 @@ enum Command {
     Commission(cmd::commission::Args),
     /// Serve the interactive tuning page.
     Serve(cmd::serve::Args),
+    /// Export a controller.toml as firmware source (Rust module or C header).
+    Export(cmd::export::Args),
+    /// Write an excitation signal (PRBS, chirp, multisine) to play on another drive.
+    Excitation(cmd::excitation::Args),
     /// Answer as a virtual CiA 402 servo drive (EtherCAT SubDevice) on a network interface.
     VirtualDrive(cmd::virtual_drive::Args),
 }
@@ -67,6 +71,8 @@ fn main() {
         Command::Design(a) => cmd::design::run(a),
         Command::Commission(a) => cmd::commission::run(a),
         Command::Serve(a) => cmd::serve::run(a),
+        Command::Export(a) => cmd::export::run(a),
+        Command::Excitation(a) => cmd::excitation::run(a),
         Command::VirtualDrive(a) => cmd::virtual_drive::run(a),
     };
     if let Err(e) = result {

@@ -2,6 +2,8 @@
 
 pub mod commission;
 pub mod design;
+pub mod excitation;
+pub mod export;
 pub mod friction;
 pub mod identify;
 pub mod knobs;
