@@ -39,6 +39,12 @@ enum Command {
     Serve(cmd::serve::Args),
     /// Robustness study: commission N seeded random axes and print the table.
     Montecarlo(cmd::montecarlo::Args),
+    /// Export a controller.toml as firmware source (Rust module or C header).
+    Export(cmd::export::Args),
+    /// Write an excitation signal (PRBS, chirp, multisine) to play on another drive.
+    Excitation(cmd::excitation::Args),
+    /// Answer as a virtual CiA 402 servo drive (EtherCAT SubDevice) on a network interface.
+    VirtualDrive(cmd::virtual_drive::Args),
 }
 
 /// A command that prints to a pipe whose reader went away (`beltune ... | head`)
@@ -68,6 +74,9 @@ fn main() {
         Command::Commission(a) => cmd::commission::run(a),
         Command::Serve(a) => cmd::serve::run(a),
         Command::Montecarlo(a) => cmd::montecarlo::run(a),
+        Command::Export(a) => cmd::export::run(a),
+        Command::Excitation(a) => cmd::excitation::run(a),
+        Command::VirtualDrive(a) => cmd::virtual_drive::run(a),
     };
     if let Err(e) = result {
         // One line: the whole cause chain joined, no backtrace.

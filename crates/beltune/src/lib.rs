@@ -19,6 +19,7 @@
 
 pub mod design;
 pub mod error;
+pub mod export;
 pub mod ident;
 pub mod io;
 pub mod lti;
@@ -29,5 +30,6 @@ pub mod provenance;
 pub mod report;
 pub mod sim;
 pub mod study;
+pub mod units;
 
 pub use error::{Error, Result};

@@ -10,11 +10,11 @@ pub struct AxisInfo {
     /// Cycle time of the exchange (the drive's control loop or the bus cycle),
     /// s (thesis: 100 us; a PC fieldbus master typically 250 us to 1 ms). Every
     /// sample count of the procedure is derived from it.
-    pub sample_time_s: f64,
+    pub ts_s: f64,
     /// Motor angle per encoder count, rad/count.
     pub motor_rad_per_count: f64,
     /// Largest torque command the drive accepts, N m (commands beyond are saturated).
-    pub torque_limit_nm: f64,
+    pub torque_max_nm: f64,
 }
 
 /// What the drive measures in one sample.
@@ -78,4 +78,13 @@ pub trait Axis {
     /// without the host's controller: the reaction to a failed exchange. An
     /// axis without such a function removes the torque.
     fn quick_stop(&mut self) -> Result<(), AxisError>;
+
+    /// Whether the axis' time runs in real time (a drive on a bus: the next
+    /// cycle is due whether or not the host is ready), so that the procedure
+    /// must keep exchanging, under a hold controller, while it computes. A
+    /// simulated axis whose time only advances with [`Axis::exchange`] waits
+    /// for the computation instead (the default).
+    fn runs_in_real_time(&self) -> bool {
+        false
+    }
 }

@@ -224,7 +224,7 @@ fn a_drive_fault_ends_the_commissioning_with_a_quick_stop_issue_14() {
         },
     )
     .unwrap();
-    let fail_after = (4.0 / inner.info().sample_time_s) as u64;
+    let fail_after = (4.0 / inner.info().ts_s) as u64;
     let mut axis = FailingAxis {
         inner,
         fail_after,

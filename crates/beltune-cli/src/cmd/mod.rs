@@ -2,6 +2,8 @@
 
 pub mod commission;
 pub mod design;
+pub mod excitation;
+pub mod export;
 pub mod friction;
 pub mod identify;
 pub mod knobs;
@@ -10,3 +12,4 @@ pub mod plant;
 pub mod serve;
 pub mod trajectory;
 pub mod util;
+pub mod virtual_drive;

@@ -36,12 +36,14 @@ pub const COMMISSIONING_FILE: &str = "commissioning.json";
 #[derive(Debug, Clone, Copy, Deserialize)]
 pub struct FrictionTotals {
     /// Viscous friction d_v, N m s/rad.
-    pub viscous: f64,
+    #[serde(alias = "viscous")]
+    pub viscous_nm_s_per_rad: f64,
     /// Coulomb friction tau_c, N m.
-    pub coulomb: f64,
-    /// Viscous-only fit (linear feedforward), N m s/rad; absent: `viscous`.
-    #[serde(default)]
-    pub linear_viscous: Option<f64>,
+    #[serde(alias = "coulomb")]
+    pub coulomb_nm: f64,
+    /// Viscous-only fit (linear feedforward), N m s/rad; absent: `viscous_nm_s_per_rad`.
+    #[serde(default, alias = "linear_viscous")]
+    pub linear_viscous_nm_s_per_rad: Option<f64>,
     /// Holding torque (tilted axis), N m; absent: 0.
     #[serde(default)]
     pub holding_torque_nm: Option<f64>,
@@ -51,7 +53,7 @@ pub struct FrictionTotals {
 #[derive(Debug, Clone, Deserialize)]
 pub struct CommissioningFile {
     /// Identified model (the keys `beltune design` reads; extra keys are ignored).
-    pub identified: beltune::design::ModelFile,
+    pub identified: beltune::design::IdentifiedModel,
     /// Identified friction (optional).
     #[serde(default)]
     pub friction: Option<FrictionTotals>,
@@ -68,15 +70,16 @@ pub struct DesignModel {
     pub dead_time_s: f64,
     /// Friction for the feedforward, if known.
     pub friction: Option<FrictionTotals>,
+    /// Torque limit of the drive from the record, N m (`None`: egc70's).
+    pub torque_max_nm: Option<f64>,
 }
 
 /// Read `dir/commissioning.json`; every failure names the file.
 pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     let path = dir.join(COMMISSIONING_FILE);
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    let file: CommissioningFile =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let text = beltune::io::read_to_string_capped(&path, beltune::io::MAX_TEXT_BYTES)?;
+    let file = beltune::design::ModelFile::parse(&text, &path.display().to_string())
+        .with_context(|| format!("parsing {}", path.display()))?;
     let id = file.identified;
     let params = id.params();
     params
@@ -84,16 +87,26 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         .with_context(|| format!("{}: identified model", path.display()))?;
     beltune::error::require_positive("dead_time_s [s]", id.dead_time_s)
         .with_context(|| format!("{}: identified model", path.display()))?;
-    if let Some(f) = file.friction {
-        beltune::error::require_non_negative("friction.viscous [N m s/rad]", f.viscous)
-            .and_then(|_| beltune::error::require_non_negative("friction.coulomb [N m]", f.coulomb))
-            .with_context(|| format!("{}: friction", path.display()))?;
+    let friction = file.friction.map(|f| FrictionTotals {
+        viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+        coulomb_nm: f.coulomb_nm,
+        linear_viscous_nm_s_per_rad: Some(f.linear_viscous_nm_s_per_rad),
+        holding_torque_nm: Some(f.holding_torque_nm),
+    });
+    if let Some(f) = friction {
+        beltune::error::require_non_negative(
+            "friction.viscous [N m s/rad]",
+            f.viscous_nm_s_per_rad,
+        )
+        .and_then(|_| beltune::error::require_non_negative("friction.coulomb [N m]", f.coulomb_nm))
+        .with_context(|| format!("{}: friction", path.display()))?;
     }
     Ok(DesignModel {
         source: format!("commissioning {}", dir.display()),
         params,
         dead_time_s: id.dead_time_s,
-        friction: file.friction,
+        friction,
+        torque_max_nm: id.torque_max_nm,
     })
 }
 
@@ -122,9 +135,9 @@ pub struct LibraryTuner {
     input: DesignInput,
     nominal_payload_kg: f64,
     move_plant: MovePlant,
-    /// Torque limit written to controller.toml and used in the move: the egc70
-    /// drive's (a commissioning.json does not record it), N m.
-    torque_limit_nm: f64,
+    /// Torque limit written to controller.toml and used in the move: the
+    /// record's (`identified.torque_max_nm`), else the egc70 drive's, N m.
+    torque_max_nm: f64,
 }
 
 impl LibraryTuner {
@@ -133,19 +146,22 @@ impl LibraryTuner {
     pub fn new(model: DesignModel) -> anyhow::Result<Self> {
         let mut input = DesignInput::new(model.params, model.dead_time_s);
         input.friction = model.friction.map(|f| FrictionParams {
-            viscous_n_m_s_per_rad: f.viscous,
-            coulomb_n_m: f.coulomb,
+            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+            coulomb_nm: f.coulomb_nm,
         });
         input
             .validate()
             .with_context(|| format!("design input from {}", model.source))?;
-        let torque_limit_nm = rigs::builtin("egc70", None)?.info().torque_limit_nm;
+        let torque_max_nm = match model.torque_max_nm {
+            Some(t) => t,
+            None => rigs::builtin("egc70", None)?.info().torque_max_nm,
+        };
         Ok(LibraryTuner {
             model,
             input,
             nominal_payload_kg: 0.0,
             move_plant: MovePlant::Identified,
-            torque_limit_nm,
+            torque_max_nm,
         })
     }
 
@@ -164,11 +180,12 @@ impl LibraryTuner {
             params,
             dead_time_s: plant.dead_time_s(),
             friction: Some(FrictionTotals {
-                viscous: friction.viscous_nm_s_per_rad,
-                coulomb: friction.coulomb_nm,
-                linear_viscous: None,
+                viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+                coulomb_nm: friction.coulomb_nm,
+                linear_viscous_nm_s_per_rad: None,
                 holding_torque_nm: None,
             }),
+            torque_max_nm: None,
         };
         let mut tuner = LibraryTuner::new(model)?;
         tuner.nominal_payload_kg = rigs::EGC70_DEFAULT_PAYLOAD_KG;
@@ -226,15 +243,15 @@ impl LibraryTuner {
                 // Section 3.6. So the linear move plant takes its viscous friction
                 // (translational equivalent on the motor side) and no cart damping.
                 if let Some(f) = self.model.friction {
-                    two_mass.d_m = f.viscous / (two_mass.i_t * two_mass.i_t);
+                    two_mass.d_m = f.viscous_nm_s_per_rad / (two_mass.i_t * two_mass.i_t);
                     two_mass.d_c = 0.0;
                 }
                 Ok(Plant::Linear(LinearPlant {
                     two_mass,
                     dead_time_s: self.model.dead_time_s,
-                    torque_limit_nm: drive.torque_limit_nm,
+                    torque_max_nm: drive.torque_max_nm,
                     motor_rad_per_count: drive.motor_rad_per_count,
-                    sample_time_s: self.input.ts_s,
+                    ts_s: self.input.ts_s,
                 }))
             }
         }
@@ -383,20 +400,28 @@ impl Tuner for LibraryTuner {
     fn controller_toml(&self, knobs: &Knobs) -> Result<String, TuneError> {
         let d = self.design(knobs)?;
         let friction = self.model.friction.unwrap_or(FrictionTotals {
-            viscous: 0.0,
-            coulomb: 0.0,
-            linear_viscous: None,
+            viscous_nm_s_per_rad: 0.0,
+            coulomb_nm: 0.0,
+            linear_viscous_nm_s_per_rad: None,
             holding_torque_nm: None,
         });
         let friction = FrictionResult {
-            viscous: friction.viscous,
-            coulomb: friction.coulomb,
-            linear_viscous: friction.linear_viscous.unwrap_or(friction.viscous),
+            viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+            coulomb_nm: friction.coulomb_nm,
+            linear_viscous_nm_s_per_rad: friction
+                .linear_viscous_nm_s_per_rad
+                .unwrap_or(friction.viscous_nm_s_per_rad),
             relative_residual: 0.0,
             holding_torque_nm: friction.holding_torque_nm.unwrap_or(0.0),
         };
-        let body = outputs::controller_toml(&d, &friction, self.torque_limit_nm)
-            .map_err(|e| TuneError::Internal(e.to_string()))?;
+        let body = outputs::controller_toml(
+            &d,
+            &friction,
+            self.torque_max_nm,
+            beltune::ident::ModelUnits::Torque,
+            beltune::provenance::Provenance::of_this_process(None),
+        )
+        .map_err(|e| TuneError::Internal(e.to_string()))?;
         let k = &d.knobs;
         Ok(format!(
             "# beltune controller, saved by `beltune serve` (same layout as `beltune commission`)\n\
@@ -452,7 +477,7 @@ impl LibraryTuner {
             ..SimConfig::default()
         };
         let mut axis = SimAxis::new(&plant, config)?;
-        let torque_max = info.torque_limit_nm;
+        let torque_max = info.torque_max_nm;
         let feedback = cascade_from_design(d, torque_max, 0.0)?;
         let a_stop = MOVE_STOP_DECELERATION_M_S2;
         let supervisor = SafetySupervisor::new(
@@ -486,10 +511,12 @@ impl LibraryTuner {
         let mut controller = feedback;
         controller.feedforward = match self.move_plant {
             MovePlant::Egc70 => {
-                RtFeedforward::nonlinear(ff.m_e_kg_m2, ff.d_v_n_m_s_per_rad, ff.tau_c_n_m)
+                RtFeedforward::nonlinear(ff.inertia_kg_m2, ff.viscous_nm_s_per_rad, ff.coulomb_nm)
             }
             // the linear move plant has no Coulomb friction to compensate
-            MovePlant::Identified => RtFeedforward::linear(ff.m_e_kg_m2, ff.d_v_n_m_s_per_rad),
+            MovePlant::Identified => {
+                RtFeedforward::linear(ff.inertia_kg_m2, ff.viscous_nm_s_per_rad)
+            }
         };
         controller.filter_desired_velocity = true;
         controller.feedforward_preview = true;
@@ -564,7 +591,7 @@ mod tests {
         assert_eq!(m.params.m_c, 13.44);
         assert_eq!(m.params.d, 0.0);
         assert_eq!(m.dead_time_s, 0.001);
-        assert_eq!(m.friction.unwrap().coulomb, 0.125);
+        assert_eq!(m.friction.unwrap().coulomb_nm, 0.125);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

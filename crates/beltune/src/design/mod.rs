@@ -14,6 +14,7 @@
 //! The conditions (4.7)-(4.9) and (4.13)/(4.14) are the specification; the printed
 //! gains of Tables A.6/A.7 do not follow from them and are not reproduced.
 
+pub mod drive_form;
 pub mod dynamics;
 pub mod feedforward;
 pub mod model_file;
@@ -22,9 +23,10 @@ pub mod prefilter;
 pub mod sampled;
 pub mod velocity;
 
+pub use drive_form::DriveForm;
 pub use dynamics::Dynamics;
 pub use feedforward::{Feedforward, FrictionParams};
-pub use model_file::ModelFile;
+pub use model_file::{IdentifiedModel, ModelFile, SCHEMA_VERSION};
 pub use prefilter::{Prefilter, PrefilterKind};
 pub use sampled::{DiscreteController, DiscreteLoops, DiscreteStability};
 pub use velocity::{PiGains, VelocityPlant, VelocityRule};
@@ -269,9 +271,9 @@ impl ControllerDesign {
             beltune_rt::filter::SosCoeffs::IDENTITY,
         ];
         cfg.feedforward = beltune_rt::control::Feedforward::nonlinear(
-            self.feedforward.m_e_kg_m2,
-            self.feedforward.d_v_n_m_s_per_rad,
-            self.feedforward.tau_c_n_m,
+            self.feedforward.inertia_kg_m2,
+            self.feedforward.viscous_nm_s_per_rad,
+            self.feedforward.coulomb_nm,
         );
         cfg.validate()?;
         Ok(cfg)
@@ -324,7 +326,7 @@ impl ControllerDesign {
             omega_c_position: self.position_margins.crossover_rad_s,
             phase_margin_position_deg: self.position_margins.phase_margin_deg,
             gain_margin_position_db: self.position_margins.gain_margin_db,
-            m_e: self.feedforward.m_e_kg_m2,
+            m_e: self.feedforward.inertia_kg_m2,
             ts_s: self.discrete.ts_s,
         }
     }

@@ -17,7 +17,7 @@
 //! the configuration, the result and the order of the stages.
 //! Every setting is in seconds, hertz or SI units, never in samples: the
 //! sample counts are derived for the axis' cycle time
-//! ([`crate::plant::AxisInfo::sample_time_s`]), so the same configuration
+//! ([`crate::plant::AxisInfo::ts_s`]), so the same configuration
 //! commissions a 10 kHz simulator and a 1 kHz fieldbus master.
 
 use super::progress::Progress;
@@ -113,7 +113,7 @@ impl DataSheet {
             origin_m,
             travel_min_m: lo,
             travel_max_m: hi,
-            torque_max_nm: plant.info().torque_limit_nm,
+            torque_max_nm: plant.info().torque_max_nm,
             velocity_max_m_s: 2.5,
         }
     }
@@ -122,6 +122,35 @@ impl DataSheet {
     pub fn rigid_inertia(&self) -> f64 {
         self.theta_e_kg_m2 + self.i_t_m * self.i_t_m * self.moving_mass_kg
     }
+}
+
+/// How far a travel window may reach beyond either end of the stroke, m (the
+/// default window's -10 mm, Table A.8).
+pub const TRAVEL_WINDOW_OVERTRAVEL_M: f64 = 0.01;
+
+/// Error if a travel window `(min, max)` reaches beyond the plant's stroke
+/// (by more than [`TRAVEL_WINDOW_OVERTRAVEL_M`]): the supervisor would let the
+/// cart run into the end stop.
+pub fn check_travel_window(
+    plant: &crate::model::rigs::Plant,
+    travel_window_m: Option<(f64, f64)>,
+) -> Result<()> {
+    let Some((lo, hi)) = travel_window_m else {
+        return Ok(());
+    };
+    let stroke = plant.stroke_m().unwrap_or(0.6);
+    let m = TRAVEL_WINDOW_OVERTRAVEL_M;
+    if !(lo.is_finite() && hi.is_finite() && lo >= -m && hi <= stroke + m && lo < hi) {
+        return Err(Error::invalid(
+            "travel window [m]",
+            if lo < -m { lo } else { hi },
+            format!(
+                "the window {lo}..{hi} m must lie inside the stroke 0..{stroke} m (up to {} mm beyond either end)",
+                m * 1e3
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Excitation settings (thesis 3.1, 3.4).
@@ -318,7 +347,7 @@ pub fn commission(
     // ---- 1. plausibility ----
     progress.stage_started("plausibility", 0);
     let info = axis.info();
-    let ts = info.sample_time_s;
+    let ts = info.ts_s;
     let plaus = stages::plausibility::plausibility(&info, datasheet, cfg)?;
     progress.stage_finished(&plaus.line);
     let torque_max = plaus.torque_max_nm;
@@ -415,14 +444,14 @@ pub fn commission(
         p.rigid_inertia(),
         datasheet.i_t_m,
         holding,
-        fr.result.coulomb,
+        fr.result.coulomb_nm,
     )?)?;
     // ---- 7b. redesign on the damping the friction runs support (issue 12) ----
     // The FRF's motor and cart damping d_m, d_c lump the Coulomb friction
     // the small-signal excitation meets into viscous damping; the friction
     // runs measure the real viscous part. A design on the over-damped fit
     // meets its margins on the fit only.
-    let bounded = stages::design::bound_damping(&p, fr.result.viscous);
+    let bounded = stages::design::bound_damping(&p, fr.result.viscous_nm_s_per_rad);
     let (designed, guaranteed, tried) = if cfg.robust_design {
         st.compute(|| {
             stages::design::robust_design(
@@ -467,8 +496,8 @@ pub fn commission(
     st.finish("robust design", robust_line);
     let input = crate::design::DesignInput {
         friction: Some(FrictionParams {
-            viscous_n_m_s_per_rad: fr.result.viscous,
-            coulomb_n_m: fr.result.coulomb,
+            viscous_nm_s_per_rad: fr.result.viscous_nm_s_per_rad,
+            coulomb_nm: fr.result.coulomb_nm,
         }),
         ..designed.input
     };

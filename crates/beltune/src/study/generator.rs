@@ -137,7 +137,7 @@ pub fn generate(seed: u64, index: u64, r: &Ranges) -> Result<GeneratedPlant> {
     p.tau_c_end_pulley_nm *= coulomb;
     p.tilt_rad = tilt.to_radians();
     // whole samples of the drive's cycle, as the simulator applies it
-    p.dead_time_s = (dead / p.sample_time_s).round() * p.sample_time_s;
+    p.dead_time_s = (dead / p.ts_s).round() * p.ts_s;
     p.motor_rad_per_count *= encoder;
     // egc70: 0.84 m between the pulleys for a 0.6 m stroke
     p.pulley_distance_m += stroke - p.stroke_m;

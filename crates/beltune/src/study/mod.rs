@@ -53,7 +53,7 @@ pub struct Feasibility {
 /// The feasibility of `plant` for the validation `spec` in the window `ds`.
 pub fn feasibility(plant: &Plant, ds: &DataSheet, spec: &MoveSpec) -> Feasibility {
     let info = plant.info();
-    let t_max = info.torque_limit_nm.min(ds.torque_max_nm);
+    let t_max = info.torque_max_nm.min(ds.torque_max_nm);
     let totals = plant.friction_totals();
     let (j, i_t, holding) = match plant {
         Plant::Physical(p) => (
@@ -269,7 +269,7 @@ pub fn run_plant(
             out.f_z_error = Some(rel(run.identified.f_z_hz, truth.f_z_hz()));
             out.m_c_error = Some(rel(run.identified.m_c, truth.m_c));
             let c_true = plant.friction_totals().coulomb_nm;
-            out.coulomb_error = Some(rel(run.friction.coulomb, c_true));
+            out.coulomb_error = Some(rel(run.friction.coulomb_nm, c_true));
             out.static_error_m = Some(run.validation.nonlinear.static_error_m);
             out.max_cart_error_m = Some(run.validation.nonlinear.max_tracking_error_m);
             out.reduced_move = Some(run.validation_move.reduced);

@@ -49,7 +49,7 @@ fn find_amplitude(
     torque_max: f64,
     ex: &ExcitationConfig,
 ) -> Result<f64> {
-    let ts = runner.info().sample_time_s;
+    let ts = runner.info().ts_s;
     let window = ex.moving_window_samples(ts);
     let burst = ex.burst_samples(ts).max(window);
     let clock = ex.clock_samples(ts);

@@ -28,7 +28,7 @@ pub fn design_stage(
     cfg: &CommissioningConfig,
 ) -> Result<DesignStage> {
     st.start("controller design", 0);
-    let ts = st.runner.info().sample_time_s;
+    let ts = st.runner.info().ts_s;
     let input = DesignInput {
         model: fit.params,
         dead_time_s,

@@ -49,7 +49,7 @@ pub fn friction_stage(
     let (fit, linear_fit) = st.compute(|| -> Result<_> {
         let mut fit = fit_constant_velocity(&points)?;
         let linear_fit = fit_viscous_only(&points)?;
-        if fit.coulomb_nm < 0.0 || fit.viscous_nms_per_rad < 0.0 {
+        if fit.coulomb_nm < 0.0 || fit.viscous_nm_s_per_rad < 0.0 {
             // A physical friction model has both terms >= 0; a negative Coulomb
             // term means the runs show none (a purely viscous axis).
             fit = FrictionFit {
@@ -63,17 +63,17 @@ pub fn friction_stage(
         / points.len().max(1) as f64)
         .sqrt();
     let result = FrictionResult {
-        viscous: fit.viscous_nms_per_rad.max(0.0),
-        coulomb: fit.coulomb_nm,
-        linear_viscous: linear_fit.viscous_nms_per_rad.max(0.0),
+        viscous_nm_s_per_rad: fit.viscous_nm_s_per_rad.max(0.0),
+        coulomb_nm: fit.coulomb_nm,
+        linear_viscous_nm_s_per_rad: linear_fit.viscous_nm_s_per_rad.max(0.0),
         relative_residual: fit.rms_residual_nm / torque_rms.max(f64::MIN_POSITIVE),
         holding_torque_nm: holding_nm,
     };
     let line = format!(
         "d_v {:.3e} N m s/rad, tau_c {:.4} N m (viscous-only fit {:.3e}), {} runs, residual {:.3}",
-        result.viscous,
-        result.coulomb,
-        result.linear_viscous,
+        result.viscous_nm_s_per_rad,
+        result.coulomb_nm,
+        result.linear_viscous_nm_s_per_rad,
         points.len(),
         result.relative_residual
     );

@@ -43,7 +43,7 @@ pub fn identification(
     ex: &ExcitationConfig,
     datasheet: &DataSheet,
 ) -> Result<Identification> {
-    let ts = st.runner.info().sample_time_s;
+    let ts = st.runner.info().ts_s;
     let clock = ex.clock_samples(ts);
     let mut prbs = Prbs::new(ex.prbs_order, clock, amplitude_nm)?;
     let period = prbs.period_samples() as usize;
@@ -64,7 +64,7 @@ pub fn identification(
         // Below 0.4 f_s the PRBS spectrum and the Tustin/ZOH effects stay mild.
         let f_max = 0.4 / ts;
         let ecfg = EtfeConfig {
-            sample_time_s: ts,
+            ts_s: ts,
             period_samples: period,
             skip_periods: ex.skip_periods,
             integrator: true,

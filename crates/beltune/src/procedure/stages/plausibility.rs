@@ -37,8 +37,8 @@ pub fn plausibility(
     cfg: &CommissioningConfig,
 ) -> Result<Plausibility> {
     datasheet.validate()?;
-    let ts = info.sample_time_s;
-    let torque_max = datasheet.torque_max_nm.min(info.torque_limit_nm);
+    let ts = info.ts_s;
+    let torque_max = datasheet.torque_max_nm.min(info.torque_max_nm);
     let j_ds = datasheet.rigid_inertia();
     let limits = SafetyLimits {
         travel_min_m: datasheet.travel_min_m,

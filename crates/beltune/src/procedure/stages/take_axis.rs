@@ -81,7 +81,7 @@ pub fn hold(
     ctrl: &CascadeConfig<f64>,
     duration_s: f64,
 ) -> Result<Vec<Sample>> {
-    let ts = runner.info().sample_time_s;
+    let ts = runner.info().ts_s;
     let mut c = CascadeController::new(*ctrl)?;
     let target = runner.motor_angle_rad();
     c.reset_to(target);

@@ -80,16 +80,17 @@ pub fn plan_validation_move(
     };
     // Torque left after gravity and Coulomb friction; viscous friction at
     // the move's top speed and the acceleration share it.
-    let budget = MOVE_TORQUE_FRACTION * torque_max_nm - holding_nm.abs() - friction.coulomb.abs();
+    let budget =
+        MOVE_TORQUE_FRACTION * torque_max_nm - holding_nm.abs() - friction.coulomb_nm.abs();
     if budget.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(Error::Infeasible {
             reason: format!(
                 "gravity and friction take {:.3} N m of the torque limit {torque_max_nm:.3} N m: the axis cannot accelerate",
-                holding_nm.abs() + friction.coulomb.abs()
+                holding_nm.abs() + friction.coulomb_nm.abs()
             ),
         });
     }
-    let viscous = friction.viscous.max(0.0);
+    let viscous = friction.viscous_nm_s_per_rad.max(0.0);
     let mut reduced = false;
     let mut probe = Trajectory::plan(&State::at_rest(start), &State::at_rest(target), &limits)?;
     let v_peak = peak_velocity(&probe);
@@ -150,13 +151,13 @@ pub fn validation_moves(
     datasheet: &DataSheet,
     cfg: &CommissioningConfig,
 ) -> Result<ValidationMoves> {
-    let ts = st.runner.info().sample_time_s;
+    let ts = st.runner.info().ts_s;
     let p = fit.params;
     let m_e = p.rigid_inertia();
     let variants = [
         Feedforward::none(),
-        Feedforward::linear(m_e, friction.linear_viscous),
-        Feedforward::nonlinear(m_e, friction.viscous, friction.coulomb),
+        Feedforward::linear(m_e, friction.linear_viscous_nm_s_per_rad),
+        Feedforward::nonlinear(m_e, friction.viscous_nm_s_per_rad, friction.coulomb_nm),
     ];
     let opts = TrackOptions {
         preview_samples: preview,
