@@ -2,7 +2,17 @@
 //! simulated axis (or a plant file), with progress bars, safety supervision,
 //! validation and the report; or, with `--csv`, from data recorded on a real
 //! drive (the stages that need the axis are skipped).
+//!
+//! Output: progress bars and stage lines on stderr (not with `--quiet`), the
+//! summary on stdout (text, or JSON with `--json`: `summary.rs`), and after a
+//! safety stop a diagnostic file (`diagnostic.rs`). The flags are grouped
+//! under the headings of `help::COMMISSION_HEADINGS`; `--config FILE.toml`
+//! supplies them from a file (`config.rs`).
 
+use super::summary::{
+    ControllerSummary, IdentifiedSummary, Summary, TruthSummary, ValidationSummary,
+};
+use crate::exit::{ExitStatus, Failure};
 use crate::progress::BarProgress;
 use anyhow::Context;
 use beltune::design::DesignKnobs;
@@ -24,6 +34,11 @@ use std::time::Instant;
 
 /// Arguments of `beltune commission`.
 #[derive(clap::Args)]
+#[command(
+    after_help = crate::help::commission_after_help(),
+    args_override_self = true,
+    mut_args = crate::help::with_commission_heading
+)]
 pub struct Args {
     /// Built-in plant name (egc70, sim-a, sim-b, sim-c) or a plant TOML file.
     #[arg(long, default_value = "egc70")]
@@ -98,9 +113,20 @@ pub struct Args {
     /// Friction record: motor-angle column, rad.
     #[arg(long)]
     pub friction_position: Option<String>,
-    /// No progress bars or log lines.
+    /// No progress bars or stage lines (the summary is still printed).
     #[arg(long)]
     pub quiet: bool,
+    /// Print the summary as JSON on stdout (keys: see the README).
+    #[arg(long)]
+    pub json: bool,
+    /// Largest following error allowed in the closed-loop stages before the
+    /// supervisor stops the axis, m (default 0.05).
+    #[arg(long, value_name = "M")]
+    pub following_error_max: Option<f64>,
+    #[command(flatten)]
+    pub limits: super::verdict::LimitArgs,
+    #[command(flatten)]
+    pub config: super::config::ConfigArgs,
 }
 
 fn parse_pair(s: &str) -> Result<(f64, f64), String> {
@@ -176,6 +202,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
         }
         _ => None,
     };
+    let started = Instant::now();
     let run = commission_recorded(id, friction, knobs, 2e-3)?;
     let source = csv.display().to_string();
     let (json, report) = recorded_outputs(&run, &source);
@@ -185,13 +212,65 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     let files = write_outputs(&args.out, &json, &toml, &html)?;
     if !args.quiet {
         for line in &run.log {
-            eprintln!("{line}");
+            // "stage: summary", as the stage lines of a run on the axis
+            let (stage, summary) = line.split_once(": ").unwrap_or(("", line));
+            for l in crate::progress::stage_lines(stage, summary) {
+                eprintln!("{l}");
+            }
         }
-        for f in files {
-            println!("wrote {}", f.display());
+    }
+    let summary = Summary {
+        schema: super::summary::SCHEMA,
+        source,
+        status: "ok",
+        exit_code: ExitStatus::Success.code(),
+        identified: IdentifiedSummary::of(&run.identified),
+        truth: None,
+        controller: ControllerSummary::of(&run.design),
+        validation: None,
+        verdict: None,
+        axis_busy_s: None,
+        computation_s: run.computation_time_s,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        files,
+    };
+    print_summary(&summary, args.json)
+}
+
+/// Print the summary on stdout: text lines, or JSON.
+fn print_summary(summary: &Summary, json: bool) -> anyhow::Result<()> {
+    if json {
+        println!("{}", summary.json()?);
+    } else {
+        for line in summary.lines() {
+            println!("{line}");
         }
     }
     Ok(())
+}
+
+/// The error that ends a commissioning: after a safety stop, with the
+/// diagnostic file written where the results would have gone (the status
+/// stays that of the library error: 3).
+fn stopped(e: beltune::Error, progress: &mut BarProgress, args: &Args) -> anyhow::Error {
+    let stop = progress.take_safety_stop();
+    let e = anyhow::Error::new(e);
+    let Some(stop) = stop else {
+        return e.context("commissioning stopped");
+    };
+    let reason = crate::exit::one_line(&e);
+    match super::diagnostic::write(&args.out, &stop, &reason, Some(args.seed)) {
+        Ok(files) => e.context(format!(
+            "commissioning stopped in stage `{}` (diagnostic: {})",
+            stop.stage,
+            files[0].display()
+        )),
+        Err(w) => e.context(format!(
+            "commissioning stopped in stage `{}` (the diagnostic could not be written: {})",
+            stop.stage,
+            crate::exit::one_line(&w)
+        )),
+    }
 }
 
 /// Run the subcommand.
@@ -200,6 +279,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let knobs = args.knobs.knobs()?;
         return run_recorded(&args, &csv, &knobs);
     }
+    let limits = args.limits.limits()?;
     let plant = load_plant(&args)?;
     let ds = DataSheet::for_plant(&plant, args.start_position, args.travel_window);
     let mut cfg = CommissioningConfig {
@@ -213,6 +293,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = args.prbs_clock {
         cfg.excitation.clock_period = p;
     }
+    if let Some(e) = args.following_error_max {
+        cfg.following_error_max_m = e;
+    }
     let sim_cfg = SimConfig {
         seed: args.seed,
         initial_cart_position_m: Some(args.start_position),
@@ -221,7 +304,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut axis = SimAxis::new(&plant, sim_cfg)?;
     let mut progress = BarProgress::new(args.quiet);
     let started = Instant::now();
-    let run = commission(&mut axis, &ds, &cfg, &mut progress).context("commissioning stopped")?;
+    let run = commission(&mut axis, &ds, &cfg, &mut progress)
+        .map_err(|e| stopped(e, &mut progress, &args))?;
     let truth_params = plant.linearize(run.identification_position_m)?;
     let friction = plant.friction_totals();
     let truth = Truth {
@@ -244,38 +328,45 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let report = build_report(&run, &name, before.as_ref(), Some(&truth));
     let html = render_html(&report)?;
     let files = write_outputs(&args.out, &json, &toml, &html)?;
-    if !args.quiet {
-        let v = &run.validation;
-        println!(
-            "identified: f_r {:.2} Hz (truth {:.2}), f_z {:.2} Hz (truth {:.2}), m_c {:.2} kg, c {:.1} kN/m, dead time {:.2} ms",
-            run.identified.f_r_hz,
-            truth.f_r_hz,
-            run.identified.f_z_hz,
-            truth.f_z_hz,
-            run.identified.m_c,
-            run.identified.c / 1e3,
-            run.identified.dead_time_s * 1e3
-        );
-        println!(
-            "controller: K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s",
-            run.design.k_p, run.design.k_i, run.design.k_pp
-        );
-        println!(
-            "validation 0 -> 500 mm, max cart error: none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm (static {:.1} um)",
-            v.none.max_tracking_error_m * 1e3,
-            v.linear.max_tracking_error_m * 1e3,
-            v.nonlinear.max_tracking_error_m * 1e3,
-            v.nonlinear.static_error_m * 1e6
-        );
-        println!(
-            "axis busy {:.1} s, computation {:.2} s, wall time {:.1} s",
-            run.experiment_time_s,
-            run.computation_time_s,
-            started.elapsed().as_secs_f64()
-        );
-        for f in files {
-            println!("wrote {}", f.display());
-        }
+    let verdict = super::verdict::judge(&run.validation.nonlinear, &limits);
+    let status = if verdict.passed {
+        ExitStatus::Success
+    } else {
+        ExitStatus::LimitsNotMet
+    };
+    let failures = verdict.failures();
+    let summary = Summary {
+        schema: super::summary::SCHEMA,
+        source: name,
+        status: if verdict.passed {
+            "ok"
+        } else {
+            "limits_not_met"
+        },
+        exit_code: status.code(),
+        identified: IdentifiedSummary::of(&run.identified),
+        truth: Some(TruthSummary::of(&truth)),
+        controller: ControllerSummary::of(&run.design),
+        validation: Some(ValidationSummary::of(
+            &run.validation,
+            cfg.validation.start_m,
+            cfg.validation.target_m,
+        )),
+        verdict: Some(verdict),
+        axis_busy_s: Some(run.experiment_time_s),
+        computation_s: run.computation_time_s,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        files,
+    };
+    print_summary(&summary, args.json)?;
+    if status != ExitStatus::Success {
+        return Err(anyhow::Error::new(Failure::new(
+            status,
+            format!(
+                "the commissioning finished, but the validation misses its limits: {}",
+                failures.join(", ")
+            ),
+        )));
     }
     Ok(())
 }

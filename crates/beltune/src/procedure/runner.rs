@@ -402,8 +402,16 @@ mod tests {
             position_max: 0.6,
         };
         let mut rec = Recorder::default();
-        let mut runner =
-            Runner::new(&mut axis, &mut rec, supervisor, i_t, start, boot, stop_limits).unwrap();
+        let mut runner = Runner::new(
+            &mut axis,
+            &mut rec,
+            supervisor,
+            i_t,
+            start,
+            boot,
+            stop_limits,
+        )
+        .unwrap();
         // A tiny torque first (well under a second of it), then a push.
         let mut steps = 0u64;
         let err = loop {
@@ -419,14 +427,19 @@ mod tests {
         assert!(
             matches!(
                 r.violation,
-                Violation::Travel { .. } | Violation::TravelAhead { .. } | Violation::Velocity { .. }
+                Violation::Travel { .. }
+                    | Violation::TravelAhead { .. }
+                    | Violation::Velocity { .. }
             ),
             "{:?}",
             r.violation
         );
         let ts = info.sample_time_s;
         let n = (STOP_HISTORY_S / ts).ceil() as usize;
-        assert!(steps as usize > n, "the run must be longer than the history");
+        assert!(
+            steps as usize > n,
+            "the run must be longer than the history"
+        );
         assert_eq!(r.history.len(), n);
         assert_eq!(r.limits, limits);
         let last = r.history.last().unwrap();
@@ -438,8 +451,10 @@ mod tests {
         for w in r.history.windows(2) {
             assert!((w[1].time_s - w[0].time_s - ts).abs() < 1e-9 * ts.max(1e-3));
         }
-        assert!(r.history.iter().all(|h| h.sample.torque_command_nm == 0.05
-            || h.sample.torque_command_nm == 0.0));
+        assert!(r
+            .history
+            .iter()
+            .all(|h| h.sample.torque_command_nm == 0.05 || h.sample.torque_command_nm == 0.0));
         assert!(r.stop_position_m.is_some() && r.stop_error.is_none());
         assert_eq!(r.torque_command_nm, 0.05);
     }
