@@ -667,6 +667,29 @@ fn help_has_headings_examples_and_exit_statuses() {
     }
 }
 
+/// The README documents every exit status of `help::EXIT_STATUSES` and the
+/// summary's JSON keys.
+#[test]
+fn readme_documents_the_exit_statuses_and_json_keys() {
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md"))
+            .unwrap();
+    for (code, _) in beltune_cli::help::EXIT_STATUSES {
+        assert!(
+            readme.contains(&format!("\n| {code} | ")),
+            "README lacks exit status {code}"
+        );
+    }
+    for key in [
+        "beltune-commission-summary/1",
+        "`limits_not_met`",
+        "`max_tracking_error_nonlinear_m`",
+        "`checks`",
+    ] {
+        assert!(readme.contains(key), "README lacks {key}");
+    }
+}
+
 /// `beltune completions SHELL`: bash's script is valid bash and knows the
 /// subcommands and flags; the others are produced.
 #[test]
