@@ -775,3 +775,49 @@ fn man_page_renders() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// From recorded data: the JSON summary has the same keys, with the axis-only
+/// parts `null`; the text summary fits and gives no SI units to values in the
+/// record's units (amperes here).
+#[test]
+fn recorded_data_summary_has_null_axis_parts() {
+    let data =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/twomass-bench/multisine-a.csv.gz");
+    let dir = temp_dir("recorded");
+    let args = |json: bool, out: &str| {
+        let mut c = beltune();
+        c.args(["commission", "--quiet", "--csv"]).arg(&data).args([
+            "--input",
+            "iq_ref_A",
+            "--output",
+            "theta_motor_rad",
+            "--actual-torque",
+            "iq_meas_A",
+            "--period-samples",
+            "2500",
+            "--out",
+        ]);
+        c.arg(dir.join(out));
+        if json {
+            c.arg("--json");
+        }
+        c.output().unwrap()
+    };
+    let o = args(true, "a");
+    assert_eq!(code(&o), 0, "{}", text(&o.stderr));
+    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(s["status"], "ok");
+    for k in ["truth", "validation", "verdict", "axis_busy_s"] {
+        assert!(s[k].is_null(), "{k}: {}", s[k]);
+    }
+    assert!(s["identified"]["f_r_hz"].as_f64().unwrap() > 0.0);
+    let o = args(false, "b");
+    assert_eq!(code(&o), 0, "{}", text(&o.stderr));
+    let t = text(&o.stdout);
+    assert_fits("recorded summary", &t);
+    assert!(
+        t.contains("units of the record") && !t.contains(" kg"),
+        "{t}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

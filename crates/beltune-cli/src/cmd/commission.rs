@@ -233,6 +233,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
         computation_s: run.computation_time_s,
         wall_time_s: started.elapsed().as_secs_f64(),
         files,
+        record_units: true,
     };
     print_summary(&summary, args.json)
 }
@@ -357,6 +358,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         computation_s: run.computation_time_s,
         wall_time_s: started.elapsed().as_secs_f64(),
         files,
+        record_units: false,
     };
     print_summary(&summary, args.json)?;
     if status != ExitStatus::Success {

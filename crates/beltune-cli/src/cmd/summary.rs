@@ -19,6 +19,10 @@
 //! | `axis_busy_s` | time the axis was busy (`null` for recorded data) |
 //! | `computation_s`, `wall_time_s` | computing time, elapsed time of the command |
 //! | `files` | the files written |
+//!
+//! For recorded data (`--csv`) the identified masses, stiffness and gains are
+//! in the units of the record's input column (N m, or A for a current
+//! record); the text form then prints them without units.
 
 use super::verdict::Verdict;
 use crate::term;
@@ -141,6 +145,10 @@ pub struct Summary {
     pub wall_time_s: f64,
     /// Files written.
     pub files: Vec<PathBuf>,
+    /// The model and gains are in the units of a record's input column (not
+    /// necessarily N m): the text prints them without units.
+    #[serde(skip)]
+    pub record_units: bool,
 }
 
 impl IdentifiedSummary {
@@ -219,6 +227,50 @@ impl Summary {
         };
         let id = &self.identified;
         let truth = |v: Option<f64>| v.map(|t| format!(" (truth {t:.2})")).unwrap_or_default();
+        if self.record_units {
+            let c = &self.controller;
+            add(
+                "identified",
+                format!(
+                    "f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.4e}, c {:.4e} (units of the record), \
+                     dead time {:.2} ms, fit {:.2} dB rms, coherence {:.3}",
+                    id.f_r_hz,
+                    id.f_z_hz,
+                    id.m_c_kg,
+                    id.c_n_per_m,
+                    id.dead_time_s * 1e3,
+                    id.fit_rms_db,
+                    id.mean_coherence
+                ),
+            );
+            add(
+                "controller",
+                format!(
+                    "K_P {:.4e}, K_I {:.4e} (units of the record), K_PP {:.2} 1/s; velocity loop \
+                     {:.1} Hz / {:.1} deg, position loop {:.1} Hz / {:.1} deg",
+                    c.k_p_nm_s_per_rad,
+                    c.k_i_nm_per_rad,
+                    c.k_pp_per_s,
+                    c.velocity_crossover_hz,
+                    c.velocity_phase_margin_deg,
+                    c.position_crossover_hz,
+                    c.position_phase_margin_deg
+                ),
+            );
+        } else {
+            self.axis_lines(&mut add, &truth);
+        }
+        self.tail_lines(&mut add);
+        out
+    }
+
+    /// The identified and controller lines of a run with SI units.
+    fn axis_lines(
+        &self,
+        add: &mut impl FnMut(&str, String),
+        truth: &dyn Fn(Option<f64>) -> String,
+    ) {
+        let id = &self.identified;
         add(
             "identified",
             format!(
@@ -250,6 +302,10 @@ impl Summary {
                 c.position_phase_margin_deg
             ),
         );
+    }
+
+    /// Validation, verdict, times and files.
+    fn tail_lines(&self, add: &mut impl FnMut(&str, String)) {
         if let Some(v) = &self.validation {
             add(
                 "validation",
@@ -278,6 +334,5 @@ impl Summary {
         for f in &self.files {
             add("wrote", f.display().to_string());
         }
-        out
     }
 }
