@@ -31,6 +31,10 @@ enum Command {
     #[command(subcommand)]
     Plant(cmd::plant::PlantCommand),
     /// Plan a jerk-limited time-optimal move and print its duration and phases.
+    #[command(
+        override_usage = "beltune trajectory [OPTIONS] --start <START> --target <TARGET>\n       \
+                                --v-max <V_MAX> --a-max <A_MAX> --j-max <J_MAX>"
+    )]
     Trajectory(cmd::trajectory::Args),
     /// Identify a two-mass model from a recorded excitation (CSV).
     Identify(cmd::identify::Args),

@@ -626,6 +626,48 @@ fn plant_template_is_accepted_unchanged() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The help of every command and subcommand fits 100 columns.
+#[test]
+fn every_help_fits_100_columns() {
+    fn visit(path: Vec<String>, seen: &mut Vec<String>) {
+        let mut args = path.clone();
+        args.push("--help".into());
+        let o = beltune().args(&args).output().unwrap();
+        assert_eq!(code(&o), 0, "{args:?}");
+        let h = text(&o.stdout);
+        assert_fits(&format!("beltune {}", path.join(" ")), &h);
+        seen.push(path.join(" "));
+        // The names listed under "Commands:", up to the next blank line.
+        let subs: Vec<String> = h
+            .lines()
+            .skip_while(|l| *l != "Commands:")
+            .skip(1)
+            .take_while(|l| !l.trim().is_empty())
+            // a name starts at column 2; wrapped descriptions are indented further
+            .filter(|l| l.starts_with("  ") && !l.starts_with("   "))
+            .filter_map(|l| l.split_whitespace().next())
+            .filter(|n| *n != "help")
+            .map(str::to_string)
+            .collect();
+        for sub in subs {
+            let mut p = path.clone();
+            p.push(sub);
+            visit(p, seen);
+        }
+    }
+    let mut seen = Vec::new();
+    visit(Vec::new(), &mut seen);
+    for s in [
+        "commission",
+        "plant template",
+        "completions",
+        "man",
+        "trajectory",
+    ] {
+        assert!(seen.iter().any(|x| x == s), "{s} not visited: {seen:?}");
+    }
+}
+
 /// `--help`: headings, examples, the exit statuses; every line fits 100 columns.
 #[test]
 fn help_has_headings_examples_and_exit_statuses() {
