@@ -334,6 +334,13 @@ fn a_forced_safety_stop_is_3_and_leaves_a_diagnostic() {
     assert_eq!(d["samples_file"], "safety-stop.csv");
     assert_eq!(d["provenance"]["seed"], 1);
     check_samples(&out, &d);
+    // A later successful run into the same folder leaves no stale diagnostic beside its results.
+    let o = commission(&out, &["--quiet"]);
+    assert_eq!(code(&o), 0, "{}", text(&o.stderr));
+    assert_eq!(
+        files_in(&out),
+        ["commissioning.json", "controller.toml", "report.html"]
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

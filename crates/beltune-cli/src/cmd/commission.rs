@@ -210,6 +210,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     let toml = controller_toml(&run.design, &friction, args.torque_limit)?;
     let html = render_html(&report)?;
     let files = write_outputs(&args.out, &json, &toml, &html)?;
+    super::diagnostic::remove_stale(&args.out)?;
     if !args.quiet {
         for line in &run.log {
             // "stage: summary", as the stage lines of a run on the axis
@@ -329,6 +330,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let report = build_report(&run, &name, before.as_ref(), Some(&truth));
     let html = render_html(&report)?;
     let files = write_outputs(&args.out, &json, &toml, &html)?;
+    super::diagnostic::remove_stale(&args.out)?;
     let verdict = super::verdict::judge(&run.validation.nonlinear, &limits);
     let status = if verdict.passed {
         ExitStatus::Success

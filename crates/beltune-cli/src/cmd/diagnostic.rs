@@ -93,6 +93,20 @@ pub fn samples_csv(history: &[HistorySample]) -> String {
     out
 }
 
+/// Remove the diagnostic of an earlier stop from `dir` (after results were
+/// written there: a folder must not hold fresh results beside a stale stop).
+pub fn remove_stale(dir: &Path) -> anyhow::Result<()> {
+    for name in [JSON_FILE, CSV_FILE] {
+        let p = dir.join(name);
+        match std::fs::remove_file(&p) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => anyhow::bail!("removing the stale {}: {e}", p.display()),
+        }
+    }
+    Ok(())
+}
+
 /// Write both files into `dir` (created if needed); returns their paths,
 /// the description first. `reason` is the one-line message of the stop.
 pub fn write(
