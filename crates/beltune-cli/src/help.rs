@@ -19,7 +19,7 @@ pub const EXIT_STATUSES: [(i32, &str); 7] = [
     ),
     (
         ExitStatus::SafetyStop as i32,
-        "safety stop: the supervisor stopped the axis (see safety-stop.json)",
+        "safety stop: the supervisor stopped the axis (safety-stop.json), or the axis failed",
     ),
     (
         ExitStatus::Infeasible as i32,
@@ -149,7 +149,7 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 7] = [
     ),
     (
         "Excitation",
-        &["excitation_amplitude", "prbs_order", "prbs_clock"],
+        &["excitation_amplitude", "prbs_order", "prbs_clock_ms"],
     ),
     (
         "Validation limits",

@@ -66,8 +66,8 @@ fn egc70_input() -> DesignInput {
     let mut input = DesignInput::new(plant.worst_case_two_mass().unwrap(), plant.dead_time_s());
     let f = plant.friction_totals();
     input.friction = Some(FrictionParams {
-        viscous_n_m_s_per_rad: f.viscous_nm_s_per_rad,
-        coulomb_n_m: f.coulomb_nm,
+        viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+        coulomb_nm: f.coulomb_nm,
     });
     input
 }
@@ -89,8 +89,8 @@ fn write_model_toml(input: &DesignInput, path: &Path) {
         m.i_t,
         input.dead_time_s,
         input.t_r_s,
-        f.viscous_n_m_s_per_rad,
-        f.coulomb_n_m
+        f.viscous_nm_s_per_rad,
+        f.coulomb_nm
     );
     std::fs::write(path, text).unwrap();
 }

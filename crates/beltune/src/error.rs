@@ -108,6 +108,16 @@ pub enum Error {
         reason: String,
     },
 
+    /// A cyclic exchange with the axis failed; the drive was told to quick
+    /// stop (`quick_stop` says why that failed too, if it did).
+    #[error("axis: {error}{}", quick_stop.map(|q| format!("; the quick stop failed too: {q}")).unwrap_or_default())]
+    Axis {
+        /// Why the exchange failed.
+        error: crate::plant::AxisError,
+        /// Why the quick stop failed, if it did.
+        quick_stop: Option<crate::plant::AxisError>,
+    },
+
     // ---- report ----
     /// A plot could not be drawn or the report not rendered.
     #[error("report: {reason}")]

@@ -69,9 +69,10 @@ pub struct Args {
     /// PRBS order n_PRBS (default 9).
     #[arg(long)]
     pub prbs_order: Option<u32>,
-    /// PRBS clock period P_PRBS in samples (default 16).
+    /// PRBS clock period P_PRBS in ms (default 1.6 ms = 16 samples at 10 kHz;
+    /// rounded to whole cycles of the axis).
     #[arg(long)]
-    pub prbs_clock: Option<u32>,
+    pub prbs_clock_ms: Option<f64>,
     /// Commission from recorded data instead of a plant: CSV of a periodic
     /// excitation (header row). Skips the stages that need the axis.
     #[arg(long, requires_all = ["input", "output"])]
@@ -292,8 +293,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(n) = args.prbs_order {
         cfg.excitation.prbs_order = n;
     }
-    if let Some(p) = args.prbs_clock {
-        cfg.excitation.clock_period = p;
+    if let Some(p) = args.prbs_clock_ms {
+        cfg.excitation.clock_period_s = p * 1e-3;
     }
     if let Some(e) = args.following_error_max {
         cfg.following_error_max_m = e;
@@ -317,8 +318,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         m_c: truth_params.m_c,
         c: truth_params.c,
         dead_time_s: plant.dead_time_s(),
-        viscous: friction.viscous_nm_s_per_rad,
-        coulomb: friction.coulomb_nm,
+        viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+        coulomb_nm: friction.coulomb_nm,
     };
     let name = args.plant.clone();
     let json = commissioning_json(&run, &name, Some(truth.clone()));

@@ -82,7 +82,7 @@ struct ModelJson {
     /// Current-loop dead time, s; null when no actual-torque column was given.
     dead_time_s: Option<f64>,
     dead_time_samples: Option<usize>,
-    sample_time_s: f64,
+    ts_s: f64,
     units: ModelUnits,
     free_inertia: bool,
     n_lines: usize,
@@ -144,7 +144,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             fit_rms_db: fit.fit_rms_db,
             dead_time_s: dead_time.map(|d| d.seconds),
             dead_time_samples: dead_time.map(|d| d.samples),
-            sample_time_s: id.sample_time_s,
+            ts_s: id.ts_s,
             units: fit.units,
             free_inertia: fit.free_inertia,
             n_lines: fit.n_lines,

@@ -109,7 +109,7 @@ fn table(name: &str, s: &PlantSummary) -> String {
         format!("{:.4} N m", s.friction.coulomb_nm),
     );
     row("dead time", format!("{:.2} ms", s.dead_time_s * 1e3));
-    row("torque limit", format!("{:.2} N m", s.torque_limit_nm));
+    row("torque limit", format!("{:.2} N m", s.torque_max_nm));
     row(
         "encoder",
         format!(
@@ -119,7 +119,7 @@ fn table(name: &str, s: &PlantSummary) -> String {
             std::f64::consts::TAU / s.motor_rad_per_count
         ),
     );
-    row("sampling time", format!("{:.1} us", s.sample_time_s * 1e6));
+    row("sampling time", format!("{:.1} us", s.ts_s * 1e6));
     if !s.position_sweep.is_empty() {
         out.push_str("\nposition dependency (linearized at xi):\n");
         out.push_str(&format!(

@@ -60,21 +60,21 @@ const PHYSICAL: &[Line] = &[
     Group("installation and drive"),
     Key("tilt_rad", "alpha: tilt against the horizontal, rad (optional, default 0; positive lifts the cart as xi grows)"),
     Key("dead_time_s", "current-loop dead time, s (thesis 3.30)"),
-    Key("torque_limit_nm", "torque limit of the drive, N m"),
+    Key("torque_max_nm", "torque limit of the drive, N m"),
     Key("motor_rad_per_count", "motor encoder resolution, rad per count (2 pi / counts per revolution)"),
-    Key("sample_time_s", "sampling time of the drive, s"),
+    Key("ts_s", "sampling time of the drive, s"),
 ];
 
 /// The keys of a linear plant, top level first, then the `[two_mass]` table.
 const LINEAR: &[Line] = &[
     Group("drive"),
     Key("dead_time_s", "current-loop dead time, s (thesis 3.30)"),
-    Key("torque_limit_nm", "torque limit of the drive, N m"),
+    Key("torque_max_nm", "torque limit of the drive, N m"),
     Key(
         "motor_rad_per_count",
         "motor encoder resolution, rad per count",
     ),
-    Key("sample_time_s", "sampling time of the drive, s"),
+    Key("ts_s", "sampling time of the drive, s"),
 ];
 
 /// The keys of the `[two_mass]` table of a linear plant (thesis 2.33, Table A.4).

@@ -36,12 +36,14 @@ pub const COMMISSIONING_FILE: &str = "commissioning.json";
 #[derive(Debug, Clone, Copy, Deserialize)]
 pub struct FrictionTotals {
     /// Viscous friction d_v, N m s/rad.
-    pub viscous: f64,
+    #[serde(alias = "viscous")]
+    pub viscous_nm_s_per_rad: f64,
     /// Coulomb friction tau_c, N m.
-    pub coulomb: f64,
-    /// Viscous-only fit (linear feedforward), N m s/rad; absent: `viscous`.
-    #[serde(default)]
-    pub linear_viscous: Option<f64>,
+    #[serde(alias = "coulomb")]
+    pub coulomb_nm: f64,
+    /// Viscous-only fit (linear feedforward), N m s/rad; absent: `viscous_nm_s_per_rad`.
+    #[serde(default, alias = "linear_viscous")]
+    pub linear_viscous_nm_s_per_rad: Option<f64>,
     /// Holding torque (tilted axis), N m; absent: 0.
     #[serde(default)]
     pub holding_torque_nm: Option<f64>,
@@ -85,9 +87,12 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     beltune::error::require_positive("dead_time_s [s]", id.dead_time_s)
         .with_context(|| format!("{}: identified model", path.display()))?;
     if let Some(f) = file.friction {
-        beltune::error::require_non_negative("friction.viscous [N m s/rad]", f.viscous)
-            .and_then(|_| beltune::error::require_non_negative("friction.coulomb [N m]", f.coulomb))
-            .with_context(|| format!("{}: friction", path.display()))?;
+        beltune::error::require_non_negative(
+            "friction.viscous [N m s/rad]",
+            f.viscous_nm_s_per_rad,
+        )
+        .and_then(|_| beltune::error::require_non_negative("friction.coulomb [N m]", f.coulomb_nm))
+        .with_context(|| format!("{}: friction", path.display()))?;
     }
     Ok(DesignModel {
         source: format!("commissioning {}", dir.display()),
@@ -124,7 +129,7 @@ pub struct LibraryTuner {
     move_plant: MovePlant,
     /// Torque limit written to controller.toml and used in the move: the egc70
     /// drive's (a commissioning.json does not record it), N m.
-    torque_limit_nm: f64,
+    torque_max_nm: f64,
 }
 
 impl LibraryTuner {
@@ -133,19 +138,19 @@ impl LibraryTuner {
     pub fn new(model: DesignModel) -> anyhow::Result<Self> {
         let mut input = DesignInput::new(model.params, model.dead_time_s);
         input.friction = model.friction.map(|f| FrictionParams {
-            viscous_n_m_s_per_rad: f.viscous,
-            coulomb_n_m: f.coulomb,
+            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+            coulomb_nm: f.coulomb_nm,
         });
         input
             .validate()
             .with_context(|| format!("design input from {}", model.source))?;
-        let torque_limit_nm = rigs::builtin("egc70", None)?.info().torque_limit_nm;
+        let torque_max_nm = rigs::builtin("egc70", None)?.info().torque_max_nm;
         Ok(LibraryTuner {
             model,
             input,
             nominal_payload_kg: 0.0,
             move_plant: MovePlant::Identified,
-            torque_limit_nm,
+            torque_max_nm,
         })
     }
 
@@ -164,9 +169,9 @@ impl LibraryTuner {
             params,
             dead_time_s: plant.dead_time_s(),
             friction: Some(FrictionTotals {
-                viscous: friction.viscous_nm_s_per_rad,
-                coulomb: friction.coulomb_nm,
-                linear_viscous: None,
+                viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+                coulomb_nm: friction.coulomb_nm,
+                linear_viscous_nm_s_per_rad: None,
                 holding_torque_nm: None,
             }),
         };
@@ -226,15 +231,15 @@ impl LibraryTuner {
                 // Section 3.6. So the linear move plant takes its viscous friction
                 // (translational equivalent on the motor side) and no cart damping.
                 if let Some(f) = self.model.friction {
-                    two_mass.d_m = f.viscous / (two_mass.i_t * two_mass.i_t);
+                    two_mass.d_m = f.viscous_nm_s_per_rad / (two_mass.i_t * two_mass.i_t);
                     two_mass.d_c = 0.0;
                 }
                 Ok(Plant::Linear(LinearPlant {
                     two_mass,
                     dead_time_s: self.model.dead_time_s,
-                    torque_limit_nm: drive.torque_limit_nm,
+                    torque_max_nm: drive.torque_max_nm,
                     motor_rad_per_count: drive.motor_rad_per_count,
-                    sample_time_s: self.input.ts_s,
+                    ts_s: self.input.ts_s,
                 }))
             }
         }
@@ -383,19 +388,21 @@ impl Tuner for LibraryTuner {
     fn controller_toml(&self, knobs: &Knobs) -> Result<String, TuneError> {
         let d = self.design(knobs)?;
         let friction = self.model.friction.unwrap_or(FrictionTotals {
-            viscous: 0.0,
-            coulomb: 0.0,
-            linear_viscous: None,
+            viscous_nm_s_per_rad: 0.0,
+            coulomb_nm: 0.0,
+            linear_viscous_nm_s_per_rad: None,
             holding_torque_nm: None,
         });
         let friction = FrictionResult {
-            viscous: friction.viscous,
-            coulomb: friction.coulomb,
-            linear_viscous: friction.linear_viscous.unwrap_or(friction.viscous),
+            viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+            coulomb_nm: friction.coulomb_nm,
+            linear_viscous_nm_s_per_rad: friction
+                .linear_viscous_nm_s_per_rad
+                .unwrap_or(friction.viscous_nm_s_per_rad),
             relative_residual: 0.0,
             holding_torque_nm: friction.holding_torque_nm.unwrap_or(0.0),
         };
-        let body = outputs::controller_toml(&d, &friction, self.torque_limit_nm)
+        let body = outputs::controller_toml(&d, &friction, self.torque_max_nm)
             .map_err(|e| TuneError::Internal(e.to_string()))?;
         let k = &d.knobs;
         Ok(format!(
@@ -452,7 +459,7 @@ impl LibraryTuner {
             ..SimConfig::default()
         };
         let mut axis = SimAxis::new(&plant, config)?;
-        let torque_max = info.torque_limit_nm;
+        let torque_max = info.torque_max_nm;
         let feedback = cascade_from_design(d, torque_max, 0.0)?;
         let a_stop = MOVE_STOP_DECELERATION_M_S2;
         let supervisor = SafetySupervisor::new(
@@ -486,10 +493,12 @@ impl LibraryTuner {
         let mut controller = feedback;
         controller.feedforward = match self.move_plant {
             MovePlant::Egc70 => {
-                RtFeedforward::nonlinear(ff.m_e_kg_m2, ff.d_v_n_m_s_per_rad, ff.tau_c_n_m)
+                RtFeedforward::nonlinear(ff.inertia_kg_m2, ff.viscous_nm_s_per_rad, ff.coulomb_nm)
             }
             // the linear move plant has no Coulomb friction to compensate
-            MovePlant::Identified => RtFeedforward::linear(ff.m_e_kg_m2, ff.d_v_n_m_s_per_rad),
+            MovePlant::Identified => {
+                RtFeedforward::linear(ff.inertia_kg_m2, ff.viscous_nm_s_per_rad)
+            }
         };
         controller.filter_desired_velocity = true;
         controller.feedforward_preview = true;
@@ -564,7 +573,7 @@ mod tests {
         assert_eq!(m.params.m_c, 13.44);
         assert_eq!(m.params.d, 0.0);
         assert_eq!(m.dead_time_s, 0.001);
-        assert_eq!(m.friction.unwrap().coulomb, 0.125);
+        assert_eq!(m.friction.unwrap().coulomb_nm, 0.125);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -417,7 +417,7 @@ mod tests {
             &u,
             &phi,
             &EtfeConfig {
-                sample_time_s: ts,
+                ts_s: ts,
                 period_samples: 4094,
                 skip_periods: 1,
                 // below f_s / 10 the ZOH-sampled response equals the continuous one in magnitude
@@ -500,7 +500,7 @@ mod tests {
             &u,
             &phi,
             &EtfeConfig {
-                sample_time_s: ts,
+                ts_s: ts,
                 period_samples: 511 * 4,
                 ..Default::default()
             },

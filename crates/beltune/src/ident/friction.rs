@@ -37,7 +37,7 @@ pub struct ConstantVelocityRun {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct FrictionFit {
     /// `d_v~`, N m s/rad.
-    pub viscous_nms_per_rad: f64,
+    pub viscous_nm_s_per_rad: f64,
     /// `tau_c~`, N m (0 for the linear variant).
     pub coulomb_nm: f64,
     /// RMS of the torque residuals, N m.
@@ -116,7 +116,7 @@ fn solve_runs(runs: &[ConstantVelocityRun], coulomb: bool) -> Result<FrictionFit
     let x = lstsq(&a, &b)?;
     let r = &b - &a * &x;
     Ok(FrictionFit {
-        viscous_nms_per_rad: x[0],
+        viscous_nm_s_per_rad: x[0],
         coulomb_nm: if coulomb { x[1] } else { 0.0 },
         rms_residual_nm: (r.norm_squared() / runs.len() as f64).sqrt(),
     })
@@ -373,12 +373,15 @@ mod tests {
         }
         let runs = run_means(&t, &v, &tau, &windows, 0.2).unwrap();
         let fit = fit_constant_velocity(&runs).unwrap();
-        assert!((fit.viscous_nms_per_rad / D_V - 1.0).abs() < TOL, "{fit:?}");
+        assert!(
+            (fit.viscous_nm_s_per_rad / D_V - 1.0).abs() < TOL,
+            "{fit:?}"
+        );
         assert!((fit.coulomb_nm / TAU_C - 1.0).abs() < TOL, "{fit:?}");
         // the linear variant absorbs Coulomb friction into a larger viscous term
         let lin = fit_viscous_only(&runs).unwrap();
         assert_eq!(lin.coulomb_nm, 0.0);
-        assert!(lin.viscous_nms_per_rad > fit.viscous_nms_per_rad);
+        assert!(lin.viscous_nm_s_per_rad > fit.viscous_nm_s_per_rad);
         assert!(lin.rms_residual_nm > fit.rms_residual_nm);
     }
 

@@ -120,7 +120,7 @@ pub fn read_csv_columns(path: &Path, names: &[&str]) -> Result<CsvColumns> {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Sampling {
     /// Mean sample period, s (time unit of the file).
-    pub sample_time_s: f64,
+    pub ts_s: f64,
     /// Largest relative deviation of one step from the mean, `max |dt - T_s| / T_s`.
     pub max_jitter: f64,
 }
@@ -152,7 +152,7 @@ pub fn check_time(cols: &CsvColumns, name: &str, min_rows: usize) -> Result<Samp
         .map(|w| ((w[1] - w[0]) - ts).abs() / ts)
         .fold(0.0, f64::max);
     Ok(Sampling {
-        sample_time_s: ts,
+        ts_s: ts,
         max_jitter,
     })
 }
@@ -169,13 +169,13 @@ pub fn check_uniform_time(
     if s.max_jitter > tolerance {
         let t = cols.column(name).expect("checked");
         let r = (1..t.len())
-            .find(|&r| ((t[r] - t[r - 1]) - s.sample_time_s).abs() / s.sample_time_s > tolerance)
+            .find(|&r| ((t[r] - t[r - 1]) - s.ts_s).abs() / s.ts_s > tolerance)
             .unwrap_or(1);
         return Err(cols.err(format!(
             "row {}, column `{name}`: non-uniform sampling (step {} vs mean {})",
             line_of_row(r),
             t[r] - t[r - 1],
-            s.sample_time_s
+            s.ts_s
         )));
     }
     Ok(s)
@@ -220,7 +220,7 @@ mod tests {
         assert_eq!(c.column("y").unwrap(), &[2.0, 4.0, 6.0]);
         assert_eq!(c.rows(), 3);
         let s = check_uniform_time(&c, "t", 3, 1e-6).unwrap();
-        assert!((s.sample_time_s - 0.1).abs() < 1e-12);
+        assert!((s.ts_s - 0.1).abs() < 1e-12);
 
         let m = msg(read_csv_columns(&p, &["t", "z"]));
         assert!(

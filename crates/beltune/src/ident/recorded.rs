@@ -44,7 +44,7 @@ pub struct RecordedIdentification {
     /// The dead time, when an actual-torque column was given.
     pub dead_time: Option<DeadTime>,
     /// Sampling time of the file, s.
-    pub sample_time_s: f64,
+    pub ts_s: f64,
     /// Samples per period.
     pub period_samples: usize,
     /// Rows in the file.
@@ -100,7 +100,7 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
     }
     let sampling = check_uniform_time(&cols, r.time, needed, 0.01)?;
     let cfg = EtfeConfig {
-        sample_time_s: sampling.sample_time_s,
+        ts_s: sampling.ts_s,
         period_samples: period,
         skip_periods: r.skip_periods,
         ..r.etfe
@@ -119,7 +119,7 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
         frf,
         fit,
         dead_time,
-        sample_time_s: sampling.sample_time_s,
+        ts_s: sampling.ts_s,
         period_samples: period,
         rows: cols.rows(),
     })

@@ -100,11 +100,13 @@ pub struct PhysicalParams {
     /// Current-loop dead time, s (3.30).
     pub dead_time_s: f64,
     /// Torque limit of the drive (saturation of the current setpoint), N m.
-    pub torque_limit_nm: f64,
+    #[serde(alias = "torque_limit_nm")]
+    pub torque_max_nm: f64,
     /// Motor encoder resolution, rad per count.
     pub motor_rad_per_count: f64,
     /// Sampling time of the drive, s.
-    pub sample_time_s: f64,
+    #[serde(alias = "sample_time_s")]
+    pub ts_s: f64,
 }
 
 /// Lengths of the three free belt segments at one cart position, m.
@@ -264,7 +266,7 @@ impl PhysicalParams {
 
     /// Number of whole samples of the dead time, `round(T_d / T_s)`.
     pub fn dead_time_samples(&self) -> usize {
-        (self.dead_time_s / self.sample_time_s).round() as usize
+        (self.dead_time_s / self.ts_s).round() as usize
     }
 
     /// Typed error for anything non-physical: non-finite values, non-positive
@@ -307,9 +309,9 @@ impl PhysicalParams {
             ));
         }
         require_non_negative("dead_time_s", self.dead_time_s)?;
-        require_positive("torque_limit_nm", self.torque_limit_nm)?;
+        require_positive("torque_max_nm", self.torque_max_nm)?;
         require_positive("motor_rad_per_count", self.motor_rad_per_count)?;
-        require_positive("sample_time_s", self.sample_time_s)?;
+        require_positive("ts_s", self.ts_s)?;
         if self.dead_time_s > 1.0 {
             return Err(Error::invalid(
                 "dead_time_s",
@@ -317,10 +319,10 @@ impl PhysicalParams {
                 "a current-loop dead time above 1 s is not physical",
             ));
         }
-        if self.sample_time_s > 0.1 {
+        if self.ts_s > 0.1 {
             return Err(Error::invalid(
-                "sample_time_s",
-                self.sample_time_s,
+                "ts_s",
+                self.ts_s,
                 "a drive sampling time above 100 ms is not supported",
             ));
         }
@@ -469,9 +471,9 @@ mod tests {
                 },
             ),
             (
-                "sample_time_s",
+                "ts_s",
                 PhysicalParams {
-                    sample_time_s: 0.0,
+                    ts_s: 0.0,
                     ..ok.clone()
                 },
             ),

@@ -14,4 +14,5 @@ pub mod outputs;
 pub mod recorded;
 pub mod result;
 pub mod runner;
+pub mod stages;
 pub mod validation;

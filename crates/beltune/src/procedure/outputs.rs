@@ -52,7 +52,7 @@ pub struct ControllerToml {
     /// Sampling time `T_s`, s.
     pub ts_s: f64,
     /// Torque limit, N m.
-    pub torque_limit_nm: f64,
+    pub torque_max_nm: f64,
     /// Constant torque offset (holding torque), N m.
     pub torque_offset_nm: f64,
     /// Continuous gains.
@@ -131,9 +131,9 @@ pub struct FeedforwardToml {
 pub fn controller_toml(
     des: &ControllerDesign,
     friction: &FrictionResult,
-    torque_limit_nm: f64,
+    torque_max_nm: f64,
 ) -> Result<String> {
-    let cfg = cascade_from_design(des, torque_limit_nm, friction.holding_torque_nm)?;
+    let cfg = cascade_from_design(des, torque_max_nm, friction.holding_torque_nm)?;
     let s = des.discrete.prefilter;
     let v = cfg.velocity_filter;
     let (kind, omega_bw, omega_r, d_n) = match des.prefilter {
@@ -146,7 +146,7 @@ pub fn controller_toml(
     let model = des.input.model;
     let doc = ControllerToml {
         ts_s: des.input.ts_s,
-        torque_limit_nm,
+        torque_max_nm,
         torque_offset_nm: friction.holding_torque_nm,
         gains: GainsToml {
             k_pp_per_s: des.k_pp,
@@ -167,9 +167,9 @@ pub fn controller_toml(
         },
         feedforward: FeedforwardToml {
             inertia_kg_m2: model.rigid_inertia(),
-            viscous_nm_s_per_rad: friction.viscous,
-            coulomb_nm: friction.coulomb,
-            linear_viscous_nm_s_per_rad: friction.linear_viscous,
+            viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+            coulomb_nm: friction.coulomb_nm,
+            linear_viscous_nm_s_per_rad: friction.linear_viscous_nm_s_per_rad,
             preview_samples: (des.input.dead_time_s / des.input.ts_s).round() as usize,
             belt_stretch_s2: model.m_c / model.c,
             static_stretch_m: friction.holding_torque_nm / (model.i_t * model.c),
@@ -437,8 +437,8 @@ pub fn build_report(
             .iter()
             .map(|p| p.mean_torque_nm)
             .collect(),
-        viscous_nm_s_per_rad: run.friction.viscous,
-        coulomb_nm: run.friction.coulomb,
+        viscous_nm_s_per_rad: run.friction.viscous_nm_s_per_rad,
+        coulomb_nm: run.friction.coulomb_nm,
     };
     let labels = [
         "no feedforward",
@@ -511,16 +511,16 @@ pub fn build_report(
                 "viscous friction d_v",
                 "mN m s/rad",
                 None,
-                f.viscous * 1e3,
-                truth.map(|t| t.viscous * 1e3),
+                f.viscous_nm_s_per_rad * 1e3,
+                truth.map(|t| t.viscous_nm_s_per_rad * 1e3),
                 3,
             ),
             row(
                 "Coulomb friction tau_c",
                 "N m",
                 None,
-                f.coulomb,
-                truth.map(|t| t.coulomb),
+                f.coulomb_nm,
+                truth.map(|t| t.coulomb_nm),
                 4,
             ),
             row(
@@ -588,7 +588,7 @@ pub fn recorded_outputs(run: &RecordedCommissioning, source: &str) -> (Commissio
                 "viscous friction d_v",
                 "(torque unit) s/rad",
                 None,
-                f.viscous,
+                f.viscous_nm_s_per_rad,
                 None,
                 5,
             ),
@@ -596,7 +596,7 @@ pub fn recorded_outputs(run: &RecordedCommissioning, source: &str) -> (Commissio
                 "Coulomb friction tau_c",
                 "(torque unit)",
                 None,
-                f.coulomb,
+                f.coulomb_nm,
                 None,
                 5,
             ),

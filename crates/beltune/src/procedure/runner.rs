@@ -116,14 +116,14 @@ impl<'a> Runner<'a> {
         stop_limits: Limits,
     ) -> Result<Self> {
         let info = axis.info();
-        crate::error::require_positive("sample_time_s", info.sample_time_s)?;
+        crate::error::require_positive("ts_s", info.ts_s)?;
         crate::error::require_positive("motor_rad_per_count", info.motor_rad_per_count)?;
         crate::error::require_positive("i_t", i_t)?;
         crate::error::require_finite("origin_m", origin_m)?;
-        let coeffs = velocity_filter(SUPERVISION_T_R_S, info.sample_time_s)?;
+        let coeffs = velocity_filter(SUPERVISION_T_R_S, info.ts_s)?;
         let mut velocity = FirstOrder::new(coeffs);
         velocity.reset_to(origin_m, 0.0);
-        let history_len = ((STOP_HISTORY_S / info.sample_time_s).ceil() as usize).max(1);
+        let history_len = ((STOP_HISTORY_S / info.ts_s).ceil() as usize).max(1);
         Ok(Runner {
             axis,
             progress,
@@ -179,7 +179,7 @@ impl<'a> Runner<'a> {
 
     /// Busy time so far, s.
     pub fn busy_time_s(&self) -> f64 {
-        self.samples as f64 * self.info.sample_time_s
+        self.samples as f64 * self.info.ts_s
     }
 
     /// The last measurement.
@@ -213,11 +213,13 @@ impl<'a> Runner<'a> {
     }
 
     /// Apply one torque command (saturated to the axis' limit) after the
-    /// supervisor approved the state; on a violation, stop and return the error.
+    /// supervisor approved the state; on a violation, stop and return the
+    /// error. A failed exchange ends in the drive's quick stop and
+    /// [`Error::Axis`].
     pub fn step(&mut self, torque_nm: f64, following_error_m: Option<f64>) -> Result<Sample> {
         let limit = self
             .info
-            .torque_limit_nm
+            .torque_max_nm
             .min(self.supervisor.limits().torque_max_nm);
         let torque = if torque_nm.is_finite() {
             torque_nm.clamp(-limit, limit)
@@ -232,11 +234,18 @@ impl<'a> Runner<'a> {
         ) {
             return Err(self.stop_after(v, torque, following_error_m));
         }
-        Ok(self.raw_step(torque, following_error_m))
+        self.raw_step(torque, following_error_m)
     }
 
-    fn raw_step(&mut self, torque_nm: f64, following_error_m: Option<f64>) -> Sample {
-        let m = self.axis.step(torque_nm);
+    fn raw_step(&mut self, torque_nm: f64, following_error_m: Option<f64>) -> Result<Sample> {
+        let m = match self.axis.exchange(torque_nm) {
+            Ok(m) => m,
+            Err(error) => {
+                // The host can no longer control the axis: the drive stops it.
+                let quick_stop = self.axis.quick_stop().err();
+                return Err(Error::Axis { error, quick_stop });
+            }
+        };
         self.last = m;
         self.samples += 1;
         self.progress.advance(1);
@@ -258,7 +267,7 @@ impl<'a> Runner<'a> {
             velocity_m_s: self.velocity_m_s,
             following_error_m,
         });
-        sample
+        Ok(sample)
     }
 
     /// Stop after a violation, hand the record to the progress sink and turn
@@ -298,7 +307,7 @@ impl<'a> Runner<'a> {
     /// controller; returns the rest position, m. The supervisor is not asked
     /// during the stop (it is the reaction), but the torque stays limited.
     pub fn stop(&mut self) -> Result<f64> {
-        let ts = self.info.sample_time_s;
+        let ts = self.info.ts_s;
         let v = if self.velocity_m_s.is_finite() {
             self.velocity_m_s
         } else {
@@ -321,7 +330,7 @@ impl<'a> Runner<'a> {
         let mut ctrl = CascadeController::new(self.stop_controller)?;
         ctrl.reset_to(self.motor_angle_rad());
         let n = ((traj.duration_s() + STOP_SETTLE_S) / ts).ceil() as u64;
-        let limit = self.info.torque_limit_nm;
+        let limit = self.info.torque_max_nm;
         for k in 0..n {
             let s = traj.sample(k as f64 * ts);
             let sp = Setpoint::at(MotionSample {
@@ -335,7 +344,7 @@ impl<'a> Runner<'a> {
             } else {
                 0.0
             };
-            self.raw_step(tau, None);
+            self.raw_step(tau, None)?;
         }
         Ok(self.position_m())
     }
@@ -385,12 +394,12 @@ mod tests {
         let limits = SafetyLimits {
             travel_min_m: 0.0,
             travel_max_m: 0.6,
-            torque_max_nm: info.torque_limit_nm,
+            torque_max_nm: info.torque_max_nm,
             velocity_max_m_s: 2.5,
             following_error_max_m: 0.05,
         };
         let supervisor = SafetySupervisor::new(limits, 5.0).unwrap();
-        let boot = bootstrap_controller(j, i_t, info.sample_time_s, info.torque_limit_nm).unwrap();
+        let boot = bootstrap_controller(j, i_t, info.ts_s, info.torque_max_nm).unwrap();
         let stop_limits = Limits {
             v_max: 0.5,
             v_min: -0.5,
@@ -434,7 +443,7 @@ mod tests {
             "{:?}",
             r.violation
         );
-        let ts = info.sample_time_s;
+        let ts = info.ts_s;
         let n = (STOP_HISTORY_S / ts).ceil() as usize;
         assert!(
             steps as usize > n,
