@@ -225,52 +225,54 @@ impl Summary {
         let mut add = |label: &str, body: String| {
             out.extend(term::wrap(label, LABEL_WIDTH, &body, term::WIDTH))
         };
-        let id = &self.identified;
-        let truth = |v: Option<f64>| v.map(|t| format!(" (truth {t:.2})")).unwrap_or_default();
         if self.record_units {
-            let c = &self.controller;
-            add(
-                "identified",
-                format!(
-                    "f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.4e}, c {:.4e} (units of the record), \
-                     dead time {:.2} ms, fit {:.2} dB rms, coherence {:.3}",
-                    id.f_r_hz,
-                    id.f_z_hz,
-                    id.m_c_kg,
-                    id.c_n_per_m,
-                    id.dead_time_s * 1e3,
-                    id.fit_rms_db,
-                    id.mean_coherence
-                ),
-            );
-            add(
-                "controller",
-                format!(
-                    "K_P {:.4e}, K_I {:.4e} (units of the record), K_PP {:.2} 1/s; velocity loop \
-                     {:.1} Hz / {:.1} deg, position loop {:.1} Hz / {:.1} deg",
-                    c.k_p_nm_s_per_rad,
-                    c.k_i_nm_per_rad,
-                    c.k_pp_per_s,
-                    c.velocity_crossover_hz,
-                    c.velocity_phase_margin_deg,
-                    c.position_crossover_hz,
-                    c.position_phase_margin_deg
-                ),
-            );
+            self.record_lines(&mut add);
         } else {
-            self.axis_lines(&mut add, &truth);
+            self.axis_lines(&mut add);
         }
         self.tail_lines(&mut add);
         out
     }
 
-    /// The identified and controller lines of a run with SI units.
-    fn axis_lines(
-        &self,
-        add: &mut impl FnMut(&str, String),
-        truth: &dyn Fn(Option<f64>) -> String,
-    ) {
+    /// The identified and controller lines of recorded data: values in the
+    /// units of the record, printed without units.
+    fn record_lines(&self, add: &mut impl FnMut(&str, String)) {
         let id = &self.identified;
+        let c = &self.controller;
+        add(
+            "identified",
+            format!(
+                "f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.4e}, c {:.4e} (units of the record), \
+                 dead time {:.2} ms, fit {:.2} dB rms, coherence {:.3}",
+                id.f_r_hz,
+                id.f_z_hz,
+                id.m_c_kg,
+                id.c_n_per_m,
+                id.dead_time_s * 1e3,
+                id.fit_rms_db,
+                id.mean_coherence
+            ),
+        );
+        add(
+            "controller",
+            format!(
+                "K_P {:.4e}, K_I {:.4e} (units of the record), K_PP {:.2} 1/s; velocity loop \
+                 {:.1} Hz / {:.1} deg, position loop {:.1} Hz / {:.1} deg",
+                c.k_p_nm_s_per_rad,
+                c.k_i_nm_per_rad,
+                c.k_pp_per_s,
+                c.velocity_crossover_hz,
+                c.velocity_phase_margin_deg,
+                c.position_crossover_hz,
+                c.position_phase_margin_deg
+            ),
+        );
+    }
+
+    /// The identified and controller lines of a run with SI units.
+    fn axis_lines(&self, add: &mut impl FnMut(&str, String)) {
+        let id = &self.identified;
+        let truth = |v: Option<f64>| v.map(|t| format!(" (truth {t:.2})")).unwrap_or_default();
         add(
             "identified",
             format!(
