@@ -130,12 +130,13 @@ pub fn commission_after_help() -> String {
 /// Headings of the flags of `beltune commission`, in the order they show,
 /// with the ids (field names) of their flags. A new flag needs an entry here
 /// (a test checks that every flag has one).
-pub const COMMISSION_HEADINGS: [(&str, &[&str]); 7] = [
+pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
     (
         "Plant",
         &["plant", "payload", "tilt", "seed", "start_position"],
     ),
     ("Safety", &["travel_window", "following_error_max"]),
+    ("EtherCAT drive", &["ethercat", "subdevice", "cycle_us"]),
     (
         "Design",
         &[
@@ -171,9 +172,10 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 7] = [
             "friction_csv",
             "friction_torque",
             "friction_position",
+            "current_units",
         ],
     ),
-    ("Output", &["config", "out", "quiet", "json"]),
+    ("Output", &["config", "out", "force", "quiet", "json"]),
 ];
 
 /// The heading of a `beltune commission` flag.

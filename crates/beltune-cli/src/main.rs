@@ -46,6 +46,12 @@ enum Command {
     Commission(cmd::commission::Args),
     /// Serve the interactive tuning page.
     Serve(cmd::serve::Args),
+    /// Export a controller.toml as firmware source (Rust module or C header).
+    Export(cmd::export::Args),
+    /// Write an excitation signal (PRBS, chirp, multisine) to play on another drive.
+    Excitation(cmd::excitation::Args),
+    /// Answer as a virtual CiA 402 servo drive (EtherCAT SubDevice) on a network interface.
+    VirtualDrive(cmd::virtual_drive::Args),
     /// Print the shell completion script (bash, zsh, fish, elvish, powershell).
     Completions(cmd::completions::Args),
     /// Print the manual page (roff), or write one per subcommand with --out.
@@ -84,6 +90,9 @@ fn main() {
         Command::Design(a) => cmd::design::run(a),
         Command::Commission(a) => cmd::commission::run(a),
         Command::Serve(a) => cmd::serve::run(a),
+        Command::Export(a) => cmd::export::run(a),
+        Command::Excitation(a) => cmd::excitation::run(a),
+        Command::VirtualDrive(a) => cmd::virtual_drive::run(a),
         Command::Completions(a) => cmd::completions::run(a, Cli::command()),
         Command::Man(a) => cmd::man::run(a, Cli::command()),
     };

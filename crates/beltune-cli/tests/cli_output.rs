@@ -253,15 +253,19 @@ fn json_summary_has_the_documented_keys_and_the_run_s_numbers() {
 }
 
 /// Status 1: an error that is neither bad input nor about the axis (the
-/// output folder cannot be created: its parent is a file).
+/// plant file named on the command line cannot be read: an I/O error).
 #[test]
-fn an_output_folder_that_cannot_be_made_is_1() {
+fn an_unreadable_plant_file_is_1() {
     let dir = temp_dir("io");
-    let file = dir.join("a-file");
-    std::fs::write(&file, "x").unwrap();
-    let o = commission(&file.join("out"), &["--quiet"]);
+    let missing = dir.join("no-such-axis.toml");
+    let o = commission(
+        &dir.join("out"),
+        &["--quiet", "--plant", missing.to_str().unwrap()],
+    );
     assert_eq!(code(&o), 1, "{}", text(&o.stderr));
-    assert_eq!(text(&o.stderr).trim().lines().count(), 1);
+    let err = text(&o.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("no-such-axis.toml"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -316,9 +320,13 @@ fn a_forced_safety_stop_is_3_and_leaves_a_diagnostic() {
         "{err}"
     );
     assert_eq!(text(&o.stdout), "", "no summary after a stop");
-    assert_eq!(files_in(&out), ["safety-stop.csv", "safety-stop.json"]);
+    // `--out DIR` stays untouched (the same command can run again); the
+    // diagnostic is the folder beside it.
+    assert!(files_in(&out).is_empty(), "{:?}", files_in(&out));
+    let diag = dir.join("out-safety-stop");
+    assert_eq!(files_in(&diag), ["safety-stop.csv", "safety-stop.json"]);
     let d: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("safety-stop.json")).unwrap())
+        serde_json::from_str(&std::fs::read_to_string(diag.join("safety-stop.json")).unwrap())
             .unwrap();
     assert_eq!(d["schema"], "beltune-safety-stop/1");
     assert_eq!(d["limit"], "following_error");
@@ -333,22 +341,24 @@ fn a_forced_safety_stop_is_3_and_leaves_a_diagnostic() {
     assert!(d["stop_position_m"].is_number() && d["stop_error"].is_null());
     assert_eq!(d["samples_file"], "safety-stop.csv");
     assert_eq!(d["provenance"]["seed"], 1);
-    check_samples(&out, &d);
-    // A later successful run into the same folder leaves no stale diagnostic beside its results.
+    check_samples(&diag, &d);
+    // The same command without the tight limit runs into the same folder and
+    // removes the then stale diagnostic beside it.
     let o = commission(&out, &["--quiet"]);
     assert_eq!(code(&o), 0, "{}", text(&o.stderr));
     assert_eq!(
         files_in(&out),
         ["commissioning.json", "controller.toml", "report.html"]
     );
+    assert!(!diag.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The samples file: the header, as many rows as the description says, at
 /// the axis' 100 us, contiguous, ending at the sample the stop was judged
 /// on; and at most one second of them.
-fn check_samples(out: &Path, d: &serde_json::Value) {
-    let csv = std::fs::read_to_string(out.join("safety-stop.csv")).unwrap();
+fn check_samples(diag: &Path, d: &serde_json::Value) {
+    let csv = std::fs::read_to_string(diag.join("safety-stop.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
@@ -415,9 +425,10 @@ fn a_late_safety_stop_keeps_exactly_the_last_second() {
         ],
     );
     assert_eq!(code(&o), 3, "{}", text(&o.stderr));
-    let d: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("safety-stop.json")).unwrap())
-            .unwrap();
+    let d: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("out-safety-stop").join("safety-stop.json")).unwrap(),
+    )
+    .unwrap();
     assert!(
         ["travel", "travel_ahead"].contains(&d["limit"].as_str().unwrap()),
         "{}",
@@ -426,7 +437,7 @@ fn a_late_safety_stop_keeps_exactly_the_last_second() {
     assert_eq!(d["stage"], "identification (open loop)");
     assert!(d["time_s"].as_f64().unwrap() > 1.0);
     assert_eq!(d["samples"], 10_000);
-    check_samples(&out, &d);
+    check_samples(&dir.join("out-safety-stop"), &d);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -844,6 +855,8 @@ fn recorded_data_summary_has_null_axis_parts() {
             "iq_meas_A",
             "--period-samples",
             "2500",
+            "--torque-limit",
+            "3.1",
             "--out",
         ]);
         c.arg(dir.join(out));

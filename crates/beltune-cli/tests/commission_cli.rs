@@ -95,7 +95,10 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
     let toml_text = std::fs::read_to_string(out.join("controller.toml")).unwrap();
     let toml: toml::Table = toml::from_str(&toml_text).unwrap();
     assert!(toml["gains"]["k_p_nm_s_per_rad"].as_float().unwrap() > 0.0);
-    assert_eq!(toml["prefilter"]["sos"].as_array().unwrap().len(), 5);
+    let sections = toml["prefilter"]["sections"].as_array().unwrap();
+    assert_eq!(sections.len(), 2);
+    assert!(sections.iter().all(|s| s.as_array().unwrap().len() == 5));
+    assert_eq!(toml["schema_version"].as_integer(), Some(1));
 
     // The report in a real browser.
     let html = out.join("report.html");
@@ -160,8 +163,13 @@ fn safety_stop_exits_non_zero_and_writes_only_its_diagnostic() {
         "{err}"
     );
     assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
-    // No results, only the diagnostic (issue 16; tests/cli_output.rs reads it).
-    let mut left = files_in(&out);
+    assert!(
+        files_in(&out).is_empty(),
+        "left behind: {:?}",
+        files_in(&out)
+    );
+    // Only the diagnostic, beside the output folder (issue 16; tests/cli_output.rs reads it).
+    let mut left = files_in(&dir.join("out-safety-stop"));
     left.sort();
     assert_eq!(left, ["safety-stop.csv", "safety-stop.json"]);
     std::fs::remove_dir_all(&dir).unwrap();
@@ -202,6 +210,9 @@ fn commission_from_recorded_data_skips_the_axis_stages() {
             "iq_meas_A",
             "--period-samples",
             "2500",
+            "--current-units",
+            "--torque-limit",
+            "20",
             "--out",
         ])
         .arg(&out)

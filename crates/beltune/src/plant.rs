@@ -78,4 +78,13 @@ pub trait Axis {
     /// without the host's controller: the reaction to a failed exchange. An
     /// axis without such a function removes the torque.
     fn quick_stop(&mut self) -> Result<(), AxisError>;
+
+    /// Whether the axis' time runs in real time (a drive on a bus: the next
+    /// cycle is due whether or not the host is ready), so that the procedure
+    /// must keep exchanging, under a hold controller, while it computes. A
+    /// simulated axis whose time only advances with [`Axis::exchange`] waits
+    /// for the computation instead (the default).
+    fn runs_in_real_time(&self) -> bool {
+        false
+    }
 }

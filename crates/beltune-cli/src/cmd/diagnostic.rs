@@ -1,7 +1,12 @@
 //! The diagnostic a safety stop leaves behind: `safety-stop.json` (what was
 //! running, which limit, the values, the stop) and `safety-stop.csv` (the
-//! last second of samples before the violation), both written atomically
-//! into the folder where the results would have gone.
+//! last second of samples before the violation), written atomically as one
+//! folder next to where the results would have gone ([`folder`]): without
+//! `--out`, `commissioning/<UTC time>-safety-stop/` beside the runs (the
+//! `latest` link keeps pointing at the newest result); with `--out DIR`, the
+//! sibling `DIR-safety-stop/`, so that `DIR` stays as it was and the same
+//! command runs again once the cause is fixed (a later result in `DIR`
+//! removes the then stale sibling).
 //!
 //! JSON keys (schema [`SCHEMA`], stable like the summary's): `schema`,
 //! `stage`, `reason`, `limit` (`travel`, `travel_ahead`, `velocity`,
@@ -12,8 +17,8 @@
 //! `stop_position_m`, `stop_error`, `samples_file`, `samples`,
 //! `provenance`.
 
-use super::util::write_atomic;
 use crate::progress::StopCapture;
+use beltune::procedure::outputs::OutputTarget;
 use beltune::procedure::runner::HistorySample;
 use beltune::procedure::Violation;
 use serde::Serialize;
@@ -93,29 +98,68 @@ pub fn samples_csv(history: &[HistorySample]) -> String {
     out
 }
 
-/// Remove the diagnostic of an earlier stop from `dir` (after results were
-/// written there: a folder must not hold fresh results beside a stale stop).
-pub fn remove_stale(dir: &Path) -> anyhow::Result<()> {
-    for name in [JSON_FILE, CSV_FILE] {
-        let p = dir.join(name);
-        match std::fs::remove_file(&p) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-            Err(e) => anyhow::bail!("removing the stale {}: {e}", p.display()),
+/// Suffix of a diagnostic folder.
+pub const FOLDER_SUFFIX: &str = "-safety-stop";
+
+/// The folder of a stop's diagnostic for `target` (a new name in a history).
+pub fn folder(target: &OutputTarget) -> PathBuf {
+    match target {
+        OutputTarget::Exact { dir, .. } => sibling(dir),
+        OutputTarget::History { root } => {
+            let stamp = beltune::provenance::Provenance::now(Vec::new(), None)
+                .created_utc
+                .replace(':', "");
+            let mut name = format!("{stamp}{FOLDER_SUFFIX}");
+            let mut k = 1;
+            while std::fs::symlink_metadata(root.join(&name)).is_ok() {
+                k += 1;
+                name = format!("{stamp}-{k}{FOLDER_SUFFIX}");
+            }
+            root.join(name)
         }
+    }
+}
+
+/// `DIR-safety-stop` beside `DIR`.
+fn sibling(dir: &Path) -> PathBuf {
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "commissioning".into());
+    dir.with_file_name(format!("{name}{FOLDER_SUFFIX}"))
+}
+
+/// After a result was written to `--out DIR`: remove the diagnostic of an
+/// earlier stop beside it (only a folder holding just the diagnostic files).
+pub fn remove_stale(target: &OutputTarget) -> anyhow::Result<()> {
+    let OutputTarget::Exact { dir, .. } = target else {
+        return Ok(());
+    };
+    let stale = sibling(dir);
+    let Ok(entries) = std::fs::read_dir(&stale) else {
+        return Ok(());
+    };
+    let names: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    if names.iter().all(|n| n == JSON_FILE || n == CSV_FILE) {
+        std::fs::remove_dir_all(&stale)
+            .map_err(|e| anyhow::anyhow!("removing the stale {}: {e}", stale.display()))?;
     }
     Ok(())
 }
 
-/// Write both files into `dir` (created if needed); returns their paths,
-/// the description first. `reason` is the one-line message of the stop.
+/// Write both files as one folder ([`folder`] of `target`, replaced as a
+/// whole); returns their paths, the description first. `reason` is the
+/// one-line message of the stop.
 pub fn write(
-    dir: &Path,
+    target: &OutputTarget,
     stop: &StopCapture,
     reason: &str,
     seed: Option<u64>,
 ) -> anyhow::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("creating {}: {e}", dir.display()))?;
+    let dir = folder(target);
     let r = &stop.record;
     let description = Description {
         schema: SCHEMA,
@@ -135,12 +179,11 @@ pub fn write(
         samples: r.history.len(),
         provenance: beltune::provenance::Provenance::of_this_process(seed),
     };
-    // The samples first: the description that names them appears only when they are there.
-    let csv = dir.join(CSV_FILE);
-    write_atomic(&csv, samples_csv(&r.history).as_bytes())?;
-    let json = dir.join(JSON_FILE);
     let mut text = serde_json::to_string_pretty(&description)?;
     text.push('\n');
-    write_atomic(&json, text.as_bytes())?;
-    Ok(vec![json, csv])
+    let csv = samples_csv(&r.history);
+    Ok(beltune::io::write_folder_atomic(
+        &dir,
+        &[(JSON_FILE, text.as_bytes()), (CSV_FILE, csv.as_bytes())],
+    )?)
 }

@@ -37,9 +37,12 @@ pub fn run(cmd: PlantCommand) -> anyhow::Result<()> {
     }
 }
 
-/// A built-in name, or a file if the argument is not a built-in name.
+/// A built-in name, or a file if the argument is not a built-in name. A
+/// built-in name always wins over a file or folder of that name in the
+/// current directory (write `./egc70` for the file).
 pub fn resolve_plant(name_or_file: &str, payload_kg: Option<f64>) -> anyhow::Result<Plant> {
-    if BUILTIN_NAMES.contains(&name_or_file) || !name_or_file.ends_with(".toml") {
+    let is_file = name_or_file.ends_with(".toml") || Path::new(name_or_file).exists();
+    if BUILTIN_NAMES.contains(&name_or_file) || !is_file {
         return Ok(builtin(name_or_file, payload_kg)?);
     }
     let plant = load_toml(Path::new(name_or_file))?;

@@ -17,20 +17,24 @@ pub const THESIS_MAX_STATIC_ERROR_M: f64 = 100e-6;
 /// The limits on the command line (`--max-tracking-error`, `--max-static-error`).
 #[derive(clap::Args, Clone, Debug)]
 pub struct LimitArgs {
-    /// Largest cart tracking error the validation move may show, m (thesis: 1 mm).
-    #[arg(long, default_value_t = THESIS_MAX_TRACKING_ERROR_M, value_name = "M")]
-    pub max_tracking_error: f64,
-    /// Largest static cart error after the validation move, m (thesis: 100 um).
-    #[arg(long, default_value_t = THESIS_MAX_STATIC_ERROR_M, value_name = "M")]
-    pub max_static_error: f64,
+    /// Largest cart tracking error the validation move may show, m (default: the thesis' 1 mm).
+    #[arg(long, value_name = "M")]
+    pub max_tracking_error: Option<f64>,
+    /// Largest static cart error after the validation move, m (default: the thesis' 100 um).
+    #[arg(long, value_name = "M")]
+    pub max_static_error: Option<f64>,
 }
 
 impl LimitArgs {
     /// The limits, or one line saying which is not a positive length.
     pub fn limits(&self) -> anyhow::Result<Limits> {
+        let tracking = self
+            .max_tracking_error
+            .unwrap_or(THESIS_MAX_TRACKING_ERROR_M);
+        let stat = self.max_static_error.unwrap_or(THESIS_MAX_STATIC_ERROR_M);
         for (flag, v) in [
-            ("--max-tracking-error", self.max_tracking_error),
-            ("--max-static-error", self.max_static_error),
+            ("--max-tracking-error", tracking),
+            ("--max-static-error", stat),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(anyhow::Error::new(crate::exit::Failure::new(
@@ -40,8 +44,8 @@ impl LimitArgs {
             }
         }
         Ok(Limits {
-            max_tracking_error_m: self.max_tracking_error,
-            max_static_error_m: self.max_static_error,
+            max_tracking_error_m: tracking,
+            max_static_error_m: stat,
         })
     }
 }

@@ -53,7 +53,7 @@ pub struct FrictionTotals {
 #[derive(Debug, Clone, Deserialize)]
 pub struct CommissioningFile {
     /// Identified model (the keys `beltune design` reads; extra keys are ignored).
-    pub identified: beltune::design::ModelFile,
+    pub identified: beltune::design::IdentifiedModel,
     /// Identified friction (optional).
     #[serde(default)]
     pub friction: Option<FrictionTotals>,
@@ -70,15 +70,16 @@ pub struct DesignModel {
     pub dead_time_s: f64,
     /// Friction for the feedforward, if known.
     pub friction: Option<FrictionTotals>,
+    /// Torque limit of the drive from the record, N m (`None`: egc70's).
+    pub torque_max_nm: Option<f64>,
 }
 
 /// Read `dir/commissioning.json`; every failure names the file.
 pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     let path = dir.join(COMMISSIONING_FILE);
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    let file: CommissioningFile =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let text = beltune::io::read_to_string_capped(&path, beltune::io::MAX_TEXT_BYTES)?;
+    let file = beltune::design::ModelFile::parse(&text, &path.display().to_string())
+        .with_context(|| format!("parsing {}", path.display()))?;
     let id = file.identified;
     let params = id.params();
     params
@@ -86,7 +87,13 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         .with_context(|| format!("{}: identified model", path.display()))?;
     beltune::error::require_positive("dead_time_s [s]", id.dead_time_s)
         .with_context(|| format!("{}: identified model", path.display()))?;
-    if let Some(f) = file.friction {
+    let friction = file.friction.map(|f| FrictionTotals {
+        viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+        coulomb_nm: f.coulomb_nm,
+        linear_viscous_nm_s_per_rad: Some(f.linear_viscous_nm_s_per_rad),
+        holding_torque_nm: Some(f.holding_torque_nm),
+    });
+    if let Some(f) = friction {
         beltune::error::require_non_negative(
             "friction.viscous [N m s/rad]",
             f.viscous_nm_s_per_rad,
@@ -98,7 +105,8 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         source: format!("commissioning {}", dir.display()),
         params,
         dead_time_s: id.dead_time_s,
-        friction: file.friction,
+        friction,
+        torque_max_nm: id.torque_max_nm,
     })
 }
 
@@ -127,8 +135,8 @@ pub struct LibraryTuner {
     input: DesignInput,
     nominal_payload_kg: f64,
     move_plant: MovePlant,
-    /// Torque limit written to controller.toml and used in the move: the egc70
-    /// drive's (a commissioning.json does not record it), N m.
+    /// Torque limit written to controller.toml and used in the move: the
+    /// record's (`identified.torque_max_nm`), else the egc70 drive's, N m.
     torque_max_nm: f64,
 }
 
@@ -144,7 +152,10 @@ impl LibraryTuner {
         input
             .validate()
             .with_context(|| format!("design input from {}", model.source))?;
-        let torque_max_nm = rigs::builtin("egc70", None)?.info().torque_max_nm;
+        let torque_max_nm = match model.torque_max_nm {
+            Some(t) => t,
+            None => rigs::builtin("egc70", None)?.info().torque_max_nm,
+        };
         Ok(LibraryTuner {
             model,
             input,
@@ -174,6 +185,7 @@ impl LibraryTuner {
                 linear_viscous_nm_s_per_rad: None,
                 holding_torque_nm: None,
             }),
+            torque_max_nm: None,
         };
         let mut tuner = LibraryTuner::new(model)?;
         tuner.nominal_payload_kg = rigs::EGC70_DEFAULT_PAYLOAD_KG;
@@ -402,8 +414,14 @@ impl Tuner for LibraryTuner {
             relative_residual: 0.0,
             holding_torque_nm: friction.holding_torque_nm.unwrap_or(0.0),
         };
-        let body = outputs::controller_toml(&d, &friction, self.torque_max_nm)
-            .map_err(|e| TuneError::Internal(e.to_string()))?;
+        let body = outputs::controller_toml(
+            &d,
+            &friction,
+            self.torque_max_nm,
+            beltune::ident::ModelUnits::Torque,
+            beltune::provenance::Provenance::of_this_process(None),
+        )
+        .map_err(|e| TuneError::Internal(e.to_string()))?;
         let k = &d.knobs;
         Ok(format!(
             "# beltune controller, saved by `beltune serve` (same layout as `beltune commission`)\n\

@@ -16,10 +16,19 @@ pub struct FrictionParams {
 }
 
 impl FrictionParams {
-    /// Typed error for negative or non-finite values.
+    /// Typed error for negative, non-finite or implausibly large values
+    /// (above [`crate::model::params::bounds::TORQUE_MAX_NM`] N m, or N m s/rad).
     pub fn validate(&self) -> Result<()> {
         require_non_negative("viscous friction [N m s/rad]", self.viscous_nm_s_per_rad)?;
         require_non_negative("coulomb friction [N m]", self.coulomb_nm)?;
+        let max = crate::model::params::bounds::TORQUE_MAX_NM;
+        crate::error::require_range(
+            "viscous friction [N m s/rad]",
+            self.viscous_nm_s_per_rad,
+            0.0,
+            max,
+        )?;
+        crate::error::require_range("coulomb friction [N m]", self.coulomb_nm, 0.0, max)?;
         Ok(())
     }
 }

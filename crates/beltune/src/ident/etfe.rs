@@ -192,7 +192,12 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
     require_all_finite("input", input)?;
     require_all_finite("output", output)?;
     let n = cfg.period_samples;
-    let needed = n * (cfg.skip_periods + 2);
+    // Checked: a huge period or skip count must be "too short", not an overflow.
+    let needed = cfg
+        .skip_periods
+        .checked_add(2)
+        .and_then(|p| p.checked_mul(n))
+        .unwrap_or(usize::MAX);
     if input.len() < needed {
         return Err(Error::TooShort {
             what: format!(
@@ -318,6 +323,16 @@ fn validate_config(cfg: &EtfeConfig) -> Result<()> {
             "period_samples",
             cfg.period_samples as f64,
             "a period needs at least 4 samples",
+        ));
+    }
+    if cfg.period_samples > crate::ident::record::MAX_CSV_ROWS {
+        return Err(Error::invalid(
+            "period_samples",
+            cfg.period_samples as f64,
+            format!(
+                "a period of more than {} samples is beyond the longest record",
+                crate::ident::record::MAX_CSV_ROWS
+            ),
         ));
     }
     if !(cfg.excitation_floor_db.is_finite() && cfg.excitation_floor_db < 0.0) {

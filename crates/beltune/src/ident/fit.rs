@@ -193,13 +193,16 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
         .minimize(problem);
     if !report.termination.was_successful() {
         return Err(Error::FitFailed {
-            reason: format!("Levenberg-Marquardt stopped: {:?}", report.termination),
+            reason: format!(
+                "the least-squares fit stopped: {}",
+                describe_termination(&report.termination)
+            ),
         });
     }
     let params = solved.to_params(&solved.q);
-    if params.validate().is_err() {
+    if let Err(e) = params.validate() {
         return Err(Error::FitFailed {
-            reason: format!("non-physical optimum {params:?}"),
+            reason: format!("the fitted model is not physical ({e})"),
         });
     }
     let r = solved
@@ -380,6 +383,20 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for LogMagnitudeProblem {
 
     fn jacobian(&self) -> Option<DMatrix<f64>> {
         self.jacobian_mat()
+    }
+}
+
+/// Why Levenberg-Marquardt stopped, in words (not a Debug dump).
+fn describe_termination(t: &levenberg_marquardt::TerminationReason) -> String {
+    use levenberg_marquardt::TerminationReason as T;
+    match t {
+        T::User(_) => "the model became non-finite during the iteration".into(),
+        T::Numerical(what) => format!("numerical problem ({what})"),
+        T::LostPatience => "no convergence within the iteration limit".into(),
+        T::NoParameters => "nothing to fit".into(),
+        T::NoResiduals => "no frequency lines to fit".into(),
+        T::WrongDimensions(what) => format!("inconsistent dimensions ({what})"),
+        other => format!("{other:?}").to_lowercase(),
     }
 }
 

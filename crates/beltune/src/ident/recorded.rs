@@ -87,14 +87,19 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
             ),
         })?,
     };
-    let needed = period * (r.skip_periods + 2);
+    let needed = r
+        .skip_periods
+        .checked_add(2)
+        .and_then(|p| p.checked_mul(period))
+        .unwrap_or(usize::MAX);
     if cols.rows() < needed {
         return Err(Error::Csv {
             path: shown,
             message: format!(
-                "too few samples: {} data rows, but {} skipped + 2 averaged periods of {period} samples need {needed}",
+                "too few samples: {} data rows, but {} skipped + 2 averaged periods of {period} samples need {}",
                 cols.rows(),
-                r.skip_periods
+                r.skip_periods,
+                if needed == usize::MAX { "more than can be addressed".to_string() } else { needed.to_string() }
             ),
         });
     }

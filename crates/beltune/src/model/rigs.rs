@@ -63,12 +63,16 @@ impl LinearPlant {
         crate::error::require_non_negative("dead_time_s", self.dead_time_s)?;
         crate::error::require_positive("torque_max_nm", self.torque_max_nm)?;
         crate::error::require_positive("motor_rad_per_count", self.motor_rad_per_count)?;
-        crate::error::require_positive("ts_s", self.ts_s)?;
+        crate::error::require_range(
+            "torque_max_nm",
+            self.torque_max_nm,
+            0.0,
+            super::params::bounds::TORQUE_MAX_NM,
+        )?;
+        crate::error::require_range("motor_rad_per_count", self.motor_rad_per_count, 1e-9, 1.0)?;
+        super::params::check_sample_time(self.ts_s)?;
         if self.dead_time_s > 1.0 {
             return Err(Error::invalid("dead_time_s", self.dead_time_s, "above 1 s"));
-        }
-        if self.ts_s > 0.1 {
-            return Err(Error::invalid("ts_s", self.ts_s, "above 100 ms"));
         }
         Ok(())
     }
@@ -324,10 +328,7 @@ pub fn load_toml(path: &Path) -> Result<Plant> {
     let file = path.display().to_string();
     // `Error::Parse` rather than `Error::Io`: the CLI prints the cause chain,
     // and `Io` would repeat its source.
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Parse {
-        path: file.clone(),
-        message: format!("cannot read the plant file: {e}"),
-    })?;
+    let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
     let plant: Plant = toml::from_str(&text).map_err(|e| Error::Parse {
         path: file.clone(),
         message: e.message().to_string()

@@ -123,6 +123,35 @@ impl DataSheet {
     }
 }
 
+/// How far a travel window may reach beyond either end of the stroke, m (the
+/// default window's -10 mm, Table A.8).
+pub const TRAVEL_WINDOW_OVERTRAVEL_M: f64 = 0.01;
+
+/// Error if a travel window `(min, max)` reaches beyond the plant's stroke
+/// (by more than [`TRAVEL_WINDOW_OVERTRAVEL_M`]): the supervisor would let the
+/// cart run into the end stop.
+pub fn check_travel_window(
+    plant: &crate::model::rigs::Plant,
+    travel_window_m: Option<(f64, f64)>,
+) -> Result<()> {
+    let Some((lo, hi)) = travel_window_m else {
+        return Ok(());
+    };
+    let stroke = plant.stroke_m().unwrap_or(0.6);
+    let m = TRAVEL_WINDOW_OVERTRAVEL_M;
+    if !(lo.is_finite() && hi.is_finite() && lo >= -m && hi <= stroke + m && lo < hi) {
+        return Err(Error::invalid(
+            "travel window [m]",
+            if lo < -m { lo } else { hi },
+            format!(
+                "the window {lo}..{hi} m must lie inside the stroke 0..{stroke} m (up to {} mm beyond either end)",
+                m * 1e3
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Excitation settings (thesis 3.1, 3.4).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ExcitationConfig {

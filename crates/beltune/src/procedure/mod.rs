@@ -9,6 +9,7 @@ pub use safety::{SafetyLimits, SafetySupervisor, Violation};
 
 pub mod bootstrap;
 pub mod commission;
+pub mod controller_file;
 pub mod motion;
 pub mod outputs;
 pub mod recorded;

@@ -87,6 +87,11 @@ impl Default for SimConfig {
 /// frequency error is about `(w h)^4 / 120`, below 4e-5 at 0.25.
 const MAX_OMEGA_H: f64 = 0.25;
 
+/// Most RK4 sub-steps per sample. egc70 needs a few dozen; a plant that
+/// needs more (a stiffness or damping far beyond any belt axis) would run
+/// for hours, so it is refused instead.
+pub const MAX_SUBSTEPS: usize = 4096;
+
 #[derive(Clone, Debug)]
 enum Dynamics {
     ThreeMass(Box<Mech<3, 3>>),
@@ -208,7 +213,20 @@ impl SimAxis {
                 if let Some(hmax) = self.config.max_substep_s {
                     h = h.min(hmax);
                 }
-                self.n_sub = ((p.ts_s / h).ceil() as usize).max(1);
+                let n = (p.ts_s / h).ceil();
+                if !n.is_finite() || n > MAX_SUBSTEPS as f64 {
+                    return Err(Error::invalid(
+                        "plant",
+                        n,
+                        format!(
+                            "too stiff or too damped to simulate: a sample of {} us needs {n:.0} \
+                             integration sub-steps (limit {MAX_SUBSTEPS}); check the stiffness, \
+                             damping and inertia values",
+                            p.ts_s * 1e6
+                        ),
+                    ));
+                }
+                self.n_sub = (n as usize).max(1);
                 self.h_sub = p.ts_s / self.n_sub as f64;
             }
             Plant::Linear(l) => {

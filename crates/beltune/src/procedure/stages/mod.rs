@@ -51,10 +51,15 @@ impl<'r, 'a> Stages<'r, 'a> {
     }
 
     /// Run a computation and add its wall-clock time to [`Stages::compute_s`].
-    pub fn compute<T>(&mut self, f: impl FnOnce() -> T) -> T {
+    /// The axis is never left alone meanwhile: an axis whose time runs in
+    /// real time is held in closed loop every cycle ([`Runner::hold_while`]).
+    pub fn compute<T: Send>(
+        &mut self,
+        f: impl FnOnce() -> crate::Result<T> + Send,
+    ) -> crate::Result<T> {
         let t0 = std::time::Instant::now();
-        let out = f();
+        let out = self.runner.hold_while(f);
         self.compute_s += t0.elapsed().as_secs_f64();
-        out
+        out?
     }
 }
