@@ -128,8 +128,6 @@ fn commission_recorded_without_limit(out: Option<&Path>) -> Command {
             "theta_motor_rad",
             "--period-samples",
             "2500",
-            "--torque-limit",
-            limit,
         ]);
     if let Some(out) = out {
         c.arg("--out").arg(out);
