@@ -136,7 +136,10 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
         &["plant", "payload", "tilt", "seed", "start_position"],
     ),
     ("Safety", &["travel_window", "following_error_max"]),
-    ("EtherCAT drive", &["ethercat", "subdevice", "cycle_us"]),
+    (
+        "EtherCAT drive",
+        &["ethercat", "subdevice", "cycle_us", "frame_timeout_ms"],
+    ),
     (
         "Design",
         &[

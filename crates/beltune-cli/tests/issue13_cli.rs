@@ -108,8 +108,16 @@ fn motion_csv(dir: &Path, bad_cell: Option<(usize, &str)>) -> PathBuf {
     p
 }
 
-/// The recorded-data commissioning of the bench file into `out` (fast: no axis).
+/// The recorded-data commissioning of the bench file into `out` (fast: no
+/// axis), with the drive's current limit of 3.1 A.
 fn commission_recorded(out: Option<&Path>) -> Command {
+    let mut c = commission_recorded_without_limit(out);
+    c.args(["--torque-limit", "3.1"]);
+    c
+}
+
+/// [`commission_recorded`] without `--torque-limit`.
+fn commission_recorded_without_limit(out: Option<&Path>) -> Command {
     let mut c = bin();
     c.args(["commission", "--quiet", "--csv"])
         .arg(measured())
@@ -558,7 +566,7 @@ fn values_that_would_be_ignored_are_errors_issue_13_10() {
         &["--torque-limit", "--inertia", "recorded data"],
     );
     expect_bad_input(
-        commission_recorded(Some(&dir.join("out"))).args(["--torque-limit", "1e300"]),
+        commission_recorded_without_limit(Some(&dir.join("out"))).args(["--torque-limit", "1e300"]),
         &["--torque-limit"],
     );
     expect_bad_input(
@@ -694,11 +702,12 @@ fn inputs_are_never_overwritten_or_confused_issue_13_15() {
         .args(["commission", "--quiet", "--force", "--csv"])
         .arg(inside.join("m.csv.gz"))
         .args(["--input", "iq_ref_A", "--output", "theta_motor_rad"])
-        .args(["--period-samples", "2500", "--out"])
+        .args(["--period-samples", "2500", "--torque-limit", "3.1", "--out"])
         .arg(&inside)
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("holds the input"));
     assert!(inside.join("m.csv.gz").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }

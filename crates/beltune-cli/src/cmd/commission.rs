@@ -140,6 +140,10 @@ pub struct Args {
     /// EtherCAT: bus cycle (the drive's SYNC0 period), us.
     #[arg(long, default_value_t = 1000, requires = "ethercat")]
     pub cycle_us: u32,
+    /// EtherCAT: how long to wait for a frame, ms (3 consecutive lost frames
+    /// end the commissioning with a quick stop).
+    #[arg(long, default_value_t = 10.0, requires = "ethercat")]
+    pub frame_timeout_ms: f64,
     /// No progress bars or stage lines (the summary is still printed).
     #[arg(long)]
     pub quiet: bool,
@@ -680,11 +684,20 @@ fn run_ethercat(
 ) -> anyhow::Result<()> {
     use beltune_ethercat::master::wire::RawSocket;
     use beltune_ethercat::master::{EthercatAxis, MasterConfig, Storage};
+    if !(args.frame_timeout_ms.is_finite() && (0.1..=1000.0).contains(&args.frame_timeout_ms)) {
+        return Err(anyhow::Error::new(crate::exit::Failure::new(
+            crate::exit::ExitStatus::BadInput,
+            format!(
+                "--frame-timeout-ms {} is outside 0.1 ..= 1000",
+                args.frame_timeout_ms
+            ),
+        )));
+    }
     let storage = Storage::new();
     let master = MasterConfig {
         subdevice: args.subdevice,
         cycle_s: f64::from(args.cycle_us) * 1e-6,
-        frame_timeout_s: (3.0 * f64::from(args.cycle_us) * 1e-6).max(2e-3),
+        frame_timeout_s: args.frame_timeout_ms * 1e-3,
         ..MasterConfig::default()
     };
     let mut axis = EthercatAxis::open(&storage, master, |tx, rx| {

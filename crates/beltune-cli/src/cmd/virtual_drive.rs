@@ -32,6 +32,10 @@ pub struct Args {
     /// Seed of the simulated measurement noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Offer no distributed clocks: the drive runs SM-synchronous, one cycle
+    /// per process-data frame (independent of the host's timing).
+    #[arg(long)]
+    pub no_dc: bool,
 }
 
 static STOP: AtomicBool = AtomicBool::new(false);
@@ -55,6 +59,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             initial_cart_position_m: Some(args.start_position),
             ..SimConfig::default()
         },
+        distributed_clocks: !args.no_dc,
         ..DriveConfig::default()
     };
     let mut drive = VirtualDrive::new(&plant, cfg).context("virtual drive")?;
