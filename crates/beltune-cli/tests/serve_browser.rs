@@ -62,14 +62,10 @@ fn free_port() -> u16 {
 }
 
 fn egc70_input() -> DesignInput {
-    let plant = beltune::model::rigs::builtin("egc70", None).unwrap();
-    let mut input = DesignInput::new(plant.worst_case_two_mass().unwrap(), plant.dead_time_s());
-    let f = plant.friction_totals();
-    input.friction = Some(FrictionParams {
-        viscous_n_m_s_per_rad: f.viscous_nm_s_per_rad,
-        coulomb_n_m: f.coulomb_nm,
-    });
-    input
+    // The page's default model (issue 16): what the commissioning of the built-in
+    // axis with the defaults of `beltune commission` identifies.
+    let (_, run) = serve::library::builtin_commissioning().unwrap();
+    run.design.input
 }
 
 /// `input` as a `beltune design --model` TOML file (`{:?}` prints the shortest
@@ -429,11 +425,12 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         assert_eq!(js(&c, "document.getElementById('error').hidden").await, Value::Bool(true));
         check_against(&c, &d0).await;
 
-        // Save: controller.toml in the save folder with the displayed gains.
+        // Save: a new folder in the save folder with the displayed gains.
         c.find(Locator::Id("save")).await.unwrap().click().await.unwrap();
         let path = wait_js(&c, "document.getElementById('save-result').dataset.path", "the save").await;
         let path = PathBuf::from(path.as_str().unwrap());
-        assert_eq!(path, save_dir.join(serve::CONTROLLER_FILE));
+        assert_eq!(path.file_name().unwrap(), serve::CONTROLLER_FILE);
+        assert_eq!(path.parent().unwrap().parent().unwrap(), save_dir, "a new folder per save");
         let saved: toml::Value = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
         let gains = &saved["gains"];
         assert_close("saved K_P", gains["k_p_nm_s_per_rad"].as_float().unwrap(), d0.k_p);

@@ -13,10 +13,12 @@ use beltune::ident::{
 use beltune::model::rigs::{self, Plant};
 use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::procedure::outputs::{
-    build_report, commissioning_json, controller_toml, recorded_outputs, write_outputs,
+    build_report, commissioning_json, controller_toml, data_files, recorded_data_files,
+    recorded_outputs, write_outputs,
 };
 use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
+use beltune::provenance::Provenance;
 use beltune::report::render_html;
 use beltune::sim::{SimAxis, SimConfig};
 use std::path::PathBuf;
@@ -178,11 +180,14 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     };
     let run = commission_recorded(id, friction, knobs, 2e-3)?;
     let source = csv.display().to_string();
-    let (json, report) = recorded_outputs(&run, &source);
+    let provenance = Provenance::of_this_process(None);
+    let (json, report) = recorded_outputs(&run, &source, Some(&provenance))?;
     let friction = run.friction.clone().unwrap_or_default();
     let toml = controller_toml(&run.design, &friction, args.torque_limit)?;
     let html = render_html(&report)?;
-    let files = write_outputs(&args.out, &json, &toml, &html)?;
+    let data = recorded_data_files(&run)?;
+    let mut files = write_outputs(&args.out, &json, &toml, &html)?;
+    files.extend(write_data_files(&args.out, &data)?);
     if !args.quiet {
         for line in &run.log {
             eprintln!("{line}");
@@ -192,6 +197,20 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
         }
     }
     Ok(())
+}
+
+/// Write the data files beside the report (`frf.csv`, ...), each atomically.
+pub fn write_data_files(
+    dir: &std::path::Path,
+    files: &[(String, String)],
+) -> anyhow::Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    for (name, text) in files {
+        let p = dir.join(name);
+        beltune::io::write_atomic(&p, text.as_bytes())?;
+        out.push(p);
+    }
+    Ok(out)
 }
 
 /// Run the subcommand.
@@ -241,9 +260,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Plant::Physical(p) => Some(p.linearize(run.identification_position_m)?),
         Plant::Linear(_) => None,
     };
-    let report = build_report(&run, &name, before.as_ref(), Some(&truth));
+    let provenance = Provenance::of_this_process(Some(args.seed));
+    let report = build_report(
+        &run,
+        &name,
+        before.as_ref(),
+        Some(&truth),
+        Some(&provenance),
+    )?;
     let html = render_html(&report)?;
-    let files = write_outputs(&args.out, &json, &toml, &html)?;
+    let data = data_files(&run, &report)?;
+    let mut files = write_outputs(&args.out, &json, &toml, &html)?;
+    files.extend(write_data_files(&args.out, &data)?);
     if !args.quiet {
         let v = &run.validation;
         println!(

@@ -19,7 +19,10 @@ use super::progress::Progress;
 use super::result::{FrictionResult, IdentifiedModel, Validation};
 use super::runner::{Runner, Sample};
 use super::safety::{SafetyLimits, SafetySupervisor};
-use super::validation::{run_move, MoveResult, MoveSpec};
+use super::validation::{
+    run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
+    MoveSpec,
+};
 use crate::design::{design, ControllerDesign, DesignInput, DesignKnobs, FrictionParams};
 use crate::ident::dead_time::{estimate_dead_time, DeadTime};
 use crate::ident::etfe::{etfe, EtfeConfig, Frf};
@@ -29,7 +32,7 @@ use crate::ident::friction::{
 };
 use crate::plant::Axis;
 use crate::{Error, Result};
-use beltune_rt::control::{BeltStretch, CascadeConfig, CascadeController, Feedforward, Setpoint};
+use beltune_rt::control::{CascadeConfig, CascadeController, Feedforward, Setpoint};
 use beltune_rt::prbs::Prbs;
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use std::time::Instant;
@@ -255,12 +258,32 @@ pub struct Commissioning {
     pub moves: [MoveResult; 3],
     /// Summaries of the moves.
     pub validation: Validation,
+    /// The open-loop excitation of stage 5 and the axis' response.
+    pub excitation: ExcitationTrace,
     /// Time the axis was busy, s.
     pub experiment_time_s: f64,
     /// Wall-clock time spent computing (FFT, fit, design), s.
     pub computation_time_s: f64,
     /// One log line per stage.
     pub log: Vec<String>,
+}
+
+/// The identification experiment as recorded (stage 5): the PRBS torque
+/// command and the motor-side position, with the limits it ran under.
+#[derive(Clone, Debug, Default)]
+pub struct ExcitationTrace {
+    /// Time since the axis was taken, s.
+    pub time_s: Vec<f64>,
+    /// Torque command (holding torque plus PRBS), N m.
+    pub torque_command_nm: Vec<f64>,
+    /// Motor-side position `i_t phi_m`, m.
+    pub position_m: Vec<f64>,
+    /// Torque limit of the commissioning, N m.
+    pub torque_limit_nm: f64,
+    /// Allowed travel, m.
+    pub travel_min_m: f64,
+    /// Allowed travel, m.
+    pub travel_max_m: f64,
 }
 
 struct Stages<'r, 'a> {
@@ -410,12 +433,15 @@ pub fn commission(
     let mut cmd = Vec::with_capacity(n);
     let mut act = Vec::with_capacity(n);
     let mut ang = Vec::with_capacity(n);
+    let mut pos = Vec::with_capacity(n);
+    let t_start = st.runner.busy_time_s();
     for _ in 0..n {
         let tau = holding + prbs.step();
         let s = st.runner.step(tau, None)?;
         cmd.push(s.torque_command_nm);
         act.push(s.torque_actual_nm);
         ang.push(s.motor_angle_rad);
+        pos.push(s.position_m);
     }
     let t0 = Instant::now();
     let f_max = 0.4 / ts; // below 0.4 f_s: the PRBS spectrum and the Tustin/ZOH effects stay mild
@@ -431,6 +457,14 @@ pub fn commission(
         ..EtfeConfig::default()
     };
     let frf = etfe(&cmd, &ang, &ecfg)?;
+    let excitation = ExcitationTrace {
+        time_s: (0..n).map(|k| t_start + k as f64 * ts).collect(),
+        torque_command_nm: cmd.clone(),
+        position_m: pos,
+        torque_limit_nm: torque_max,
+        travel_min_m: datasheet.travel_min_m,
+        travel_max_m: datasheet.travel_max_m,
+    };
     let frf_actual = etfe(&act, &ang, &ecfg)?;
     let fcfg = FitConfig {
         theta_e: Some(datasheet.theta_e_kg_m2),
@@ -551,21 +585,8 @@ pub fn commission(
 
     // ---- 8. validation ----
     let m_e = p.rigid_inertia();
-    let variants = [
-        Feedforward::none(),
-        Feedforward::linear(m_e, friction.linear_viscous),
-        Feedforward::nonlinear(m_e, friction.viscous, friction.coulomb),
-    ];
-    let opts = TrackOptions {
-        preview_samples: n_t,
-        belt_stretch: BeltStretch::On {
-            m_c_kg: p.m_c,
-            c_n_per_m: p.c,
-        },
-        check_following_error: true,
-        static_stretch_m: holding / (p.i_t * p.c),
-    };
-    let move_samples = ((cfg.validation.settle_s + 1.5) / ts) as u64 * variants.len() as u64;
+    let opts = validation_track_options(&p, dead_time.seconds, ts, holding);
+    let move_samples = ((cfg.validation.settle_s + 1.5) / ts) as u64 * 3;
     st.start("validation moves", move_samples);
     let mut moves: Vec<MoveResult> = Vec::with_capacity(3);
     let return_limits = Limits {
@@ -573,11 +594,8 @@ pub fn commission(
         position_max: datasheet.travel_max_m,
         ..cfg.validation.limits
     };
-    for ff in variants {
-        let mut c = feedback;
-        c.feedforward = ff;
-        c.filter_desired_velocity = true;
-        c.feedforward_preview = true;
+    for variant in FeedforwardVariant::ALL {
+        let c = validation_controller(&feedback, m_e, &friction, variant);
         // Return to the start with the thesis' own limits (it is not measured).
         moves.push(run_move(
             st.runner,
@@ -624,6 +642,7 @@ pub fn commission(
         friction,
         moves,
         validation,
+        excitation,
         experiment_time_s,
         computation_time_s,
         log,
