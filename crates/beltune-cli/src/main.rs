@@ -37,6 +37,8 @@ enum Command {
     Commission(cmd::commission::Args),
     /// Serve the interactive tuning page.
     Serve(cmd::serve::Args),
+    /// Compare two commissioning folders: FRFs, fits, loops, moves, parameter changes.
+    Compare(cmd::compare::Args),
 }
 
 /// A command that prints to a pipe whose reader went away (`beltune ... | head`)
@@ -65,6 +67,7 @@ fn main() {
         Command::Design(a) => cmd::design::run(a),
         Command::Commission(a) => cmd::commission::run(a),
         Command::Serve(a) => cmd::serve::run(a),
+        Command::Compare(a) => cmd::compare::run(a),
     };
     if let Err(e) = result {
         // One line: the whole cause chain joined, no backtrace.

@@ -696,6 +696,7 @@ impl LibraryTuner {
             before: None,
             after: format!("{v:.digits$}"),
             truth: None,
+            value: Some(v),
         };
         let hz = |w: f64| w / (2.0 * std::f64::consts::PI);
         let parameters = vec![

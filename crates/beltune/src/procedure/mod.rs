@@ -9,6 +9,7 @@ pub use safety::{SafetyLimits, SafetySupervisor, Violation};
 
 pub mod bootstrap;
 pub mod commission;
+pub mod compare;
 pub mod motion;
 pub mod outputs;
 pub mod plots;

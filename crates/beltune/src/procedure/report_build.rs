@@ -242,6 +242,7 @@ fn row(
         before: before.map(|b| fmt(b, d)),
         after: fmt(after, d),
         truth: truth.map(|t| fmt(t, d)),
+        value: Some(after),
     }
 }
 

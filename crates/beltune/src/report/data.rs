@@ -150,6 +150,9 @@ pub struct ParameterRow {
     pub after: String,
     /// True value of a simulated plant, if known.
     pub truth: Option<String>,
+    /// The "after" value at full precision, in `unit` (written as `data-value`
+    /// so that tests and tools read the exact number).
+    pub value: Option<f64>,
 }
 
 /// Everything the report page shows.

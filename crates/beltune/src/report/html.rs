@@ -55,7 +55,7 @@ pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; overflow-x: auto; 
 <h2>Parameters</h2>
 <table id="parameters">
 <tr><th>quantity</th><th>unit</th><th>before (data sheet / default)</th><th>after (commissioned)</th>{% if has_truth %}<th>simulation truth</th>{% endif %}</tr>
-{% for p in parameters %}<tr><td>{{ p.name }}</td><td>{{ p.unit }}</td><td>{{ p.before or "" }}</td><td class="after">{{ p.after }}</td>{% if has_truth %}<td>{{ p.truth or "" }}</td>{% endif %}</tr>
+{% for p in parameters %}<tr><td>{{ p.name }}</td><td>{{ p.unit }}</td><td>{{ p.before or "" }}</td><td class="after"{% if p.value is not none %} data-value="{{ p.value }}"{% endif %}>{{ p.after }}</td>{% if has_truth %}<td>{{ p.truth or "" }}</td>{% endif %}</tr>
 {% endfor %}</table>
 
 {% if validation_rows %}<h2>Validation</h2>
@@ -199,6 +199,7 @@ mod tests {
                 before: Some("11.57".into()),
                 after: "13.44".into(),
                 truth: None,
+                value: Some(13.44),
             }],
             friction: Some(FrictionPlot {
                 velocity_rad_s: vec![-10.0, 10.0],

@@ -35,6 +35,9 @@ const PALETTE: [RGBColor; 6] = [
 const GREY: RGBColor = RGBColor(170, 170, 170);
 /// Font size of tick labels, legends and marker labels (display px).
 const SMALL: u32 = 13;
+/// Most y tick labels per panel (panels are 150..250 px high: a label
+/// every 25 px or more keeps them apart).
+const Y_LABELS: usize = 6;
 /// Font size of captions (display px).
 const CAPTION: u32 = 16;
 
@@ -148,11 +151,14 @@ fn phase_range<'a>(values: impl Iterator<Item = &'a f64>) -> Range<f64> {
     let r = range_of(values, -360.0..0.0);
     let lo = (r.start / 90.0).floor() * 90.0;
     let hi = (r.end / 90.0).ceil() * 90.0;
-    if hi - lo < 90.0 {
-        lo..(lo + 90.0)
+    let (lo, hi) = if hi - lo < 90.0 {
+        (lo, lo + 90.0)
     } else {
-        lo..hi
-    }
+        (lo, hi)
+    };
+    // a little room so the lowest value label does not meet the first frequency label
+    let pad = 0.02 * (hi - lo);
+    (lo - pad)..(hi + pad)
 }
 
 fn freq_range(curves: &[&BodeCurve]) -> Range<f64> {
@@ -341,6 +347,7 @@ fn bode_panel(
         Panel::Magnitude => "magnitude / dB",
         Panel::Phase => "phase / deg",
     })
+    .y_labels(Y_LABELS)
     .label_style(font(SMALL))
     .axis_desc_style(font(SMALL))
     .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
@@ -590,6 +597,7 @@ pub fn frf_svg(plot: &FrfPlot) -> Result<String> {
             .configure_mesh()
             .x_desc("frequency / Hz")
             .y_desc("coherence")
+            .y_labels(Y_LABELS)
             .label_style(font(SMALL))
             .axis_desc_style(font(SMALL))
             .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
@@ -678,6 +686,7 @@ pub fn friction_svg(plot: &FrictionPlot) -> Result<String> {
             .configure_mesh()
             .x_desc("motor velocity / (rad/s)")
             .y_desc("torque / N m")
+            .y_labels(Y_LABELS)
             .label_style(font(SMALL))
             .axis_desc_style(font(SMALL))
             .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
@@ -741,6 +750,7 @@ fn draw_time_panel(
         .map_err(err)?;
     let mut mesh = chart.configure_mesh();
     mesh.y_desc(y_desc)
+        .y_labels(Y_LABELS)
         .label_style(font(SMALL))
         .axis_desc_style(font(SMALL))
         .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
@@ -831,7 +841,8 @@ fn time_figure(
                 .flat_map(|p| p.1.iter().flat_map(|s| s.1.iter())),
             0.0..1.0,
         );
-        let t_range = t_range.start.max(0.0)..t_range.end;
+        // (the 5 % pad before the first sample keeps the first time label
+        // away from the lowest value label of the bottom panel)
         let mut labels = Labels::default();
         for (i, (desc, series, scale, hl)) in panels.iter().enumerate() {
             let last = i + 1 == panels.len();
