@@ -478,7 +478,11 @@ fn check_move(m: &serve::api::MoveData) {
 fn payload_changes_the_move_but_not_the_design() {
     let s = start(library(), "payload");
     let mut runs = Vec::new();
-    for payload in [0.0, 11.2] {
+    // (the design is the commissioned one for 11.2 kg; an empty cart has a
+    // tenth of that inertia, where its loop gain makes the velocity loop
+    // unstable and the supervisor stops the move, which is the right answer
+    // but not a move to compare: 8 kg still moves)
+    for payload in [8.0, 11.2] {
         let (status, body) = post_json(
             s.addr,
             "/api/design",

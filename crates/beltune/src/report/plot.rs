@@ -1059,7 +1059,11 @@ mod tests {
         let a = l.place(100, 100, 400, 48, b);
         let c = l.place(110, 100, 400, 48, b);
         assert_eq!(a, (100, 100));
-        assert!(c.1 >= 100 + 48, "{c:?}");
+        assert!((c.1 - a.1).abs() >= 48, "{c:?}");
+        // at the top of the area the next free row is below
+        let top = l.place(105, 0, 400, 48, b);
+        let top2 = l.place(108, 0, 400, 48, b);
+        assert!(top2.1 >= top.1 + 48, "{top:?} {top2:?}");
     }
 
     #[test]
