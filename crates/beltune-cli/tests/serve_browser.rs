@@ -12,7 +12,7 @@
 
 use beltune_cli::serve;
 
-use beltune::design::{self as bdesign, DesignInput, DesignKnobs, FrictionParams};
+use beltune::design::{self as bdesign, DesignInput, DesignKnobs};
 use fantoccini::{Client, ClientBuilder, Locator};
 use serde_json::{json, Value};
 use serve::library::LibraryTuner;

@@ -78,6 +78,11 @@ pub struct Verdict {
     pub next_step: String,
 }
 
+/// `x >= lo`; false for NaN (a missing number never passes).
+fn at_least(x: f64, lo: f64) -> bool {
+    x >= lo
+}
+
 /// Judge a commissioning.
 pub fn verdict(v: &VerdictInput) -> Verdict {
     let mut checks = Vec::new();
@@ -100,7 +105,7 @@ pub fn verdict(v: &VerdictInput) -> Verdict {
         });
     }
     let mut warnings = Vec::new();
-    if let Some(c) = v.mean_coherence.filter(|c| !(*c >= MIN_MEAN_COHERENCE)) {
+    if let Some(c) = v.mean_coherence.filter(|c| !at_least(*c, MIN_MEAN_COHERENCE)) {
         warnings.push(Warning {
             topic: "coherence".into(),
             reason: format!(
@@ -109,7 +114,7 @@ pub fn verdict(v: &VerdictInput) -> Verdict {
             ),
         });
     }
-    if let Some(r) = v.fit_rms_db.filter(|r| !(*r <= MAX_FIT_RMS_DB)) {
+    if let Some(r) = v.fit_rms_db.filter(|r| !at_least(MAX_FIT_RMS_DB, *r)) {
         warnings.push(Warning {
             topic: "fit residual".into(),
             reason: format!(
@@ -119,7 +124,7 @@ pub fn verdict(v: &VerdictInput) -> Verdict {
         });
     }
     let (want, got) = v.velocity_phase_margin_deg;
-    if !(got >= want - MARGIN_SHORTFALL_DEG) {
+    if !at_least(got, want - MARGIN_SHORTFALL_DEG) {
         warnings.push(Warning {
             topic: "margins".into(),
             reason: format!(
@@ -128,7 +133,7 @@ pub fn verdict(v: &VerdictInput) -> Verdict {
         });
     }
     let (want, got) = v.position_phase_margin_deg;
-    if !(got >= want - MARGIN_SHORTFALL_DEG) {
+    if !at_least(got, want - MARGIN_SHORTFALL_DEG) {
         warnings.push(Warning {
             topic: "margins".into(),
             reason: format!(
@@ -136,7 +141,7 @@ pub fn verdict(v: &VerdictInput) -> Verdict {
             ),
         });
     }
-    if !(v.velocity_gain_margin_db >= MIN_GAIN_MARGIN_DB) {
+    if !at_least(v.velocity_gain_margin_db, MIN_GAIN_MARGIN_DB) {
         warnings.push(Warning {
             topic: "margins".into(),
             reason: format!(

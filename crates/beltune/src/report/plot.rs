@@ -449,11 +449,14 @@ fn styles(plot: &BodePlot) -> Vec<Style> {
         .collect()
 }
 
+/// A panel drawn below the Bode panels (the coherence) on the shared frequency range.
+type ExtraPanel<'a> = &'a dyn Fn(&DrawingArea<SVGBackend, Shift>, &Range<f64>) -> Result<()>;
+
 /// Caption, legend strip, magnitude and (unless `magnitude_only`) phase.
 fn bode_figure(
     plot: &BodePlot,
     curves: &[(&BodeCurve, Style)],
-    extra_panel: Option<&dyn Fn(&DrawingArea<SVGBackend, Shift>, &Range<f64>) -> Result<()>>,
+    extra_panel: Option<ExtraPanel>,
 ) -> Result<(String, u32)> {
     register_font();
     let st: Vec<Style> = curves.iter().map(|(_, s)| s.clone()).collect();
