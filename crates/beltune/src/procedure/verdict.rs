@@ -105,7 +105,10 @@ pub fn verdict(v: &VerdictInput) -> Verdict {
         });
     }
     let mut warnings = Vec::new();
-    if let Some(c) = v.mean_coherence.filter(|c| !at_least(*c, MIN_MEAN_COHERENCE)) {
+    if let Some(c) = v
+        .mean_coherence
+        .filter(|c| !at_least(*c, MIN_MEAN_COHERENCE))
+    {
         warnings.push(Warning {
             topic: "coherence".into(),
             reason: format!(
