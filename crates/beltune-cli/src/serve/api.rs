@@ -313,6 +313,9 @@ pub struct BodeData {
 /// Result of the simulated validation move (decimated traces).
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct MoveData {
+    /// Which plant and feedforward the move was simulated with.
+    #[serde(default)]
+    pub plant: String,
     /// Payload the simulated plant carried, kg.
     pub payload_kg: f64,
     /// Maximum absolute cart tracking error, m.

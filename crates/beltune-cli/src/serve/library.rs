@@ -501,7 +501,7 @@ impl Tuner for LibraryTuner {
         };
         let payload_kg = self.payload_kg(knobs);
         let (validation_move, move_error) = match self.validation_move(&d, payload_kg) {
-            Ok(m) => (Some(move_data(&m, payload_kg)), None),
+            Ok(m) => (Some(move_data(&m, payload_kg, self.move_label())), None),
             Err(e) => (
                 None,
                 Some(format!("simulated move with {payload_kg} kg payload: {e}")),
@@ -825,7 +825,7 @@ pub const MOVE_TRACE_POINTS: usize = 400;
 pub const MOVE_FOLLOWING_ERROR_MAX_M: f64 = 0.1;
 
 /// Summary and traces (every k-th sample, at most [`MOVE_TRACE_POINTS`]) of a move.
-fn move_data(r: &MoveResult, payload_kg: f64) -> MoveData {
+fn move_data(r: &MoveResult, payload_kg: f64, plant: String) -> MoveData {
     let rec = &r.record;
     let n = rec.samples.len();
     let stride = n.div_ceil(MOVE_TRACE_POINTS).max(1);
@@ -837,6 +837,7 @@ fn move_data(r: &MoveResult, payload_kg: f64) -> MoveData {
     let pick = |f: &dyn Fn(usize) -> f64| (0..n).step_by(stride).map(f).collect::<Vec<f64>>();
     let s = &r.summary;
     MoveData {
+        plant,
         payload_kg,
         max_error_m: s.max_tracking_error_m,
         static_error_m: s.static_error_m,

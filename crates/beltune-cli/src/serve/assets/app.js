@@ -253,7 +253,7 @@
         series: [{ x: m.t_s, y: m.torque_nm, cls: 's2', name: 'torque' }],
         hlines: [{ y: 0 }],
       });
-      $('move-note').textContent = `Simulated move with ${fmt(m.payload_kg, 3)} kg payload` +
+      $('move-note').textContent = `Move ${m.plant} with ${fmt(m.payload_kg, 3)} kg payload` +
         (tEnd === null ? ' (did not settle).' : '.') + ' Dashed red: the 1 mm limit.';
     } else {
       const why = r.move_error || 'no simulated move';
