@@ -6,7 +6,7 @@
 //! | 0 | success |
 //! | 1 | any other error (I/O, an internal failure) |
 //! | 2 | bad input: command line, a file's contents, a parameter out of range |
-//! | 3 | safety stop: the supervisor stopped the axis during the commissioning |
+//! | 3 | safety stop: the supervisor stopped the axis during the commissioning, or the axis failed (drive fault, lost frames) and was quick-stopped |
 //! | 4 | infeasible: no controller can be designed, or the axis cannot do what is asked |
 //! | 5 | the commissioning ended with a controller that does not meet its own limits |
 //! | 141 | the reader of stdout went away (SIGPIPE, as `head` causes) |
@@ -109,7 +109,7 @@ pub fn status_of(e: &anyhow::Error) -> ExitStatus {
 pub fn library_status(e: &beltune::Error) -> ExitStatus {
     use beltune::Error as E;
     match e {
-        E::SafetyStop { .. } => ExitStatus::SafetyStop,
+        E::SafetyStop { .. } | E::Axis { .. } => ExitStatus::SafetyStop,
         E::Infeasible { .. } | E::NoCrossover { .. } | E::Unstable { .. } => ExitStatus::Infeasible,
         E::InvalidParameter { .. }
         | E::UnknownPlant { .. }

@@ -39,6 +39,8 @@ enum Command {
     Serve(cmd::serve::Args),
     /// Compare two commissioning folders: FRFs, fits, loops, moves, parameter changes.
     Compare(cmd::compare::Args),
+    /// Answer as a virtual CiA 402 servo drive (EtherCAT SubDevice) on a network interface.
+    VirtualDrive(cmd::virtual_drive::Args),
 }
 
 /// A command that prints to a pipe whose reader went away (`beltune ... | head`)
@@ -68,6 +70,7 @@ fn main() {
         Command::Commission(a) => cmd::commission::run(a),
         Command::Serve(a) => cmd::serve::run(a),
         Command::Compare(a) => cmd::compare::run(a),
+        Command::VirtualDrive(a) => cmd::virtual_drive::run(a),
     };
     if let Err(e) = result {
         // One line: the whole cause chain joined, no backtrace.

@@ -78,7 +78,7 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
     ] {
         assert!(json["identified"][key].is_number(), "identified.{key}");
     }
-    for key in ["viscous", "coulomb"] {
+    for key in ["viscous_nm_s_per_rad", "coulomb_nm"] {
         assert!(json["friction"][key].is_number(), "friction.{key}");
     }
     for key in [
@@ -149,8 +149,8 @@ fn safety_stop_exits_non_zero_and_writes_nothing() {
             "1.5",
             "--prbs-order",
             "7",
-            "--prbs-clock",
-            "512",
+            "--prbs-clock-ms",
+            "51.2",
             "--travel-window",
             "0.0,0.12",
             "--start-position",

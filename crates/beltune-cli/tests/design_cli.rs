@@ -80,7 +80,7 @@ fn toml_model_gives_json_with_the_required_keys() {
             assert!(v["discrete"]["velocity_filter"][key].is_f64());
         }
         // friction from the model file reaches the feedforward
-        assert_eq!(v["feedforward"]["tau_c_n_m"].as_f64(), Some(0.125));
+        assert_eq!(v["feedforward"]["coulomb_nm"].as_f64(), Some(0.125));
     }
 }
 

@@ -716,8 +716,8 @@ fn commissioning_folder_model_is_designed_and_simulated() {
     let r: DesignResponse = serde_json::from_str(&body).unwrap();
     let mut input = DesignInput::new(beltune::model::TwoMassParams::thesis_table_a4(), 1e-3);
     input.friction = Some(FrictionParams {
-        viscous_n_m_s_per_rad: 0.00253,
-        coulomb_n_m: 0.125,
+        viscous_nm_s_per_rad: 0.00253,
+        coulomb_nm: 0.125,
     });
     let d = bdesign::design(&input, &DesignKnobs::default()).unwrap();
     // i_t in the file is 78 mm / 2 pi to 17 digits, as in thesis_table_a4()

@@ -85,8 +85,8 @@ fn write_model_toml(input: &DesignInput, path: &Path) {
         m.i_t,
         input.dead_time_s,
         input.t_r_s,
-        f.viscous_n_m_s_per_rad,
-        f.coulomb_n_m
+        f.viscous_nm_s_per_rad,
+        f.coulomb_nm
     );
     std::fs::write(path, text).unwrap();
 }

@@ -7,7 +7,6 @@
 //! and is printed at the end.
 
 use beltune::model::builtin;
-use beltune::plant::Axis;
 use beltune::sim::{SimAxis, SimConfig, SimModel};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;

@@ -12,7 +12,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 pub enum Error {
     // ---- parameters and models ----
     /// A parameter is non-finite or outside its physical range.
-    #[error("invalid parameter `{name}` = {value}: {reason}")]
+    #[error("invalid parameter `{name}` = {}: {reason}", short_number(*value))]
     InvalidParameter {
         /// Parameter name (field name, with its unit where it helps).
         name: String,
@@ -108,6 +108,16 @@ pub enum Error {
         reason: String,
     },
 
+    /// A cyclic exchange with the axis failed; the drive was told to quick
+    /// stop (`quick_stop` says why that failed too, if it did).
+    #[error("axis: {error}{}", quick_stop.map(|q| format!("; the quick stop failed too: {q}")).unwrap_or_default())]
+    Axis {
+        /// Why the exchange failed.
+        error: crate::plant::AxisError,
+        /// Why the quick stop failed, if it did.
+        quick_stop: Option<crate::plant::AxisError>,
+    },
+
     // ---- report ----
     /// A plot could not be drawn or the report not rendered.
     #[error("report: {reason}")]
@@ -184,5 +194,30 @@ pub fn require_all_finite(what: &str, xs: &[f64]) -> Result<()> {
             what: what.to_string(),
             index,
         }),
+    }
+}
+
+/// `Ok(x)` if `x` is finite and `lo <= x <= hi` (a plausibility bound; the
+/// message gives the range in the unit of the name).
+pub fn require_range(name: &str, x: f64, lo: f64, hi: f64) -> Result<f64> {
+    if x.is_finite() && x >= lo && x <= hi {
+        Ok(x)
+    } else {
+        Err(Error::invalid(
+            name,
+            x,
+            format!("must be finite and within [{lo:e}, {hi:e}] (plausible physical range)"),
+        ))
+    }
+}
+
+/// A number for a message: plain when it is short, else in exponent form
+/// (`1e308`, not 309 digits).
+pub fn short_number(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() <= 12 {
+        plain
+    } else {
+        format!("{x:e}")
     }
 }

@@ -1,30 +1,107 @@
-//! File output that never leaves half a file behind.
+//! File input and output that never leaves half a file behind, never replaces
+//! a special file, and never reads without bound.
+//!
+//! - [`write_atomic`]: a regular file (or a new one) is replaced atomically
+//!   through a uniquely named temporary in the same folder; a device, a FIFO or
+//!   a symlink's target is written through instead of being replaced.
+//! - [`read_capped`] / [`read_to_string_capped`]: only regular files, at most
+//!   a given size ([`MAX_TEXT_BYTES`] for TOML/JSON, [`MAX_CSV_BYTES`] for CSV).
+//! - [`clean_stale_temporaries`]: removes temporaries left by a killed process.
 
 use crate::{Error, Result};
-use std::io::Write;
-use std::path::Path;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Largest TOML or JSON file read (plant, model, commissioning), bytes (4 MiB).
+pub const MAX_TEXT_BYTES: u64 = 4 << 20;
+/// Largest CSV file read, bytes (512 MiB; after decompression for `.csv.gz`).
+pub const MAX_CSV_BYTES: u64 = 512 << 20;
+
+/// Marker inside every temporary name: `.NAME.tmp-PID-N`.
+const TMP_MARK: &str = ".tmp-";
+
+static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// A name for a temporary sibling of `name`, unique within the machine: the
+/// process id, a per-process counter and the clock.
+pub fn temporary_name(name: &str) -> String {
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    format!(".{name}{TMP_MARK}{}-{n}-{nanos}", std::process::id())
+}
+
+fn parent_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
 
 /// Write `contents` to `path` atomically: a temporary file in the same
-/// directory is written, flushed to disk and renamed over `path`.
+/// directory (a unique name, so concurrent writers never share one) is
+/// written, flushed to disk and renamed over `path`. A readers sees the old
+/// file or the new one, never a partial or empty one.
+///
+/// A symlink is followed (its target is replaced, the link stays); a device,
+/// FIFO or socket is written through (opened and written, never replaced);
+/// a directory is an error.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
     let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
     };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
+    // Follow symlinks to the file that is really meant.
+    let target = match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => match std::fs::canonicalize(path) {
+            Ok(t) => t,
+            // A dangling link: create its target.
+            Err(_) => {
+                let link = std::fs::read_link(path).map_err(io)?;
+                parent_of(path).join(link)
+            }
+        },
+        _ => path.to_path_buf(),
     };
-    let name = path
+    match std::fs::metadata(&target) {
+        Ok(m) if m.is_dir() => {
+            return Err(io(std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a directory",
+            )))
+        }
+        Ok(m) if !m.is_file() => {
+            // Device, FIFO, socket: write through.
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(&target)
+                .map_err(io)?;
+            return f.write_all(contents).and_then(|()| f.flush()).map_err(io);
+        }
+        _ => {}
+    }
+    let dir = parent_of(&target);
+    let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let tmp = dir.join(temporary_name(&name));
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
+        // Keep the permissions of the file being replaced.
+        if let Ok(m) = std::fs::metadata(&target) {
+            let _ = f.set_permissions(m.permissions());
+        }
         f.write_all(contents)?;
         f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        std::fs::rename(&tmp, &target)?;
+        sync_dir(&dir);
+        Ok(())
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
@@ -32,14 +109,289 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
     result.map_err(io)
 }
 
+/// Flush a directory's entries (a rename) to disk; best effort.
+pub fn sync_dir(dir: &Path) {
+    if let Ok(d) = std::fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+}
+
+fn too_big(path: &Path, limit: u64) -> Error {
+    Error::Parse {
+        path: path.display().to_string(),
+        message: format!("file is larger than the limit of {} bytes", limit),
+    }
+}
+
+/// Refuse anything but a regular file (a FIFO would block, a device such as
+/// `/dev/zero` never ends) and a file larger than `limit` bytes.
+pub fn check_readable_file(path: &Path, limit: u64) -> Result<()> {
+    let m = std::fs::metadata(path).map_err(|e| Error::Parse {
+        path: path.display().to_string(),
+        message: format!("cannot open: {}", describe(&e)),
+    })?;
+    if m.is_dir() {
+        return Err(Error::Parse {
+            path: path.display().to_string(),
+            message: "is a directory, not a file".into(),
+        });
+    }
+    if !m.is_file() {
+        return Err(Error::Parse {
+            path: path.display().to_string(),
+            message: "is not a regular file (a device, FIFO or socket); give a file".into(),
+        });
+    }
+    if m.len() > limit {
+        return Err(too_big(path, limit));
+    }
+    Ok(())
+}
+
+/// An I/O error's text, once (the error is not kept as a source, so that
+/// the one-line message does not repeat it).
+pub fn describe(e: &std::io::Error) -> String {
+    e.to_string()
+}
+
+/// A reader of at most `limit` bytes: reading more is an error naming `path`.
+pub struct CappedReader<R> {
+    inner: R,
+    left: u64,
+    limit: u64,
+}
+
+impl<R: Read> CappedReader<R> {
+    /// Cap `inner` at `limit` bytes.
+    pub fn new(inner: R, limit: u64) -> Self {
+        CappedReader {
+            inner,
+            left: limit,
+            limit,
+        }
+    }
+}
+
+impl<R: Read> Read for CappedReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.left == 0 {
+            // One more byte means the limit was exceeded.
+            let mut probe = [0u8; 1];
+            return match self.inner.read(&mut probe)? {
+                0 => Ok(0),
+                _ => Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("more than the limit of {} bytes", self.limit),
+                )),
+            };
+        }
+        let n = buf.len().min(self.left.min(usize::MAX as u64) as usize);
+        let got = self.inner.read(&mut buf[..n])?;
+        self.left -= got as u64;
+        Ok(got)
+    }
+}
+
+/// The bytes of the regular file `path`, at most `limit` bytes
+/// ([`Error::Parse`] naming the file otherwise).
+pub fn read_capped(path: &Path, limit: u64) -> Result<Vec<u8>> {
+    check_readable_file(path, limit)?;
+    let f = std::fs::File::open(path).map_err(|e| Error::Parse {
+        path: path.display().to_string(),
+        message: format!("cannot open: {}", describe(&e)),
+    })?;
+    let mut out = Vec::new();
+    CappedReader::new(f, limit)
+        .read_to_end(&mut out)
+        .map_err(|e| Error::Parse {
+            path: path.display().to_string(),
+            message: format!("cannot open: {}", describe(&e)),
+        })?;
+    Ok(out)
+}
+
+/// The text of the regular file `path` (UTF-8), at most `limit` bytes.
+pub fn read_to_string_capped(path: &Path, limit: u64) -> Result<String> {
+    let bytes = read_capped(path, limit)?;
+    String::from_utf8(bytes).map_err(|e| Error::Parse {
+        path: path.display().to_string(),
+        message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+    })
+}
+
+/// `true` if the process `pid` still runs (Linux: `/proc/PID`; elsewhere
+/// every process is assumed alive and only age counts).
+fn process_alive(pid: u32) -> bool {
+    let proc = Path::new("/proc");
+    if !proc.join("self").exists() {
+        return true;
+    }
+    pid == std::process::id() || proc.join(pid.to_string()).exists()
+}
+
+/// The process id in a temporary name `.NAME.tmp-PID-...`.
+fn temporary_pid(name: &str) -> Option<u32> {
+    if !name.starts_with('.') {
+        return None;
+    }
+    // Exactly our pattern `PID-N-NANOS` (three numbers), so that a user's
+    // own `.x.tmp-...` file is never taken for one of ours.
+    let rest = &name[name.rfind(TMP_MARK)? + TMP_MARK.len()..];
+    let parts: Vec<&str> = rest.split('-').collect();
+    if parts.len() != 3
+        || !parts
+            .iter()
+            .all(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()))
+    {
+        return None;
+    }
+    parts[0].parse().ok()
+}
+
+/// Remove temporaries (`.NAME.tmp-PID-...`, files or folders) in `dir` whose
+/// process no longer runs, or older than a day. Best effort: returns what
+/// was removed.
+pub fn clean_stale_temporaries(dir: &Path) -> Vec<PathBuf> {
+    let mut removed = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return removed;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = temporary_pid(&name) else {
+            continue;
+        };
+        let old = e
+            .metadata()
+            .ok()
+            .and_then(|m| m.modified().ok())
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age.as_secs() > 24 * 3600);
+        if process_alive(pid) && !old {
+            continue;
+        }
+        let p = e.path();
+        let gone = match e.file_type() {
+            Ok(t) if t.is_dir() => std::fs::remove_dir_all(&p),
+            _ => std::fs::remove_file(&p),
+        };
+        if gone.is_ok() {
+            removed.push(p);
+        }
+    }
+    removed
+}
+
+/// Replace the folder `dir` by a folder holding exactly `files` (name,
+/// contents), atomically: the files are written into a temporary sibling
+/// folder, flushed, and the folder is renamed into place (over a new or empty
+/// `dir`) or exchanged with the old one (Linux `renameat2(RENAME_EXCHANGE)`),
+/// whose contents are then removed. Anyone looking at `dir` sees the old set
+/// or the new one, never a mix. A symlinked `dir` has its target replaced.
+///
+/// The caller decides whether replacing an existing `dir` is allowed.
+pub fn write_folder_atomic(dir: &Path, files: &[(&str, &[u8])]) -> Result<Vec<PathBuf>> {
+    let io = |p: &Path| {
+        let p = p.to_path_buf();
+        move |source| Error::Io { path: p, source }
+    };
+    let dir = match std::fs::symlink_metadata(dir) {
+        Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(dir).map_err(io(dir))?,
+        _ => dir.to_path_buf(),
+    };
+    let parent = parent_of(&dir);
+    std::fs::create_dir_all(&parent).map_err(io(&parent))?;
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .ok_or_else(|| Error::Parse {
+            path: dir.display().to_string(),
+            message: "not a folder name".into(),
+        })?;
+    let tmp = parent.join(temporary_name(&name));
+    let result = (|| -> Result<()> {
+        std::fs::create_dir(&tmp).map_err(io(&tmp))?;
+        for (file, bytes) in files {
+            let p = tmp.join(file);
+            let mut f = std::fs::File::create(&p).map_err(io(&p))?;
+            f.write_all(bytes).map_err(io(&p))?;
+            f.sync_all().map_err(io(&p))?;
+        }
+        sync_dir(&tmp);
+        let empty = std::fs::read_dir(&dir).map(|mut d| d.next().is_none());
+        match empty {
+            // New, or an empty folder: a plain rename replaces it atomically.
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                std::fs::rename(&tmp, &dir).map_err(io(&dir))?
+            }
+            Ok(true) => std::fs::rename(&tmp, &dir).map_err(io(&dir))?,
+            Err(e) => return Err(io(&dir)(e)),
+            Ok(false) => {
+                exchange(&tmp, &dir).map_err(io(&dir))?;
+                // `tmp` now holds the old set.
+                let _ = std::fs::remove_dir_all(&tmp);
+            }
+        }
+        sync_dir(&parent);
+        Ok(())
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_dir_all(&tmp);
+    }
+    result?;
+    Ok(files.iter().map(|(f, _)| dir.join(f)).collect())
+}
+
+/// Swap two paths atomically; where the system cannot, move `b` aside, move
+/// `a` to `b` and the old `b` to `a` (a short window without `b`).
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        let ca = std::ffi::CString::new(a.as_os_str().as_bytes())?;
+        let cb = std::ffi::CString::new(b.as_os_str().as_bytes())?;
+        // SAFETY: two valid NUL-terminated paths; renameat2 has no other
+        // preconditions.
+        let r = unsafe {
+            libc::renameat2(
+                libc::AT_FDCWD,
+                ca.as_ptr(),
+                libc::AT_FDCWD,
+                cb.as_ptr(),
+                libc::RENAME_EXCHANGE,
+            )
+        };
+        if r == 0 {
+            return Ok(());
+        }
+        let e = std::io::Error::last_os_error();
+        if !matches!(e.raw_os_error(), Some(libc::EINVAL) | Some(libc::ENOSYS)) {
+            return Err(e);
+        }
+    }
+    let aside = parent_of(b).join(temporary_name("old"));
+    std::fs::rename(b, &aside)?;
+    if let Err(e) = std::fs::rename(a, b) {
+        let _ = std::fs::rename(&aside, b);
+        return Err(e);
+    }
+    std::fs::rename(&aside, a)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn temp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("beltune-io-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
     #[test]
     fn writes_and_replaces_without_leftovers() {
-        let dir = std::env::temp_dir().join(format!("beltune-io-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = temp("replace");
         let p = dir.join("a.json");
         write_atomic(&p, b"one").unwrap();
         write_atomic(&p, b"two").unwrap();
@@ -53,5 +405,122 @@ mod tests {
     fn missing_directory_is_an_error_not_a_panic() {
         let p = Path::new("/nonexistent-beltune-dir/x.json");
         assert!(matches!(write_atomic(p, b"x"), Err(Error::Io { .. })));
+    }
+
+    #[test]
+    fn concurrent_writers_use_distinct_temporaries_issue_13_1() {
+        // 8 threads x 50 writes of the same file; a reader never sees an
+        // empty or foreign file, no write fails, nothing is left behind.
+        let dir = temp("concurrent");
+        let p = dir.join("c.toml");
+        write_atomic(&p, b"x = 0\n").unwrap();
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let reader = {
+            let (p, stop) = (p.clone(), stop.clone());
+            std::thread::spawn(move || {
+                let mut looks = 0;
+                while !stop.load(Ordering::Relaxed) {
+                    let text = std::fs::read_to_string(&p).unwrap();
+                    assert!(text.starts_with("x = ") && text.ends_with('\n'), "{text:?}");
+                    looks += 1;
+                }
+                looks
+            })
+        };
+        let writers: Vec<_> = (0..8)
+            .map(|w| {
+                let p = p.clone();
+                std::thread::spawn(move || {
+                    for k in 0..50 {
+                        write_atomic(&p, format!("x = {}\n", w * 1000 + k).as_bytes()).unwrap();
+                    }
+                })
+            })
+            .collect();
+        for w in writers {
+            w.join().unwrap();
+        }
+        stop.store(true, Ordering::Relaxed);
+        assert!(reader.join().unwrap() > 0);
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn special_files_are_written_through_not_replaced_issue_13_7() {
+        let dir = temp("special");
+        // A symlink stays a symlink; its target gets the contents.
+        let target = dir.join("target.csv");
+        std::fs::write(&target, b"old").unwrap();
+        let link = dir.join("link.csv");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        // A character device stays a device.
+        let null = Path::new("/dev/null");
+        write_atomic(null, b"discarded").unwrap();
+        assert!(!std::fs::metadata(null).unwrap().is_file());
+        // A directory is an error.
+        assert!(write_atomic(&dir, b"x").is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn reads_refuse_devices_fifos_and_oversized_files_issue_13_5() {
+        let e = read_capped(Path::new("/dev/zero"), MAX_TEXT_BYTES).unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+        let dir = temp("read");
+        let big = dir.join("big.toml");
+        std::fs::write(&big, vec![b'#'; 2000]).unwrap();
+        let e = read_capped(&big, 1000).unwrap_err();
+        assert!(e.to_string().contains("limit of 1000 bytes"), "{e}");
+        assert_eq!(read_capped(&big, 2000).unwrap().len(), 2000);
+        let e = read_capped(&dir, 1000).unwrap_err();
+        assert!(e.to_string().contains("directory"), "{e}");
+        // A reader capped below its stream's length fails instead of growing.
+        let mut s = Vec::new();
+        let r = CappedReader::new(std::io::repeat(0), 100).read_to_end(&mut s);
+        assert!(r.is_err() && s.len() == 100);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_folder_is_replaced_as_a_whole() {
+        let dir = temp("folder");
+        let out = dir.join("out");
+        write_folder_atomic(&out, &[("a", b"1"), ("b", b"1")]).unwrap();
+        write_folder_atomic(&out, &[("a", b"2"), ("c", b"2")]).unwrap();
+        let mut names: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a", "c"]);
+        assert_eq!(std::fs::read(out.join("a")).unwrap(), b"2");
+        // Nothing but `out` beside it: the old set and the temporary are gone.
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn stale_temporaries_of_dead_processes_are_removed() {
+        let dir = temp("stale");
+        // pid 0 never names a user process.
+        let dead = dir.join(".report.html.tmp-0-1-2");
+        std::fs::write(&dead, b"x").unwrap();
+        let live = dir.join(temporary_name("controller.toml"));
+        std::fs::write(&live, b"x").unwrap();
+        let keep = dir.join("controller.toml");
+        std::fs::write(&keep, b"x").unwrap();
+        let users = dir.join(".notes.tmp-0");
+        std::fs::write(&users, b"x").unwrap();
+        let removed = clean_stale_temporaries(&dir);
+        assert_eq!(removed, vec![dead.clone()]);
+        assert!(live.exists() && keep.exists() && users.exists() && !dead.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

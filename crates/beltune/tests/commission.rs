@@ -5,6 +5,7 @@
 //! simulator's own linearization at the identification position (truth).
 
 use beltune::model::rigs::{self, Plant};
+use beltune::plant::Axis;
 use beltune::procedure::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
 use beltune::procedure::NoProgress;
 use beltune::sim::{SimAxis, SimConfig};
@@ -150,7 +151,7 @@ fn excitation_that_would_leave_the_travel_window_is_stopped_inside_it() {
     // a slow PRBS (long clock period, as the thesis' PRBS^7_128 and slower)
     // moves the cart in long strokes
     cfg.excitation.prbs_order = 7;
-    cfg.excitation.clock_period = 512;
+    cfg.excitation.clock_period_s = 512.0 * 100e-6;
     let err = commission(&mut axis, &ds, &cfg, &mut NoProgress).unwrap_err();
     let Error::SafetyStop { reason } = &err else {
         panic!("expected a safety stop, got {err}");
@@ -172,4 +173,107 @@ fn excitation_that_would_leave_the_travel_window_is_stopped_inside_it() {
 fn egc70_vertical_motor_on_top_meets_the_same_limits() {
     let (_, run) = run(None, Some(-90.0));
     assert_validation_meets_thesis(&run);
+}
+
+/// An axis that fails after `fail_after` good exchanges (a drive fault, as a
+/// fieldbus axis reports it), and records whether it was quick-stopped.
+struct FailingAxis {
+    inner: SimAxis,
+    fail_after: u64,
+    exchanges: u64,
+    quick_stopped: bool,
+}
+
+impl beltune::plant::Axis for FailingAxis {
+    fn info(&self) -> beltune::plant::AxisInfo {
+        self.inner.info()
+    }
+
+    fn exchange(
+        &mut self,
+        torque_command_nm: f64,
+    ) -> Result<beltune::plant::Measurement, beltune::plant::AxisError> {
+        assert!(!self.quick_stopped, "exchange after the quick stop");
+        self.exchanges += 1;
+        if self.exchanges > self.fail_after {
+            return Err(beltune::plant::AxisError::DriveFault { error_code: 0x7500 });
+        }
+        Ok(self.inner.step(torque_command_nm))
+    }
+
+    fn quick_stop(&mut self) -> Result<(), beltune::plant::AxisError> {
+        self.quick_stopped = true;
+        Ok(())
+    }
+}
+
+/// Issue 14 (the fallible axis seam): a drive fault in the middle of the
+/// commissioning (here during the excitation-amplitude bursts, after 4 s of
+/// the axis' time) ends it at once with the drive's code, after exactly one
+/// quick stop and no further exchange.
+#[test]
+fn a_drive_fault_ends_the_commissioning_with_a_quick_stop_issue_14() {
+    let plant = rigs::builtin("egc70", None).unwrap();
+    let start = 0.05;
+    let inner = SimAxis::new(
+        &plant,
+        SimConfig {
+            seed: 1,
+            initial_cart_position_m: Some(start),
+            ..SimConfig::default()
+        },
+    )
+    .unwrap();
+    let fail_after = (4.0 / inner.info().ts_s) as u64;
+    let mut axis = FailingAxis {
+        inner,
+        fail_after,
+        exchanges: 0,
+        quick_stopped: false,
+    };
+    let ds = DataSheet::for_plant(&plant, start, None);
+    let err = commission(
+        &mut axis,
+        &ds,
+        &CommissioningConfig::default(),
+        &mut NoProgress,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            Error::Axis {
+                error: beltune::plant::AxisError::DriveFault { error_code: 0x7500 },
+                quick_stop: None
+            }
+        ),
+        "{err}"
+    );
+    assert!(axis.quick_stopped);
+    assert_eq!(axis.exchanges, fail_after + 1);
+    assert_eq!(err.to_string(), "axis: the drive reports fault 0x7500");
+}
+
+/// Issue 14: the procedure's settings are in seconds, so a slower cycle (a
+/// PC fieldbus master at 1 kHz) uses the same configuration: the PRBS clock
+/// of 1.6 ms is 16 samples at 10 kHz and 2 at 1 kHz (rounded), the bursts
+/// and windows scale alike.
+#[test]
+fn excitation_settings_derive_their_sample_counts_from_the_cycle_time_issue_14() {
+    let ex = beltune::procedure::commission::ExcitationConfig::default();
+    assert_eq!(ex.clock_samples(100e-6), 16);
+    assert_eq!(ex.clock_samples(1e-3), 2);
+    assert_eq!(ex.clock_samples(250e-6), 6);
+    assert_eq!(ex.burst_samples(100e-6), 1500);
+    assert_eq!(ex.burst_samples(1e-3), 150);
+    assert_eq!(ex.moving_window_samples(100e-6), 20);
+    assert_eq!(ex.moving_window_samples(1e-3), 2);
+    // Degenerate values never give zero samples.
+    let odd = beltune::procedure::commission::ExcitationConfig {
+        clock_period_s: 0.0,
+        burst_s: f64::NAN,
+        ..ex
+    };
+    assert_eq!(odd.clock_samples(1e-3), 1);
+    assert_eq!(odd.burst_samples(1e-3), 1);
 }

@@ -3,6 +3,7 @@
 //! validation and the report; or, with `--csv`, from data recorded on a real
 //! drive (the stages that need the axis are skipped).
 
+use crate::exit::{ExitStatus, Failure};
 use crate::progress::BarProgress;
 use anyhow::Context;
 use beltune::design::DesignKnobs;
@@ -10,12 +11,13 @@ use beltune::ident::{
     identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig,
     MotionFrictionConfig, RecordedExcitation,
 };
-use beltune::model::rigs::{self, Plant};
+use beltune::model::rigs::Plant;
 use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::procedure::outputs::{
     build_report, commissioning_json, controller_toml, data_files, recorded_data_files,
-    recorded_outputs, write_outputs,
+    recorded_outputs,
 };
+use beltune::procedure::outputs::{write_outputs_with_data, OutputTarget};
 use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
 use beltune::provenance::Provenance;
@@ -27,45 +29,52 @@ use std::time::Instant;
 /// Arguments of `beltune commission`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Built-in plant name (egc70, sim-a, sim-b, sim-c) or a plant TOML file.
-    #[arg(long, default_value = "egc70")]
-    pub plant: String,
-    /// Payload on the cart, kg (egc70 only; default 11.2 kg).
+    /// Built-in plant name (egc70, sim-a, sim-b, sim-c) or a plant TOML file
+    /// (a built-in name always means the built-in plant; write `./egc70` for a file).
+    #[arg(long)]
+    pub plant: Option<String>,
+    /// Payload on the cart, kg (physical plants: egc70 default 11.2 kg, or a plant file).
     #[arg(long, allow_negative_numbers = true)]
     pub payload: Option<f64>,
-    /// Tilt of the axis, degrees (0 horizontal, 90 vertical).
+    /// Tilt of the axis, degrees (0 horizontal, 90 vertical; within -90..90).
     #[arg(long, allow_negative_numbers = true)]
     pub tilt: Option<f64>,
     /// Seed of the simulated measurement noise.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Output folder.
-    #[arg(long, default_value = "commissioning")]
-    pub out: PathBuf,
+    #[arg(long, allow_negative_numbers = true)]
+    pub seed: Option<u64>,
+    /// Output folder, written exactly (new or empty; a previous result needs
+    /// --force). Without it: a new timestamped folder under commissioning/ per
+    /// run, with commissioning/latest pointing at the newest.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Replace the result already in --out (the three files are replaced together).
+    #[arg(long, requires = "out")]
+    pub force: bool,
     #[command(flatten)]
     pub knobs: super::knobs::KnobArgs,
     /// Travel window MIN,MAX in m (default: inside the stroke).
     #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
     pub travel_window: Option<(f64, f64)>,
-    /// Cart position at start (the homing result), m.
-    #[arg(long, default_value_t = 0.05)]
-    pub start_position: f64,
+    /// Cart position at start (the homing result), m (default 0.05).
+    #[arg(long, allow_negative_numbers = true)]
+    pub start_position: Option<f64>,
     /// Fixed PRBS amplitude A_PRBS in N m (values +-A/2) instead of the automatic search.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub excitation_amplitude: Option<f64>,
-    /// PRBS order n_PRBS (default 9).
-    #[arg(long)]
+    /// PRBS order n_PRBS (default 9; 2..=18).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=MAX_PRBS_ORDER as i64))]
     pub prbs_order: Option<u32>,
-    /// PRBS clock period P_PRBS in samples (default 16).
-    #[arg(long)]
-    pub prbs_clock: Option<u32>,
+    /// PRBS clock period P_PRBS in ms (default 1.6 ms = 16 samples at 10 kHz;
+    /// rounded to whole cycles of the axis).
+    #[arg(long, allow_negative_numbers = true)]
+    pub prbs_clock_ms: Option<f64>,
     /// Commission from recorded data instead of a plant: CSV of a periodic
     /// excitation (header row). Skips the stages that need the axis.
     #[arg(long, requires_all = ["input", "output"])]
     pub csv: Option<PathBuf>,
-    /// Recorded data: time column, s.
-    #[arg(long, default_value = "t_s")]
-    pub time: String,
+    /// Recorded data: time column, s (default t_s).
+    #[arg(long)]
+    pub time: Option<String>,
     /// Recorded data: desired-torque column, N m.
     #[arg(long)]
     pub input: Option<String>,
@@ -76,21 +85,21 @@ pub struct Args {
     #[arg(long)]
     pub actual_torque: Option<String>,
     /// Recorded data: samples per excitation period (default: detected).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_period)]
     pub period_samples: Option<usize>,
-    /// Recorded data: leading periods discarded as transient.
-    #[arg(long, default_value_t = 1)]
-    pub skip_periods: usize,
+    /// Recorded data: leading periods discarded as transient (default 1).
+    #[arg(long, value_parser = parse_skip)]
+    pub skip_periods: Option<usize>,
     /// Recorded data: data-sheet Theta_e in kg m^2 (fitted when not given).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub inertia: Option<f64>,
-    /// Recorded data: transmission i_t in m/rad.
-    #[arg(long, default_value_t = 1.0)]
-    pub transmission: f64,
+    /// Recorded data: transmission i_t in m/rad (default 1).
+    #[arg(long, allow_negative_numbers = true)]
+    pub transmission: Option<f64>,
     /// Recorded data: the drive's torque limit, in the unit of the input column
-    /// (N m, or A for a current record), written to controller.toml.
-    #[arg(long, default_value_t = 3.1)]
-    pub torque_limit: f64,
+    /// (N m, or A for a current record), written to controller.toml (default 3.1).
+    #[arg(long, allow_negative_numbers = true)]
+    pub torque_limit: Option<f64>,
     /// Recorded data: a CSV of any motion for the friction regression (same time column name).
     #[arg(long, requires_all = ["friction_torque", "friction_position"])]
     pub friction_csv: Option<PathBuf>,
@@ -105,53 +114,215 @@ pub struct Args {
     pub quiet: bool,
 }
 
+/// Largest `--prbs-order`: 2^18 - 1 bits.
+pub const MAX_PRBS_ORDER: u32 = 18;
+/// Largest PRBS clock period (`--prbs-clock-ms`), samples of the axis.
+pub const MAX_PRBS_CLOCK: u32 = 4096;
+/// Most samples in one PRBS period (`(2^n - 1) P`): 2^22, 419 s at 100 us.
+pub const MAX_PRBS_PERIOD_SAMPLES: u64 = 1 << 22;
+/// Largest `--skip-periods`.
+pub const MAX_SKIP_PERIODS: usize = 1000;
+/// Largest `--torque-limit` (N m or A).
+pub const MAX_TORQUE_LIMIT: f64 = 1e4;
+
+pub fn parse_period(s: &str) -> Result<usize, String> {
+    let max = beltune::ident::record::MAX_CSV_ROWS;
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a whole number of samples"))?;
+    if !(4..=max).contains(&n) {
+        return Err(format!("must lie in 4..={max} samples"));
+    }
+    Ok(n)
+}
+
+pub fn parse_skip(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a whole number of periods"))?;
+    if n > MAX_SKIP_PERIODS {
+        return Err(format!("must lie in 0..={MAX_SKIP_PERIODS}"));
+    }
+    Ok(n)
+}
+
 fn parse_pair(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s
         .split_once(',')
         .ok_or_else(|| format!("expected MIN,MAX, got `{s}`"))?;
-    let a: f64 = a
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{a}` is not a number"))?;
-    let b: f64 = b
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{b}` is not a number"))?;
-    Ok((a, b))
+    let num = |x: &str| -> Result<f64, String> {
+        let v: f64 = x
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{}` is not a number", x.trim()))?;
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(format!("`{}` is not finite", x.trim()))
+        }
+    };
+    Ok((num(a)?, num(b)?))
+}
+
+/// A bad-input error (exit status 2) with one line of text.
+fn bad(msg: impl Into<String>) -> anyhow::Error {
+    anyhow::Error::new(Failure::new(ExitStatus::BadInput, msg))
+}
+
+/// Error if any flag of the other mode was given: nothing is silently ignored.
+fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
+    let recorded_only: [(&str, bool); 11] = [
+        ("--time", args.time.is_some()),
+        ("--input", args.input.is_some()),
+        ("--output", args.output.is_some()),
+        ("--actual-torque", args.actual_torque.is_some()),
+        ("--period-samples", args.period_samples.is_some()),
+        ("--skip-periods", args.skip_periods.is_some()),
+        ("--inertia", args.inertia.is_some()),
+        ("--transmission", args.transmission.is_some()),
+        ("--torque-limit", args.torque_limit.is_some()),
+        ("--friction-csv", args.friction_csv.is_some()),
+        (
+            "--friction-torque/--friction-position",
+            args.friction_torque.is_some() || args.friction_position.is_some(),
+        ),
+    ];
+    let simulated_only: [(&str, bool); 9] = [
+        ("--plant", args.plant.is_some()),
+        ("--payload", args.payload.is_some()),
+        ("--tilt", args.tilt.is_some()),
+        ("--seed", args.seed.is_some()),
+        ("--travel-window", args.travel_window.is_some()),
+        ("--start-position", args.start_position.is_some()),
+        (
+            "--excitation-amplitude",
+            args.excitation_amplitude.is_some(),
+        ),
+        ("--prbs-order", args.prbs_order.is_some()),
+        ("--prbs-clock-ms", args.prbs_clock_ms.is_some()),
+    ];
+    let (given, mode, hint): (Vec<&str>, _, _) = if args.csv.is_some() {
+        (
+            simulated_only.iter().filter(|f| f.1).map(|f| f.0).collect(),
+            "a plant",
+            "they do not apply to recorded data (--csv)",
+        )
+    } else {
+        (
+            recorded_only.iter().filter(|f| f.1).map(|f| f.0).collect(),
+            "recorded data (--csv)",
+            "they would be ignored when commissioning a plant",
+        )
+    };
+    if !given.is_empty() {
+        return Err(bad(format!(
+            "{} apply only to {mode}; {hint}",
+            given.join(", ")
+        )));
+    }
+    Ok(())
+}
+
+/// A numeric flag that must be finite and within `lo..=hi` (`lo` exclusive when `open`).
+fn check_flag(flag: &str, v: Option<f64>, lo: f64, hi: f64, open: bool) -> anyhow::Result<()> {
+    if let Some(v) = v {
+        let low_ok = if open { v > lo } else { v >= lo };
+        if !(v.is_finite() && low_ok && v <= hi) {
+            let range = if open {
+                format!("({lo}, {hi}]")
+            } else {
+                format!("[{lo}, {hi}]")
+            };
+            let v = beltune::error::short_number(v);
+            return Err(bad(format!("{flag} {v} is out of range {range}")));
+        }
+    }
+    Ok(())
 }
 
 fn load_plant(args: &Args) -> anyhow::Result<Plant> {
-    let p = std::path::Path::new(&args.plant);
-    let mut plant = if args.plant.ends_with(".toml") || p.exists() {
-        rigs::load_toml(p)?
-    } else {
-        rigs::builtin(&args.plant, args.payload)?
-    };
-    if let (Some(tilt), Plant::Physical(pp)) = (args.tilt, &mut plant) {
-        pp.tilt_rad = tilt.to_radians();
+    let name = args.plant.as_deref().unwrap_or("egc70");
+    check_flag("--tilt", args.tilt, -90.0, 90.0, false)?;
+    let mut plant = super::plant::resolve_plant(name, args.payload)?;
+    if let Some(tilt) = args.tilt {
+        match &mut plant {
+            Plant::Physical(pp) => pp.tilt_rad = tilt.to_radians(),
+            Plant::Linear(_) => {
+                return Err(bad(format!(
+                "--tilt applies to physical plants only; `{name}` is a linear set without gravity"
+            )))
+            }
+        }
     }
     plant.validate()?;
     Ok(plant)
 }
 
+/// Where the result goes: `--out DIR` exactly, or the history folder.
+fn target(args: &Args) -> OutputTarget {
+    match &args.out {
+        Some(dir) => OutputTarget::Exact {
+            dir: dir.clone(),
+            force: args.force,
+        },
+        None => OutputTarget::History {
+            root: PathBuf::from(HISTORY_ROOT),
+        },
+    }
+}
+
+/// The history folder without `--out`.
+pub const HISTORY_ROOT: &str = "commissioning";
+
+/// Refuse an output folder that holds one of the input files (it would be replaced).
+fn check_inputs_outside_output(args: &Args) -> anyhow::Result<()> {
+    let Some(out) = &args.out else { return Ok(()) };
+    let Ok(out) = std::fs::canonicalize(out) else {
+        return Ok(());
+    };
+    for input in [&args.csv, &args.friction_csv].into_iter().flatten() {
+        if let Ok(i) = std::fs::canonicalize(input) {
+            if i.starts_with(&out) {
+                return Err(bad(format!(
+                    "--out {} holds the input {}; the result would replace it",
+                    out.display(),
+                    input.display()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Commission from recorded data (`--csv`).
 fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyhow::Result<()> {
     let (Some(input), Some(output)) = (&args.input, &args.output) else {
-        anyhow::bail!("--csv needs --input and --output column names");
+        return Err(bad("--csv needs --input and --output column names"));
     };
+    check_flag("--inertia", args.inertia, 0.0, 1e3, true)?;
+    check_flag("--transmission", args.transmission, 0.0, 1e3, true)?;
+    check_flag(
+        "--torque-limit",
+        args.torque_limit,
+        0.0,
+        MAX_TORQUE_LIMIT,
+        true,
+    )?;
+    let time = args.time.clone().unwrap_or_else(|| "t_s".to_string());
+    let torque_limit = args.torque_limit.unwrap_or(3.1);
     let id = identify_recorded(&RecordedExcitation {
         csv,
-        time: &args.time,
+        time: &time,
         input,
         output,
         actual_torque: args.actual_torque.as_deref(),
         period_samples: args.period_samples,
-        skip_periods: args.skip_periods,
+        skip_periods: args.skip_periods.unwrap_or(1),
         etfe: EtfeConfig::default(),
         fit: FitConfig {
             theta_e: args.inertia,
             free_inertia: args.inertia.is_none(),
-            i_t: args.transmission,
+            i_t: args.transmission.unwrap_or(1.0),
             ..FitConfig::default()
         },
     })?;
@@ -161,14 +332,14 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
         &args.friction_position,
     ) {
         (Some(f), Some(tq), Some(pos)) => {
-            let cols = read_csv_columns(f, &[args.time.as_str(), pos.as_str(), tq.as_str()])?;
+            let cols = read_csv_columns(f, &[time.as_str(), pos.as_str(), tq.as_str()])?;
             let column = |n: &str| {
                 cols.column(n)
                     .ok_or_else(|| anyhow::anyhow!("{}: missing column `{n}`", f.display()))
             };
             Some(
                 identify_from_motion(
-                    column(&args.time)?,
+                    column(&time)?,
                     column(pos)?,
                     column(tq)?,
                     &MotionFrictionConfig::default(),
@@ -183,11 +354,24 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     let provenance = Provenance::of_this_process(None);
     let (json, report) = recorded_outputs(&run, &source, Some(&provenance))?;
     let friction = run.friction.clone().unwrap_or_default();
-    let toml = controller_toml(&run.design, &friction, args.torque_limit)?;
+    for (name, v) in [
+        ("Coulomb friction", friction.coulomb_nm),
+        ("holding torque", friction.holding_torque_nm),
+    ] {
+        if !(v.is_finite() && v.abs() <= torque_limit) {
+            return Err(bad(format!(
+                "{}: the fitted {name} {v:.4e} exceeds the torque limit {torque_limit}; \
+                 check the friction record's units",
+                args.friction_csv
+                    .as_ref()
+                    .map_or(String::from("friction"), |p| p.display().to_string())
+            )));
+        }
+    }
+    let toml = controller_toml(&run.design, &friction, torque_limit)?;
     let html = render_html(&report)?;
     let data = recorded_data_files(&run)?;
-    let mut files = write_outputs(&args.out, &json, &toml, &html)?;
-    files.extend(write_data_files(&args.out, &data)?);
+    let files = write_outputs_with_data(&target(args), &json, &toml, &html, &data)?;
     if !args.quiet {
         for line in &run.log {
             eprintln!("{line}");
@@ -199,28 +383,47 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     Ok(())
 }
 
-/// Write the data files beside the report (`frf.csv`, ...), each atomically.
-pub fn write_data_files(
-    dir: &std::path::Path,
-    files: &[(String, String)],
-) -> anyhow::Result<Vec<PathBuf>> {
-    let mut out = Vec::new();
-    for (name, text) in files {
-        let p = dir.join(name);
-        beltune::io::write_atomic(&p, text.as_bytes())?;
-        out.push(p);
-    }
-    Ok(out)
-}
-
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    check_mode_flags(&args)?;
+    check_inputs_outside_output(&args)?;
     if let Some(csv) = args.csv.clone() {
         let knobs = args.knobs.knobs()?;
         return run_recorded(&args, &csv, &knobs);
     }
     let plant = load_plant(&args)?;
-    let ds = DataSheet::for_plant(&plant, args.start_position, args.travel_window);
+    check_flag(
+        "--excitation-amplitude",
+        args.excitation_amplitude,
+        0.0,
+        plant.info().torque_max_nm,
+        true,
+    )?;
+    let order = args.prbs_order.unwrap_or(9);
+    let ts_s = plant.info().ts_s;
+    let clock_limit_ms = f64::from(MAX_PRBS_CLOCK) * ts_s * 1e3;
+    check_flag(
+        "--prbs-clock-ms",
+        args.prbs_clock_ms,
+        0.0,
+        clock_limit_ms,
+        true,
+    )?;
+    let mut excitation = CommissioningConfig::default().excitation;
+    if let Some(ms) = args.prbs_clock_ms {
+        excitation.clock_period_s = ms * 1e-3;
+    }
+    let clock = excitation.clock_samples(ts_s);
+    let period = ((1u64 << order) - 1) * u64::from(clock);
+    if period > MAX_PRBS_PERIOD_SAMPLES {
+        return Err(bad(format!(
+            "--prbs-order {order} with a PRBS clock of {clock} samples makes a period of {period} \
+             samples (limit {MAX_PRBS_PERIOD_SAMPLES}); lower one of them"
+        )));
+    }
+    let start_position = args.start_position.unwrap_or(0.05);
+    beltune::procedure::commission::check_travel_window(&plant, args.travel_window)?;
+    let ds = DataSheet::for_plant(&plant, start_position, args.travel_window);
     let mut cfg = CommissioningConfig {
         knobs: args.knobs.knobs()?,
         ..CommissioningConfig::default()
@@ -229,12 +432,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(n) = args.prbs_order {
         cfg.excitation.prbs_order = n;
     }
-    if let Some(p) = args.prbs_clock {
-        cfg.excitation.clock_period = p;
+    if let Some(p) = args.prbs_clock_ms {
+        cfg.excitation.clock_period_s = p * 1e-3;
     }
     let sim_cfg = SimConfig {
-        seed: args.seed,
-        initial_cart_position_m: Some(args.start_position),
+        seed: args.seed.unwrap_or(1),
+        initial_cart_position_m: Some(start_position),
         ..SimConfig::default()
     };
     let mut axis = SimAxis::new(&plant, sim_cfg)?;
@@ -250,17 +453,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         m_c: truth_params.m_c,
         c: truth_params.c,
         dead_time_s: plant.dead_time_s(),
-        viscous: friction.viscous_nm_s_per_rad,
-        coulomb: friction.coulomb_nm,
+        viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+        coulomb_nm: friction.coulomb_nm,
     };
-    let name = args.plant.clone();
+    let name = args.plant.clone().unwrap_or_else(|| "egc70".to_string());
     let json = commissioning_json(&run, &name, Some(truth.clone()));
     let toml = controller_toml(&run.design, &run.friction, ds.torque_max_nm)?;
     let before = match &plant {
         Plant::Physical(p) => Some(p.linearize(run.identification_position_m)?),
         Plant::Linear(_) => None,
     };
-    let provenance = Provenance::of_this_process(Some(args.seed));
+    let provenance = Provenance::of_this_process(Some(args.seed.unwrap_or(1)));
     let report = build_report(
         &run,
         &name,
@@ -270,8 +473,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     let html = render_html(&report)?;
     let data = data_files(&run, &report)?;
-    let mut files = write_outputs(&args.out, &json, &toml, &html)?;
-    files.extend(write_data_files(&args.out, &data)?);
+    let files = write_outputs_with_data(&target(&args), &json, &toml, &html, &data)?;
     if !args.quiet {
         let v = &run.validation;
         println!(

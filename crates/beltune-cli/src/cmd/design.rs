@@ -17,8 +17,8 @@ pub struct Args {
     model: PathBuf,
     #[command(flatten)]
     knobs: super::knobs::KnobArgs,
-    /// Sampling time of the controller in s.
-    #[arg(long, default_value_t = design::DEFAULT_TS_S)]
+    /// Sampling time of the controller in s (1e-6 ..= 0.1).
+    #[arg(long, default_value_t = design::DEFAULT_TS_S, allow_negative_numbers = true)]
     ts: f64,
     /// Write the design as JSON to this file.
     #[arg(long)]
@@ -37,6 +37,15 @@ struct JsonOut<'a> {
 
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Err(e) = beltune::model::params::check_sample_time(args.ts) {
+        return Err(anyhow::Error::new(crate::exit::Failure::new(
+            crate::exit::ExitStatus::BadInput,
+            format!("--ts {}: {}", beltune::error::short_number(args.ts), e),
+        )));
+    }
+    if let Some(out) = &args.json {
+        super::util::check_not_an_input("--json", out, &[&args.model])?;
+    }
     let model = ModelFile::load(&args.model)?;
     let input = model.design_input(args.ts)?;
     let knobs = args.knobs.knobs()?;
@@ -95,9 +104,9 @@ fn human_summary(d: &ControllerDesign) -> String {
         s.omega_c_position,
         s.phase_margin_position_deg,
         s.gain_margin_position_db,
-        d.feedforward.m_e_kg_m2,
-        d.feedforward.d_v_n_m_s_per_rad,
-        d.feedforward.tau_c_n_m,
+        d.feedforward.inertia_kg_m2,
+        d.feedforward.viscous_nm_s_per_rad,
+        d.feedforward.coulomb_nm,
         s.ts_s,
         d.discrete_stability.velocity_max_pole_magnitude,
         d.discrete_stability.position_max_pole_magnitude,

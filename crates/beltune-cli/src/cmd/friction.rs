@@ -25,10 +25,10 @@ pub struct Args {
     #[arg(long)]
     pub position: String,
     /// Low-pass cut-off for position and torque, Hz (default: 1/50 of the sampling rate).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub cutoff_hz: Option<f64>,
     /// Samples slower than this fraction of the top speed are excluded.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
     pub min_speed_fraction: f64,
     /// Write the result here (JSON).
     #[arg(long)]
@@ -49,6 +49,9 @@ struct FrictionJson {
 
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(out) = &args.json {
+        super::util::check_not_an_input("--json", out, &[&args.csv])?;
+    }
     let cols = read_csv_columns(
         &args.csv,
         &[

@@ -26,16 +26,16 @@ pub struct Args {
     #[arg(long)]
     pub output: String,
     /// Samples per excitation period (default: detected from an exactly periodic input).
-    #[arg(long)]
+    #[arg(long, value_parser = super::commission::parse_period)]
     pub period_samples: Option<usize>,
     /// Leading periods discarded as transient.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::commission::parse_skip)]
     pub skip_periods: usize,
     /// Known motor-side inertia Theta_e (kg m^2, or A s^2/rad in current units); without it, it is fitted.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub inertia: Option<f64>,
     /// Transmission i_t = r / i_g in m/rad (1 for a rotary two-mass system).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub transmission: f64,
     /// Fit Theta_e too (starting from --inertia if given).
     #[arg(long)]
@@ -47,13 +47,13 @@ pub struct Args {
     #[arg(long)]
     pub actual_torque: Option<String>,
     /// Lowest frequency used, Hz.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub min_freq_hz: Option<f64>,
     /// Highest frequency used, Hz.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub max_freq_hz: Option<f64>,
     /// Lines with a lower magnitude-squared coherence are not fitted.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub min_coherence: f64,
     /// Lines whose input power is this many dB below the strongest are "not excited".
     #[arg(long, default_value_t = -40.0, allow_hyphen_values = true)]
@@ -82,7 +82,7 @@ struct ModelJson {
     /// Current-loop dead time, s; null when no actual-torque column was given.
     dead_time_s: Option<f64>,
     dead_time_samples: Option<usize>,
-    sample_time_s: f64,
+    ts_s: f64,
     units: ModelUnits,
     free_inertia: bool,
     n_lines: usize,
@@ -93,6 +93,41 @@ struct ModelJson {
 
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    for (flag, out) in [("--json", &args.json), ("--frf-csv", &args.frf_csv)] {
+        if let Some(out) = out {
+            super::util::check_not_an_input(flag, out, &[&args.csv])?;
+        }
+    }
+    if let Some(a) = &args.actual_torque {
+        for (flag, other) in [
+            ("--time", &args.time),
+            ("--input", &args.input),
+            ("--output", &args.output),
+        ] {
+            if a == other {
+                return Err(anyhow::Error::new(crate::exit::Failure::new(
+                    crate::exit::ExitStatus::BadInput,
+                    format!("--actual-torque `{a}` is the same column as {flag}; give the measured-torque column"),
+                )));
+            }
+        }
+    }
+    for (flag, v) in [
+        ("--inertia", args.inertia),
+        ("--transmission", Some(args.transmission)),
+    ] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v > 0.0 && v <= 1e3) {
+                return Err(anyhow::Error::new(crate::exit::Failure::new(
+                    crate::exit::ExitStatus::BadInput,
+                    format!(
+                        "{flag} {} is out of range (0, 1000]",
+                        beltune::error::short_number(v)
+                    ),
+                )));
+            }
+        }
+    }
     let band = match (args.min_freq_hz, args.max_freq_hz) {
         (None, None) => None,
         (lo, hi) => Some((lo.unwrap_or(0.0), hi.unwrap_or(f64::MAX))),
@@ -144,7 +179,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             fit_rms_db: fit.fit_rms_db,
             dead_time_s: dead_time.map(|d| d.seconds),
             dead_time_samples: dead_time.map(|d| d.samples),
-            sample_time_s: id.sample_time_s,
+            ts_s: id.ts_s,
             units: fit.units,
             free_inertia: fit.free_inertia,
             n_lines: fit.n_lines,

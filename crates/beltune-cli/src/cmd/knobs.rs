@@ -24,7 +24,7 @@ pub struct KnobArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub filter_attenuation_db: Option<f64>,
     /// One-knob mode: conservative, standard, dynamic, or a number in [0, 1].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub dynamics: Option<String>,
 }
 

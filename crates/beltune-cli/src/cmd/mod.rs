@@ -10,3 +10,4 @@ pub mod plant;
 pub mod serve;
 pub mod trajectory;
 pub mod util;
+pub mod virtual_drive;

@@ -33,9 +33,12 @@ pub fn run(cmd: PlantCommand) -> anyhow::Result<()> {
     }
 }
 
-/// A built-in name, or a file if the argument is not a built-in name.
+/// A built-in name, or a file if the argument is not a built-in name. A
+/// built-in name always wins over a file or folder of that name in the
+/// current directory (write `./egc70` for the file).
 pub fn resolve_plant(name_or_file: &str, payload_kg: Option<f64>) -> anyhow::Result<Plant> {
-    if BUILTIN_NAMES.contains(&name_or_file) || !name_or_file.ends_with(".toml") {
+    let is_file = name_or_file.ends_with(".toml") || Path::new(name_or_file).exists();
+    if BUILTIN_NAMES.contains(&name_or_file) || !is_file {
         return Ok(builtin(name_or_file, payload_kg)?);
     }
     let plant = load_toml(Path::new(name_or_file))?;
@@ -105,7 +108,7 @@ fn table(name: &str, s: &PlantSummary) -> String {
         format!("{:.4} N m", s.friction.coulomb_nm),
     );
     row("dead time", format!("{:.2} ms", s.dead_time_s * 1e3));
-    row("torque limit", format!("{:.2} N m", s.torque_limit_nm));
+    row("torque limit", format!("{:.2} N m", s.torque_max_nm));
     row(
         "encoder",
         format!(
@@ -115,7 +118,7 @@ fn table(name: &str, s: &PlantSummary) -> String {
             std::f64::consts::TAU / s.motor_rad_per_count
         ),
     );
-    row("sampling time", format!("{:.1} us", s.sample_time_s * 1e6));
+    row("sampling time", format!("{:.1} us", s.ts_s * 1e6));
     if !s.position_sweep.is_empty() {
         out.push_str("\nposition dependency (linearized at xi):\n");
         out.push_str(&format!(

@@ -59,6 +59,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             std::env::current_dir().context("current directory")?,
         ),
     };
+    // Temporaries of a save that a killed server left behind.
+    beltune::io::clean_stale_temporaries(&save_dir);
     let state = AppState {
         tuner: Arc::new(tuner),
         save_dir,

@@ -7,5 +7,35 @@ use std::path::Path;
 /// directory, then rename it over the target. A crash leaves either the old
 /// file or the new one, never half a file.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> anyhow::Result<()> {
+    // Temporaries a killed earlier run left beside the file go first.
+    if let Some(dir) = path.parent() {
+        let dir = if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        };
+        beltune::io::clean_stale_temporaries(dir);
+    }
     beltune::io::write_atomic(path, contents).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Error (bad input, exit status 2) if the output `out` names the same file
+/// as one of `inputs`: writing it would destroy the input.
+pub fn check_not_an_input(flag: &str, out: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
+    let Ok(o) = std::fs::canonicalize(out) else {
+        return Ok(()); // does not exist yet: cannot be an input
+    };
+    for input in inputs {
+        if std::fs::canonicalize(input).is_ok_and(|i| i == o) {
+            return Err(anyhow::Error::new(crate::exit::Failure::new(
+                crate::exit::ExitStatus::BadInput,
+                format!(
+                    "{flag} {} is the input file {}; it would be overwritten",
+                    out.display(),
+                    input.display()
+                ),
+            )));
+        }
+    }
+    Ok(())
 }

@@ -54,12 +54,14 @@ pub const MOVE_SEED: u64 = 1;
 #[derive(Debug, Clone, Copy, Deserialize)]
 pub struct FrictionTotals {
     /// Viscous friction d_v, N m s/rad.
-    pub viscous: f64,
+    #[serde(alias = "viscous")]
+    pub viscous_nm_s_per_rad: f64,
     /// Coulomb friction tau_c, N m.
-    pub coulomb: f64,
-    /// Viscous-only fit (linear feedforward), N m s/rad; absent: `viscous`.
-    #[serde(default)]
-    pub linear_viscous: Option<f64>,
+    #[serde(alias = "coulomb")]
+    pub coulomb_nm: f64,
+    /// Viscous-only fit (linear feedforward), N m s/rad; absent: `viscous_nm_s_per_rad`.
+    #[serde(default, alias = "linear_viscous")]
+    pub linear_viscous_nm_s_per_rad: Option<f64>,
     /// Holding torque (tilted axis), N m; absent: 0.
     #[serde(default)]
     pub holding_torque_nm: Option<f64>,
@@ -111,8 +113,7 @@ pub struct DesignModel {
 /// failure names the file.
 pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     let path = dir.join(COMMISSIONING_FILE);
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let text = beltune::io::read_to_string_capped(&path, beltune::io::MAX_TEXT_BYTES)?;
     let file: CommissioningFile =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let json: serde_json::Value =
@@ -125,9 +126,12 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     beltune::error::require_positive("dead_time_s [s]", id.dead_time_s)
         .with_context(|| format!("{}: identified model", path.display()))?;
     if let Some(f) = file.friction {
-        beltune::error::require_non_negative("friction.viscous [N m s/rad]", f.viscous)
-            .and_then(|_| beltune::error::require_non_negative("friction.coulomb [N m]", f.coulomb))
-            .with_context(|| format!("{}: friction", path.display()))?;
+        beltune::error::require_non_negative(
+            "friction.viscous [N m s/rad]",
+            f.viscous_nm_s_per_rad,
+        )
+        .and_then(|_| beltune::error::require_non_negative("friction.coulomb [N m]", f.coulomb_nm))
+        .with_context(|| format!("{}: friction", path.display()))?;
     }
     let frf_path = dir.join(plots::FRF_CSV);
     let frf = if frf_path.exists() {
@@ -188,7 +192,7 @@ pub struct LibraryTuner {
     move_plant: MovePlant,
     /// Torque limit written to controller.toml and used in the move: the egc70
     /// drive's (a commissioning.json does not record it), N m.
-    torque_limit_nm: f64,
+    torque_max_nm: f64,
 }
 
 impl LibraryTuner {
@@ -199,23 +203,25 @@ impl LibraryTuner {
             .input
             .unwrap_or_else(|| DesignInput::new(model.params, model.dead_time_s));
         input.friction = model.friction.map(|f| FrictionParams {
-            viscous_n_m_s_per_rad: f.viscous,
-            coulomb_n_m: f.coulomb,
+            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+            coulomb_nm: f.coulomb_nm,
         });
         input
             .validate()
             .with_context(|| format!("design input from {}", model.source))?;
-        let torque_limit_nm = rigs::builtin("egc70", None)?.info().torque_limit_nm;
+        let torque_max_nm = rigs::builtin("egc70", None)?.info().torque_max_nm;
         let f = model.friction.unwrap_or(FrictionTotals {
-            viscous: 0.0,
-            coulomb: 0.0,
-            linear_viscous: None,
+            viscous_nm_s_per_rad: 0.0,
+            coulomb_nm: 0.0,
+            linear_viscous_nm_s_per_rad: None,
             holding_torque_nm: None,
         });
         let friction = FrictionResult {
-            viscous: f.viscous,
-            coulomb: f.coulomb,
-            linear_viscous: f.linear_viscous.unwrap_or(f.viscous),
+            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+            coulomb_nm: f.coulomb_nm,
+            linear_viscous_nm_s_per_rad: f
+                .linear_viscous_nm_s_per_rad
+                .unwrap_or(f.viscous_nm_s_per_rad),
             relative_residual: 0.0,
             holding_torque_nm: f.holding_torque_nm.unwrap_or(0.0),
         };
@@ -225,7 +231,7 @@ impl LibraryTuner {
             friction,
             nominal_payload_kg: 0.0,
             move_plant: MovePlant::Identified,
-            torque_limit_nm,
+            torque_max_nm,
         })
     }
 
@@ -255,9 +261,9 @@ impl LibraryTuner {
             params: run.design.input.model,
             dead_time_s: run.design.input.dead_time_s,
             friction: Some(FrictionTotals {
-                viscous: run.friction.viscous,
-                coulomb: run.friction.coulomb,
-                linear_viscous: Some(run.friction.linear_viscous),
+                viscous_nm_s_per_rad: run.friction.viscous_nm_s_per_rad,
+                coulomb_nm: run.friction.coulomb_nm,
+                linear_viscous_nm_s_per_rad: Some(run.friction.linear_viscous_nm_s_per_rad),
                 holding_torque_nm: Some(run.friction.holding_torque_nm),
             }),
             frf: Some(lines),
@@ -266,7 +272,7 @@ impl LibraryTuner {
             input: Some(run.design.input),
         };
         let mut tuner = LibraryTuner::new(model)?;
-        tuner.torque_limit_nm = plant.info().torque_limit_nm;
+        tuner.torque_max_nm = plant.info().torque_max_nm;
         tuner.nominal_payload_kg = rigs::EGC70_DEFAULT_PAYLOAD_KG;
         tuner.move_plant = MovePlant::Egc70;
         Ok(tuner)
@@ -322,15 +328,15 @@ impl LibraryTuner {
                 // Section 3.6. So the linear move plant takes its viscous friction
                 // (translational equivalent on the motor side) and no cart damping.
                 if let Some(f) = self.model.friction {
-                    two_mass.d_m = f.viscous / (two_mass.i_t * two_mass.i_t);
+                    two_mass.d_m = f.viscous_nm_s_per_rad / (two_mass.i_t * two_mass.i_t);
                     two_mass.d_c = 0.0;
                 }
                 Ok(Plant::Linear(LinearPlant {
                     two_mass,
                     dead_time_s: self.model.dead_time_s,
-                    torque_limit_nm: drive.torque_limit_nm,
+                    torque_max_nm: drive.torque_max_nm,
                     motor_rad_per_count: drive.motor_rad_per_count,
-                    sample_time_s: self.input.ts_s,
+                    ts_s: self.input.ts_s,
                 }))
             }
         }
@@ -345,7 +351,7 @@ impl LibraryTuner {
             MovePlant::Identified => (
                 FeedforwardVariant::Linear,
                 FrictionResult {
-                    linear_viscous: self.friction.viscous,
+                    linear_viscous_nm_s_per_rad: self.friction.viscous_nm_s_per_rad,
                     ..self.friction.clone()
                 },
             ),
@@ -600,7 +606,7 @@ impl Tuner for LibraryTuner {
 
 impl LibraryTuner {
     fn controller_toml_of(&self, d: &ControllerDesign) -> Result<String, TuneError> {
-        let body = outputs::controller_toml(d, &self.friction, self.torque_limit_nm)
+        let body = outputs::controller_toml(d, &self.friction, self.torque_max_nm)
             .map_err(|e| TuneError::Internal(e.to_string()))?;
         let k = &d.knobs;
         let hz = |w: f64| w / (2.0 * std::f64::consts::PI);
@@ -772,45 +778,61 @@ pub struct SavedSet {
 }
 
 /// Write `files` into a new folder `tuned-<UTC time>` (`-2`, `-3`, ... if
-/// taken) under `dir`: first into a hidden temporary folder, then renamed,
-/// so the set appears whole or not at all and nothing earlier is overwritten.
+/// taken) under `dir`: first into a hidden temporary folder unique to this
+/// save, then renamed, so the set appears whole or not at all and nothing
+/// earlier is overwritten (a rename onto a folder another save created in
+/// the meantime fails, and the next name is tried).
 pub fn write_saved_set(dir: &Path, files: &[SavedFile]) -> anyhow::Result<SavedSet> {
+    static SAVES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let stamp: String = Provenance::now(Vec::new(), None)
         .created_utc
         .chars()
         .filter(|c| c.is_ascii_alphanumeric())
         .collect();
-    let tmp = dir.join(format!(".tuned-{stamp}-{}.partial", std::process::id()));
-    let _ = std::fs::remove_dir_all(&tmp);
+    let unique = SAVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = dir.join(format!(
+        ".tuned-{stamp}-{}-{unique}.partial",
+        std::process::id()
+    ));
     std::fs::create_dir(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
     let result = (|| -> anyhow::Result<SavedSet> {
         for f in files {
             beltune::io::write_atomic(&tmp.join(&f.name), &f.bytes)?;
         }
-        let mut n = 1;
-        loop {
+        for n in 1.. {
             let name = if n == 1 {
                 format!("tuned-{stamp}")
             } else {
                 format!("tuned-{stamp}-{n}")
             };
             let target = dir.join(name);
-            if !target.exists() {
-                std::fs::rename(&tmp, &target).with_context(|| {
-                    format!("renaming {} to {}", tmp.display(), target.display())
-                })?;
-                return Ok(SavedSet {
-                    dir: target,
-                    files: files.iter().map(|f| f.name.clone()).collect(),
-                    controller_bytes: files
-                        .iter()
-                        .find(|f| f.name == super::CONTROLLER_FILE)
-                        .map_or(0, |f| f.bytes.len()),
-                });
+            if std::fs::symlink_metadata(&target).is_ok() {
+                continue;
             }
-            n += 1;
+            match std::fs::rename(&tmp, &target) {
+                Ok(()) => {
+                    return Ok(SavedSet {
+                        dir: target,
+                        files: files.iter().map(|f| f.name.clone()).collect(),
+                        controller_bytes: files
+                            .iter()
+                            .find(|f| f.name == super::CONTROLLER_FILE)
+                            .map_or(0, |f| f.bytes.len()),
+                    })
+                }
+                // another save took the name between the check and the rename
+                Err(_) if std::fs::symlink_metadata(&target).is_ok() => continue,
+                Err(e) => {
+                    return Err(anyhow::Error::new(e).context(format!(
+                        "renaming {} to {}",
+                        tmp.display(),
+                        target.display()
+                    )))
+                }
+            }
         }
+        unreachable!("the name search ends with a free name or an error")
     })();
     if result.is_err() {
         let _ = std::fs::remove_dir_all(&tmp);
@@ -874,7 +896,7 @@ mod tests {
         assert_eq!(m.params.m_c, 13.44);
         assert_eq!(m.params.d, 0.0);
         assert_eq!(m.dead_time_s, 0.001);
-        assert_eq!(m.friction.unwrap().coulomb, 0.125);
+        assert_eq!(m.friction.unwrap().coulomb_nm, 0.125);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

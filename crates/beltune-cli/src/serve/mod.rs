@@ -10,7 +10,17 @@
 //!
 //! POST bodies must be `application/json` (a cross-site form cannot post them
 //! without a CORS preflight, which this server never grants) and at most
-//! [`api::MAX_BODY_BYTES`]. Every error answer is JSON `{ "error": "..." }`.
+//! [`api::MAX_BODY_BYTES`]. Every error answer is JSON `{ "error": "..." }`
+//! (405, 408, 413, 414, 431 and 503 included).
+//!
+//! Against slow or abusive clients ([`serve`]): the request head must arrive
+//! within [`HEADER_READ_TIMEOUT`] and the body within [`BODY_READ_TIMEOUT`];
+//! at most [`MAX_CONNECTIONS`] connections are served at once (more get 503);
+//! a connection lives at most [`CONNECTION_LIFETIME`]; a request target
+//! longer than [`MAX_URI_BYTES`] is 414, a head larger than
+//! [`MAX_HEADER_BYTES`] is 431. With `loopback_only`, a request needs exactly
+//! one `Host` header naming a loopback host (`localhost`, `127.x.y.z`,
+//! `[::1]`) with an optional numeric port.
 //! [`router`] is separate from the listener so that tests run the server
 //! in-process on port 0.
 
@@ -29,7 +39,25 @@ use axum::routing::{get, post};
 use axum::{Json, Router};
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 use tuner::{TuneError, Tuner};
+
+/// Time a client has to send a request head (also the idle time between
+/// requests on a kept-alive connection).
+pub const HEADER_READ_TIMEOUT: Duration = Duration::from_secs(10);
+/// Time a client has to send a request body.
+pub const BODY_READ_TIMEOUT: Duration = Duration::from_secs(10);
+/// Longest life of one connection.
+pub const CONNECTION_LIFETIME: Duration = Duration::from_secs(300);
+/// Connections served at once; more are answered 503 and closed.
+pub const MAX_CONNECTIONS: usize = 64;
+/// Longest request target (path and query), bytes.
+pub const MAX_URI_BYTES: usize = 2048;
+/// Largest request head (header names and values), bytes.
+pub const MAX_HEADER_BYTES: usize = 8 * 1024;
+/// hyper's own limit, beyond ours: only a head larger than this gets hyper's
+/// bare 431 without a JSON body.
+const HYPER_MAX_HEADER_BYTES: usize = 64 * 1024;
 
 const INDEX_HTML: &str = include_str!("assets/index.html");
 const APP_JS: &str = include_str!("assets/app.js");
@@ -65,43 +93,222 @@ pub fn router(state: AppState) -> Router {
         .route("/api/design", post(design))
         .route("/api/save", post(save))
         .fallback(not_found)
+        .method_not_allowed_fallback(method_not_allowed)
         .layer(DefaultBodyLimit::max(api::MAX_BODY_BYTES))
-        .layer(middleware::from_fn_with_state(state.clone(), check_host))
+        .layer(middleware::from_fn_with_state(state.clone(), guard))
         .with_state(state)
 }
 
-/// `true` for `localhost`, a loopback IP literal, with or without a port.
+/// `true` for exactly `localhost`, an IPv4 loopback address or `[::1]`
+/// (any IPv6 loopback in brackets), each with an optional numeric port
+/// `:1..=65535`; nothing before or after (`[::1]evil.com`,
+/// `localhost:evil.com` and `localhost.` are refused).
 pub fn is_loopback_host(host: &str) -> bool {
-    let name = match host.strip_prefix('[') {
-        Some(rest) => rest.split(']').next().unwrap_or(""),
-        None => host.rsplit_once(':').map_or(host, |(h, _)| h),
+    let (loopback, port) = match host.strip_prefix('[') {
+        Some(rest) => {
+            let Some((inside, after)) = rest.split_once(']') else {
+                return false;
+            };
+            let port = match after {
+                "" => None,
+                p => match p.strip_prefix(':') {
+                    Some(p) => Some(p),
+                    None => return false,
+                },
+            };
+            let ip = inside.parse::<std::net::Ipv6Addr>();
+            (ip.is_ok_and(|ip| ip.is_loopback()), port)
+        }
+        None => {
+            let (name, port) = match host.split_once(':') {
+                Some((h, p)) => (h, Some(p)),
+                None => (host, None),
+            };
+            let ok = name.eq_ignore_ascii_case("localhost")
+                || name
+                    .parse::<std::net::Ipv4Addr>()
+                    .is_ok_and(|ip| ip.is_loopback());
+            (ok, port)
+        }
     };
-    name.eq_ignore_ascii_case("localhost")
-        || name
-            .parse::<std::net::IpAddr>()
-            .is_ok_and(|ip| ip.is_loopback())
+    let port_ok = port.is_none_or(|p| {
+        !p.is_empty()
+            && p.len() <= 5
+            && p.bytes().all(|b| b.is_ascii_digit())
+            && p.parse::<u32>().is_ok_and(|n| (1..=65535).contains(&n))
+    });
+    loopback && port_ok
 }
 
-async fn check_host(State(state): State<AppState>, req: Request, next: Next) -> Response {
+/// Limits and checks before any route runs, and JSON for every error answer
+/// (see the module documentation).
+async fn guard(State(state): State<AppState>, req: Request, next: Next) -> Response {
+    if let Some(e) = check_request_head(&state, &req) {
+        return error_response(e);
+    }
+    // Read the body here, within the time limit; the routes get it from memory.
+    let (parts, body) = req.into_parts();
+    let bytes = match tokio::time::timeout(
+        BODY_READ_TIMEOUT,
+        axum::body::to_bytes(body, api::MAX_BODY_BYTES + 1),
+    )
+    .await
+    {
+        Ok(Ok(b)) => b,
+        Ok(Err(_)) => {
+            return error_response(ApiError {
+                status: 413,
+                message: format!(
+                    "request body too large (limit {} bytes) or unreadable",
+                    api::MAX_BODY_BYTES
+                ),
+            })
+        }
+        Err(_) => {
+            return error_response(ApiError {
+                status: 408,
+                message: format!(
+                    "request body not received within {} s",
+                    BODY_READ_TIMEOUT.as_secs()
+                ),
+            })
+        }
+    };
+    let response = next
+        .run(Request::from_parts(parts, axum::body::Body::from(bytes)))
+        .await;
+    json_errors(response)
+}
+
+/// The request-head checks of [`guard`]: target length, head size, `Host`.
+fn check_request_head(state: &AppState, req: &Request) -> Option<ApiError> {
+    let target = req.uri().path_and_query().map_or(0, |p| p.as_str().len());
+    if target > MAX_URI_BYTES {
+        return Some(ApiError {
+            status: 414,
+            message: format!("request target of {target} bytes is longer than {MAX_URI_BYTES}"),
+        });
+    }
+    let head: usize = req
+        .headers()
+        .iter()
+        .map(|(n, v)| n.as_str().len() + v.len() + 4)
+        .sum();
+    if head > MAX_HEADER_BYTES {
+        return Some(ApiError {
+            status: 431,
+            message: format!("request headers of {head} bytes exceed {MAX_HEADER_BYTES}"),
+        });
+    }
     if state.loopback_only {
-        if let Some(host) = req.headers().get(header::HOST) {
-            let host = host.to_str().unwrap_or("");
-            if !is_loopback_host(host) {
-                return error_response(ApiError {
-                    status: 403,
-                    message: format!(
-                        "Host `{host}` is not a loopback name; open the page as http://127.0.0.1:PORT/"
-                    ),
-                });
-            }
+        let hosts: Vec<_> = req.headers().get_all(header::HOST).iter().collect();
+        if hosts.len() != 1 {
+            return Some(ApiError {
+                status: 400,
+                message: format!(
+                    "a request needs exactly one Host header, got {}",
+                    hosts.len()
+                ),
+            });
+        }
+        let host = hosts[0].to_str().unwrap_or("");
+        if !is_loopback_host(host) {
+            return Some(ApiError {
+                status: 403,
+                message: format!(
+                    "Host `{}` is not a loopback name; open the page as http://127.0.0.1:PORT/",
+                    host.escape_debug()
+                ),
+            });
         }
     }
-    next.run(req).await
+    None
 }
 
-/// Serve `router(state)` on an already bound listener until the process ends.
+/// An error answer whose body is not JSON (axum's own 405, a rejection) gets
+/// the `{ "error": "..." }` body with the status' reason.
+fn json_errors(response: Response) -> Response {
+    let status = response.status();
+    let is_json = response
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.starts_with("application/json"));
+    if !(status.is_client_error() || status.is_server_error()) || is_json {
+        return response;
+    }
+    let (mut parts, _) = response.into_parts();
+    let message = status
+        .canonical_reason()
+        .unwrap_or("error")
+        .to_ascii_lowercase();
+    let body = serde_json::to_vec(&ErrorBody { error: message }).unwrap_or_default();
+    parts.headers.insert(
+        header::CONTENT_TYPE,
+        header::HeaderValue::from_static("application/json"),
+    );
+    parts.headers.remove(header::CONTENT_LENGTH);
+    Response::from_parts(parts, axum::body::Body::from(body))
+}
+
+async fn method_not_allowed() -> Response {
+    error_response(ApiError {
+        status: 405,
+        message: "method not allowed for this path".into(),
+    })
+}
+
+/// Serve `router(state)` on an already bound listener until the process
+/// ends, with the limits of the module documentation.
 pub async fn serve(listener: tokio::net::TcpListener, state: AppState) -> std::io::Result<()> {
-    axum::serve(listener, router(state)).await
+    use hyper_util::rt::{TokioIo, TokioTimer};
+    let app = router(state);
+    let permits = Arc::new(tokio::sync::Semaphore::new(MAX_CONNECTIONS));
+    loop {
+        let stream = match listener.accept().await {
+            Ok((stream, _)) => stream,
+            // Out of file descriptors and the like: wait, then accept again.
+            Err(_) => {
+                tokio::time::sleep(Duration::from_millis(50)).await;
+                continue;
+            }
+        };
+        let Ok(permit) = permits.clone().try_acquire_owned() else {
+            tokio::spawn(refuse_busy(stream));
+            continue;
+        };
+        let service = hyper_util::service::TowerToHyperService::new(app.clone());
+        tokio::spawn(async move {
+            let _permit = permit;
+            let mut builder = hyper::server::conn::http1::Builder::new();
+            builder
+                .timer(TokioTimer::new())
+                .header_read_timeout(HEADER_READ_TIMEOUT)
+                .max_header_size(HYPER_MAX_HEADER_BYTES);
+            let conn = builder.serve_connection(TokioIo::new(stream), service);
+            // Dropping the connection closes it.
+            let _ = tokio::time::timeout(CONNECTION_LIFETIME, conn).await;
+        });
+    }
+}
+
+/// Answer 503 (JSON) to a connection beyond [`MAX_CONNECTIONS`] and close it.
+async fn refuse_busy(mut stream: tokio::net::TcpStream) {
+    use tokio::io::AsyncWriteExt;
+    let body = serde_json::to_string(&ErrorBody {
+        error: format!("server busy: more than {MAX_CONNECTIONS} connections; retry"),
+    })
+    .unwrap_or_default();
+    let answer = format!(
+        "HTTP/1.1 503 Service Unavailable\r\ncontent-type: application/json\r\n\
+         content-length: {}\r\nretry-after: 1\r\nconnection: close\r\n\r\n{body}",
+        body.len()
+    );
+    let _ = tokio::time::timeout(Duration::from_secs(1), async {
+        let _ = stream.write_all(answer.as_bytes()).await;
+        let _ = stream.shutdown().await;
+    })
+    .await;
 }
 
 fn error_response(e: ApiError) -> Response {

@@ -10,16 +10,25 @@ use crate::Result;
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FrictionParams {
     /// Viscous friction `d_v~`, N m s/rad.
-    pub viscous_n_m_s_per_rad: f64,
+    pub viscous_nm_s_per_rad: f64,
     /// Coulomb friction `tau_c~`, N m.
-    pub coulomb_n_m: f64,
+    pub coulomb_nm: f64,
 }
 
 impl FrictionParams {
-    /// Typed error for negative or non-finite values.
+    /// Typed error for negative, non-finite or implausibly large values
+    /// (above [`crate::model::params::bounds::TORQUE_MAX_NM`] N m, or N m s/rad).
     pub fn validate(&self) -> Result<()> {
-        require_non_negative("viscous friction [N m s/rad]", self.viscous_n_m_s_per_rad)?;
-        require_non_negative("coulomb friction [N m]", self.coulomb_n_m)?;
+        require_non_negative("viscous friction [N m s/rad]", self.viscous_nm_s_per_rad)?;
+        require_non_negative("coulomb friction [N m]", self.coulomb_nm)?;
+        let max = crate::model::params::bounds::TORQUE_MAX_NM;
+        crate::error::require_range(
+            "viscous friction [N m s/rad]",
+            self.viscous_nm_s_per_rad,
+            0.0,
+            max,
+        )?;
+        crate::error::require_range("coulomb friction [N m]", self.coulomb_nm, 0.0, max)?;
         Ok(())
     }
 }
@@ -29,11 +38,11 @@ impl FrictionParams {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Feedforward {
     /// `m_e~ = Theta_e + i_t^2 m_c` (4.15), kg m^2.
-    pub m_e_kg_m2: f64,
+    pub inertia_kg_m2: f64,
     /// `d_v~`, N m s/rad.
-    pub d_v_n_m_s_per_rad: f64,
+    pub viscous_nm_s_per_rad: f64,
     /// `tau_c~`, N m.
-    pub tau_c_n_m: f64,
+    pub coulomb_nm: f64,
     /// Velocity feedforward gain `K_v` (4.17), dimensionless (always 1, (B.7)).
     pub k_v: f64,
 }
@@ -46,15 +55,15 @@ impl Feedforward {
         let f = friction.copied().unwrap_or_default();
         f.validate()?;
         Ok(Feedforward {
-            m_e_kg_m2: model.rigid_inertia(),
-            d_v_n_m_s_per_rad: f.viscous_n_m_s_per_rad,
-            tau_c_n_m: f.coulomb_n_m,
+            inertia_kg_m2: model.rigid_inertia(),
+            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+            coulomb_nm: f.coulomb_nm,
             k_v: 1.0,
         })
     }
 
     /// The feedforward torque (4.16) for a desired motor speed and acceleration.
-    pub fn torque_n_m(&self, omega_d_rad_s: f64, alpha_d_rad_s2: f64) -> f64 {
+    pub fn torque_nm(&self, omega_d_rad_s: f64, alpha_d_rad_s2: f64) -> f64 {
         let sign = if omega_d_rad_s > 0.0 {
             1.0
         } else if omega_d_rad_s < 0.0 {
@@ -62,9 +71,9 @@ impl Feedforward {
         } else {
             0.0
         };
-        self.m_e_kg_m2 * alpha_d_rad_s2
-            + self.d_v_n_m_s_per_rad * omega_d_rad_s
-            + self.tau_c_n_m * sign
+        self.inertia_kg_m2 * alpha_d_rad_s2
+            + self.viscous_nm_s_per_rad * omega_d_rad_s
+            + self.coulomb_nm * sign
     }
 }
 
@@ -76,23 +85,23 @@ mod tests {
     #[test]
     fn table_a4_inertia_and_table_a10_friction() {
         let fr = FrictionParams {
-            viscous_n_m_s_per_rad: 2.530e-3,
-            coulomb_n_m: 0.125,
+            viscous_nm_s_per_rad: 2.530e-3,
+            coulomb_nm: 0.125,
         };
         let ff = Feedforward::design(&TwoMassParams::thesis_table_a4(), Some(&fr)).unwrap();
         assert!(
-            (ff.m_e_kg_m2 - 2.14e-3).abs() < 0.005e-3,
+            (ff.inertia_kg_m2 - 2.14e-3).abs() < 0.005e-3,
             "{}",
-            ff.m_e_kg_m2
+            ff.inertia_kg_m2
         );
         assert_eq!(ff.k_v, 1.0);
         // 100 rad/s, 1000 rad/s^2: 2.14 + 0.253 + 0.125 N m
-        let t = ff.torque_n_m(100.0, 1000.0);
-        assert!((t - (ff.m_e_kg_m2 * 1000.0 + 0.253 + 0.125)).abs() < 1e-12);
-        assert!((ff.torque_n_m(-1.0, 0.0) + 2.530e-3 + 0.125).abs() < 1e-12);
+        let t = ff.torque_nm(100.0, 1000.0);
+        assert!((t - (ff.inertia_kg_m2 * 1000.0 + 0.253 + 0.125)).abs() < 1e-12);
+        assert!((ff.torque_nm(-1.0, 0.0) + 2.530e-3 + 0.125).abs() < 1e-12);
         let bad = FrictionParams {
-            viscous_n_m_s_per_rad: -1.0,
-            coulomb_n_m: 0.0,
+            viscous_nm_s_per_rad: -1.0,
+            coulomb_nm: 0.0,
         };
         assert!(Feedforward::design(&TwoMassParams::thesis_table_a4(), Some(&bad)).is_err());
     }

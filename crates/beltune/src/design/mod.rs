@@ -269,9 +269,9 @@ impl ControllerDesign {
             beltune_rt::filter::SosCoeffs::IDENTITY,
         ];
         cfg.feedforward = beltune_rt::control::Feedforward::nonlinear(
-            self.feedforward.m_e_kg_m2,
-            self.feedforward.d_v_n_m_s_per_rad,
-            self.feedforward.tau_c_n_m,
+            self.feedforward.inertia_kg_m2,
+            self.feedforward.viscous_nm_s_per_rad,
+            self.feedforward.coulomb_nm,
         );
         cfg.validate()?;
         Ok(cfg)
@@ -324,7 +324,7 @@ impl ControllerDesign {
             omega_c_position: self.position_margins.crossover_rad_s,
             phase_margin_position_deg: self.position_margins.phase_margin_deg,
             gain_margin_position_db: self.position_margins.gain_margin_db,
-            m_e: self.feedforward.m_e_kg_m2,
+            m_e: self.feedforward.inertia_kg_m2,
             ts_s: self.discrete.ts_s,
         }
     }

@@ -44,11 +44,11 @@ pub struct ModelFile {
     #[serde(default = "default_t_r")]
     pub t_r_s: f64,
     /// Viscous friction `d_v~`, N m s/rad (optional).
-    #[serde(default)]
-    pub viscous: Option<f64>,
+    #[serde(default, alias = "viscous")]
+    pub viscous_nm_s_per_rad: Option<f64>,
     /// Coulomb friction `tau_c~`, N m (optional).
-    #[serde(default)]
-    pub coulomb: Option<f64>,
+    #[serde(default, alias = "coulomb")]
+    pub coulomb_nm: Option<f64>,
 }
 
 fn default_t_r() -> f64 {
@@ -73,10 +73,7 @@ impl ModelFile {
 
     /// Read and parse a file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
         ModelFile::parse(&text, &path.display().to_string())
     }
 
@@ -95,10 +92,10 @@ impl ModelFile {
 
     /// The design input at sampling time `ts_s` (not validated).
     pub fn design_input(&self, ts_s: f64) -> Result<DesignInput> {
-        let friction = if self.viscous.is_some() || self.coulomb.is_some() {
+        let friction = if self.viscous_nm_s_per_rad.is_some() || self.coulomb_nm.is_some() {
             let f = FrictionParams {
-                viscous_n_m_s_per_rad: self.viscous.unwrap_or(0.0),
-                coulomb_n_m: self.coulomb.unwrap_or(0.0),
+                viscous_nm_s_per_rad: self.viscous_nm_s_per_rad.unwrap_or(0.0),
+                coulomb_nm: self.coulomb_nm.unwrap_or(0.0),
             };
             f.validate()?;
             Some(f)
@@ -127,7 +124,7 @@ mod tests {
         assert_eq!(m.t_r_s, 2e-3);
         assert_eq!(m.d, 0.0);
         let inp = m.design_input(1e-4).unwrap();
-        assert_eq!(inp.friction.unwrap().coulomb_n_m, 0.125);
+        assert_eq!(inp.friction.unwrap().coulomb_nm, 0.125);
         let json = r#"{"theta_e": 71.73e-6, "m_c": 13.44, "c": 203740.0, "d_m": 33.17, "d_c": 226.42,
             "i_t": 0.0124141, "dead_time_s": 0.001, "f_r_hz": 107.1, "fit": {"cost": 0.1}, "frf": [1, 2]}"#;
         let j = ModelFile::parse(json, "m.json").unwrap();

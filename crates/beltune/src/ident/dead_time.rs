@@ -33,7 +33,7 @@ pub fn estimate_dead_time(
 ) -> Result<DeadTime> {
     crate::error::require_positive("max_freq_hz", max_freq_hz)?;
     if desired.freq_hz.len() != actual.freq_hz.len()
-        || (desired.sample_time_s - actual.sample_time_s).abs() > 1e-12 * desired.sample_time_s
+        || (desired.ts_s - actual.ts_s).abs() > 1e-12 * desired.ts_s
     {
         return Err(Error::LengthMismatch {
             what:
@@ -51,7 +51,7 @@ pub fn estimate_dead_time(
             what: format!("dead time: no line usable in both FRFs below {max_freq_hz} Hz"),
         });
     }
-    let ts = desired.sample_time_s;
+    let ts = desired.ts_s;
     // arg(G_i) - arg(G_m) = arg(G_i / G_m)
     let dphi: Vec<(f64, f64)> = lines
         .iter()
@@ -106,7 +106,7 @@ mod tests {
         let actual = delay(&desired, 10);
         let (phi, _) = simulate_two_mass(&p, &actual, ts);
         let cfg = EtfeConfig {
-            sample_time_s: ts,
+            ts_s: ts,
             period_samples: 1023 * 4,
             skip_periods: 1,
             ..Default::default()

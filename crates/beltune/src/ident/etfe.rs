@@ -25,7 +25,7 @@ use std::f64::consts::PI;
 #[derive(Clone, Debug, PartialEq)]
 pub struct EtfeConfig {
     /// Sampling time `T_s`, s.
-    pub sample_time_s: f64,
+    pub ts_s: f64,
     /// Samples per period of the excitation (the FFT length).
     pub period_samples: usize,
     /// Leading periods discarded as transient.
@@ -46,7 +46,7 @@ pub struct EtfeConfig {
 impl Default for EtfeConfig {
     fn default() -> Self {
         EtfeConfig {
-            sample_time_s: 100e-6,
+            ts_s: 100e-6,
             period_samples: 1270,
             skip_periods: 1,
             integrator: true,
@@ -101,7 +101,7 @@ pub struct Frf {
     /// Averaged input power per line (|U|^2 / N^2), input unit squared.
     pub input_power: Vec<f64>,
     /// Sampling time, s.
-    pub sample_time_s: f64,
+    pub ts_s: f64,
     /// Number of averaged periods `n_m`.
     pub n_periods: usize,
 }
@@ -171,7 +171,7 @@ pub fn log_spaced_subset(freq_hz: &[f64], candidates: &[usize], n_o: usize) -> V
     out
 }
 
-/// The ETFE of `input -> output` (both sampled at `cfg.sample_time_s`, same
+/// The ETFE of `input -> output` (both sampled at `cfg.ts_s`, same
 /// length), with Clary's method II when `cfg.integrator`, averaged over all
 /// complete periods after the `skip_periods` transient ones.
 ///
@@ -192,7 +192,12 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
     require_all_finite("input", input)?;
     require_all_finite("output", output)?;
     let n = cfg.period_samples;
-    let needed = n * (cfg.skip_periods + 2);
+    // Checked: a huge period or skip count must be "too short", not an overflow.
+    let needed = cfg
+        .skip_periods
+        .checked_add(2)
+        .and_then(|p| p.checked_mul(n))
+        .unwrap_or(usize::MAX);
     if input.len() < needed {
         return Err(Error::TooShort {
             what: format!(
@@ -256,7 +261,7 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
         });
     }
     let floor = max_power * 10f64.powf(cfg.excitation_floor_db / 10.0);
-    let ts = cfg.sample_time_s;
+    let ts = cfg.ts_s;
     let df = 1.0 / (n as f64 * ts);
     let norm = (n_periods as f64) * (n as f64) * (n as f64);
 
@@ -266,7 +271,7 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
         coherence: Vec::with_capacity(n_lines),
         line_status: Vec::with_capacity(n_lines),
         input_power: Vec::with_capacity(n_lines),
-        sample_time_s: ts,
+        ts_s: ts,
         n_periods,
     };
     for k in 0..n_lines {
@@ -312,12 +317,22 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
 }
 
 fn validate_config(cfg: &EtfeConfig) -> Result<()> {
-    crate::error::require_positive("sample_time_s", cfg.sample_time_s)?;
+    crate::error::require_positive("ts_s", cfg.ts_s)?;
     if cfg.period_samples < 4 {
         return Err(Error::invalid(
             "period_samples",
             cfg.period_samples as f64,
             "a period needs at least 4 samples",
+        ));
+    }
+    if cfg.period_samples > crate::ident::record::MAX_CSV_ROWS {
+        return Err(Error::invalid(
+            "period_samples",
+            cfg.period_samples as f64,
+            format!(
+                "a period of more than {} samples is beyond the longest record",
+                crate::ident::record::MAX_CSV_ROWS
+            ),
         ));
     }
     if !(cfg.excitation_floor_db.is_finite() && cfg.excitation_floor_db < 0.0) {
@@ -368,7 +383,7 @@ mod tests {
         }
         let ts = 1e-3;
         let cfg = EtfeConfig {
-            sample_time_s: ts,
+            ts_s: ts,
             period_samples: n,
             skip_periods: 2,
             ..Default::default()
@@ -404,7 +419,7 @@ mod tests {
             .map(|v| v + 3.0 * (rng.random::<f64>() - 0.5))
             .collect();
         let cfg = EtfeConfig {
-            sample_time_s: 1e-3,
+            ts_s: 1e-3,
             period_samples: n,
             skip_periods: 1,
             integrator: false,

@@ -193,13 +193,16 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
         .minimize(problem);
     if !report.termination.was_successful() {
         return Err(Error::FitFailed {
-            reason: format!("Levenberg-Marquardt stopped: {:?}", report.termination),
+            reason: format!(
+                "the least-squares fit stopped: {}",
+                describe_termination(&report.termination)
+            ),
         });
     }
     let params = solved.to_params(&solved.q);
-    if params.validate().is_err() {
+    if let Err(e) = params.validate() {
         return Err(Error::FitFailed {
-            reason: format!("non-physical optimum {params:?}"),
+            reason: format!("the fitted model is not physical ({e})"),
         });
     }
     let r = solved
@@ -383,6 +386,20 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for LogMagnitudeProblem {
     }
 }
 
+/// Why Levenberg-Marquardt stopped, in words (not a Debug dump).
+fn describe_termination(t: &levenberg_marquardt::TerminationReason) -> String {
+    use levenberg_marquardt::TerminationReason as T;
+    match t {
+        T::User(_) => "the model became non-finite during the iteration".into(),
+        T::Numerical(what) => format!("numerical problem ({what})"),
+        T::LostPatience => "no convergence within the iteration limit".into(),
+        T::NoParameters => "nothing to fit".into(),
+        T::NoResiduals => "no frequency lines to fit".into(),
+        T::WrongDimensions(what) => format!("inconsistent dimensions ({what})"),
+        other => format!("{other:?}").to_lowercase(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -417,7 +434,7 @@ mod tests {
             &u,
             &phi,
             &EtfeConfig {
-                sample_time_s: ts,
+                ts_s: ts,
                 period_samples: 4094,
                 skip_periods: 1,
                 // below f_s / 10 the ZOH-sampled response equals the continuous one in magnitude
@@ -500,7 +517,7 @@ mod tests {
             &u,
             &phi,
             &EtfeConfig {
-                sample_time_s: ts,
+                ts_s: ts,
                 period_samples: 511 * 4,
                 ..Default::default()
             },

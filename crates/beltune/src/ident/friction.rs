@@ -37,7 +37,7 @@ pub struct ConstantVelocityRun {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct FrictionFit {
     /// `d_v~`, N m s/rad.
-    pub viscous_nms_per_rad: f64,
+    pub viscous_nm_s_per_rad: f64,
     /// `tau_c~`, N m (0 for the linear variant).
     pub coulomb_nm: f64,
     /// RMS of the torque residuals, N m.
@@ -116,7 +116,7 @@ fn solve_runs(runs: &[ConstantVelocityRun], coulomb: bool) -> Result<FrictionFit
     let x = lstsq(&a, &b)?;
     let r = &b - &a * &x;
     Ok(FrictionFit {
-        viscous_nms_per_rad: x[0],
+        viscous_nm_s_per_rad: x[0],
         coulomb_nm: if coulomb { x[1] } else { 0.0 },
         rms_residual_nm: (r.norm_squared() / runs.len() as f64).sqrt(),
     })
@@ -179,6 +179,9 @@ pub fn identify_from_motion(
     require_all_finite("time", time_s)?;
     require_all_finite("position", position)?;
     require_all_finite("torque", torque)?;
+    for (what, x) in [("time", time_s), ("position", position), ("torque", torque)] {
+        require_bounded_energy(what, x)?;
+    }
     const MIN_SAMPLES: usize = 50;
     if time_s.len() < MIN_SAMPLES {
         return Err(Error::TooShort {
@@ -270,7 +273,7 @@ pub fn identify_from_motion(
     let x = lstsq(&phi, &y)?;
     let r = &y - &phi * &x;
     let norm_y = y.norm();
-    Ok(MotionFriction {
+    let fit = MotionFriction {
         inertia: x[0],
         viscous: x[1],
         coulomb: x[2],
@@ -278,7 +281,66 @@ pub fn identify_from_motion(
         relative_residual: if norm_y > 0.0 { r.norm() / norm_y } else { 0.0 },
         samples_used: keep.len(),
         cutoff_hz: fc,
-    })
+    };
+    let peak = |f: &dyn Fn(usize) -> f64| keep.iter().map(|&k| f(k).abs()).fold(0.0, f64::max);
+    check_plausible(&fit, peak(&|k| tau_f[k]), peak(&|k| a[k]), peak(&|k| v[k]))?;
+    Ok(fit)
+}
+
+/// How many times the peak filtered torque one term of the fitted model may
+/// reach before the fit counts as implausible (terms that cancel each other).
+const MAX_TERM_TO_TORQUE: f64 = 100.0;
+
+/// A fit whose numbers are not finite, or whose terms are far larger than the
+/// torque they explain, is an error: nothing absurd reaches a file (issue 13).
+fn check_plausible(fit: &MotionFriction, tau_peak: f64, a_peak: f64, v_peak: f64) -> Result<()> {
+    let values = [
+        ("inertia", fit.inertia),
+        ("viscous", fit.viscous),
+        ("coulomb", fit.coulomb),
+        ("offset", fit.offset),
+        ("relative residual", fit.relative_residual),
+    ];
+    if let Some((name, v)) = values.iter().find(|(_, v)| !v.is_finite()) {
+        return Err(Error::FitFailed {
+            reason: format!(
+                "friction fit: {name} is {v}; the record's values are too large or degenerate"
+            ),
+        });
+    }
+    let bound = MAX_TERM_TO_TORQUE * tau_peak;
+    for (name, term) in [
+        ("inertia x acceleration", fit.inertia * a_peak),
+        ("viscous x velocity", fit.viscous * v_peak),
+        ("coulomb", fit.coulomb),
+        ("offset", fit.offset),
+    ] {
+        if !term.is_finite() || term.abs() > bound {
+            return Err(Error::FitFailed {
+                reason: format!(
+                    "friction fit is implausible: the {name} term reaches {term:.3e}, more than \
+                     {MAX_TERM_TO_TORQUE} times the largest torque {tau_peak:.3e}"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Error if the squares of `x` overflow: values that large (a cell of 1e308)
+/// make every sum of the regression infinite.
+fn require_bounded_energy(what: &str, x: &[f64]) -> Result<()> {
+    let peak = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // Sums of squares of n values up to `peak` stay far from overflow.
+    if peak * peak * (x.len().max(1) as f64) < 1e300 {
+        return Ok(());
+    }
+    let index = x.iter().position(|v| v.abs() == peak).unwrap_or(0);
+    Err(Error::invalid(
+        what,
+        x[index],
+        format!("sample {index} is too large to fit (check the units of the column)"),
+    ))
 }
 
 /// Forward-backward filtering with one section, started in steady state.
@@ -373,12 +435,15 @@ mod tests {
         }
         let runs = run_means(&t, &v, &tau, &windows, 0.2).unwrap();
         let fit = fit_constant_velocity(&runs).unwrap();
-        assert!((fit.viscous_nms_per_rad / D_V - 1.0).abs() < TOL, "{fit:?}");
+        assert!(
+            (fit.viscous_nm_s_per_rad / D_V - 1.0).abs() < TOL,
+            "{fit:?}"
+        );
         assert!((fit.coulomb_nm / TAU_C - 1.0).abs() < TOL, "{fit:?}");
         // the linear variant absorbs Coulomb friction into a larger viscous term
         let lin = fit_viscous_only(&runs).unwrap();
         assert_eq!(lin.coulomb_nm, 0.0);
-        assert!(lin.viscous_nms_per_rad > fit.viscous_nms_per_rad);
+        assert!(lin.viscous_nm_s_per_rad > fit.viscous_nm_s_per_rad);
         assert!(lin.rms_residual_nm > fit.rms_residual_nm);
     }
 

@@ -48,15 +48,22 @@ pub fn line_of_row(r: usize) -> usize {
 /// (the bench recording ships as `data/twomass-bench/multisine-a.csv.gz`).
 pub fn open_maybe_gzip(path: &Path) -> std::io::Result<Box<dyn std::io::Read>> {
     let file = std::io::BufReader::new(std::fs::File::open(path)?);
+    let limit = crate::io::MAX_CSV_BYTES;
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"))
     {
-        Ok(Box::new(flate2::read::MultiGzDecoder::new(file)))
+        Ok(Box::new(crate::io::CappedReader::new(
+            flate2::read::MultiGzDecoder::new(file),
+            limit,
+        )))
     } else {
-        Ok(Box::new(file))
+        Ok(Box::new(crate::io::CappedReader::new(file, limit)))
     }
 }
+
+/// Most data rows read from one CSV file (100 s at 10 kHz is 10^6).
+pub const MAX_CSV_ROWS: usize = 10_000_000;
 
 /// Read the named columns of a CSV file with a header row (plain or gzip,
 /// see [`open_maybe_gzip`]). Errors name the
@@ -68,6 +75,10 @@ pub fn read_csv_columns(path: &Path, names: &[&str]) -> Result<CsvColumns> {
         path: shown.clone(),
         message,
     };
+    crate::io::check_readable_file(path, crate::io::MAX_CSV_BYTES).map_err(|e| match e {
+        Error::Parse { message, .. } => csv_err(message),
+        other => other,
+    })?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .trim(csv::Trim::All)
@@ -77,8 +88,30 @@ pub fn read_csv_columns(path: &Path, names: &[&str]) -> Result<CsvColumns> {
         .map_err(|e| csv_err(format!("cannot read the header row: {e}")))?
         .clone();
     let mut index = Vec::with_capacity(names.len());
-    for name in names {
-        match headers.iter().position(|h| h == *name) {
+    for (k, name) in names.iter().enumerate() {
+        if names[..k].contains(name) {
+            return Err(csv_err(format!(
+                "column `{name}` is asked for twice (two different signals cannot share one column)"
+            )));
+        }
+        let found: Vec<usize> = headers
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| h == name)
+            .map(|(i, _)| i)
+            .collect();
+        if found.len() > 1 {
+            return Err(csv_err(format!(
+                "the header names column `{name}` {} times (columns {}); rename them",
+                found.len(),
+                found
+                    .iter()
+                    .map(|i| (i + 1).to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
+        match found.first().copied() {
             Some(i) => index.push(i),
             None => {
                 return Err(csv_err(format!(
@@ -91,6 +124,11 @@ pub fn read_csv_columns(path: &Path, names: &[&str]) -> Result<CsvColumns> {
     let mut data = vec![Vec::new(); names.len()];
     for (r, rec) in reader.records().enumerate() {
         let line = line_of_row(r);
+        if r >= MAX_CSV_ROWS {
+            return Err(csv_err(format!(
+                "more than {MAX_CSV_ROWS} data rows (the limit of one record)"
+            )));
+        }
         let rec = rec.map_err(|e| csv_err(format!("row {line}: {e}")))?;
         for (c, &i) in index.iter().enumerate() {
             let cell = rec.get(i).unwrap_or("");
@@ -120,7 +158,7 @@ pub fn read_csv_columns(path: &Path, names: &[&str]) -> Result<CsvColumns> {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Sampling {
     /// Mean sample period, s (time unit of the file).
-    pub sample_time_s: f64,
+    pub ts_s: f64,
     /// Largest relative deviation of one step from the mean, `max |dt - T_s| / T_s`.
     pub max_jitter: f64,
 }
@@ -152,7 +190,7 @@ pub fn check_time(cols: &CsvColumns, name: &str, min_rows: usize) -> Result<Samp
         .map(|w| ((w[1] - w[0]) - ts).abs() / ts)
         .fold(0.0, f64::max);
     Ok(Sampling {
-        sample_time_s: ts,
+        ts_s: ts,
         max_jitter,
     })
 }
@@ -169,13 +207,13 @@ pub fn check_uniform_time(
     if s.max_jitter > tolerance {
         let t = cols.column(name).expect("checked");
         let r = (1..t.len())
-            .find(|&r| ((t[r] - t[r - 1]) - s.sample_time_s).abs() / s.sample_time_s > tolerance)
+            .find(|&r| ((t[r] - t[r - 1]) - s.ts_s).abs() / s.ts_s > tolerance)
             .unwrap_or(1);
         return Err(cols.err(format!(
             "row {}, column `{name}`: non-uniform sampling (step {} vs mean {})",
             line_of_row(r),
             t[r] - t[r - 1],
-            s.sample_time_s
+            s.ts_s
         )));
     }
     Ok(s)
@@ -186,6 +224,9 @@ pub fn check_not_constant(cols: &CsvColumns, name: &str) -> Result<()> {
     let x = cols
         .column(name)
         .ok_or_else(|| cols.err(format!("missing column `{name}`")))?;
+    if x.is_empty() {
+        return Err(cols.err("no data rows (only the header)".to_string()));
+    }
     if x.iter().all(|&v| v == x[0]) {
         return Err(cols.err(format!(
             "column `{name}` is constant ({}) in rows {}..{}: no excitation",
@@ -220,7 +261,7 @@ mod tests {
         assert_eq!(c.column("y").unwrap(), &[2.0, 4.0, 6.0]);
         assert_eq!(c.rows(), 3);
         let s = check_uniform_time(&c, "t", 3, 1e-6).unwrap();
-        assert!((s.sample_time_s - 0.1).abs() < 1e-12);
+        assert!((s.ts_s - 0.1).abs() < 1e-12);
 
         let m = msg(read_csv_columns(&p, &["t", "z"]));
         assert!(

@@ -44,7 +44,7 @@ pub struct RecordedIdentification {
     /// The dead time, when an actual-torque column was given.
     pub dead_time: Option<DeadTime>,
     /// Sampling time of the file, s.
-    pub sample_time_s: f64,
+    pub ts_s: f64,
     /// Samples per period.
     pub period_samples: usize,
     /// Rows in the file.
@@ -87,20 +87,25 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
             ),
         })?,
     };
-    let needed = period * (r.skip_periods + 2);
+    let needed = r
+        .skip_periods
+        .checked_add(2)
+        .and_then(|p| p.checked_mul(period))
+        .unwrap_or(usize::MAX);
     if cols.rows() < needed {
         return Err(Error::Csv {
             path: shown,
             message: format!(
-                "too few samples: {} data rows, but {} skipped + 2 averaged periods of {period} samples need {needed}",
+                "too few samples: {} data rows, but {} skipped + 2 averaged periods of {period} samples need {}",
                 cols.rows(),
-                r.skip_periods
+                r.skip_periods,
+                if needed == usize::MAX { "more than can be addressed".to_string() } else { needed.to_string() }
             ),
         });
     }
     let sampling = check_uniform_time(&cols, r.time, needed, 0.01)?;
     let cfg = EtfeConfig {
-        sample_time_s: sampling.sample_time_s,
+        ts_s: sampling.ts_s,
         period_samples: period,
         skip_periods: r.skip_periods,
         ..r.etfe
@@ -119,7 +124,7 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
         frf,
         fit,
         dead_time,
-        sample_time_s: sampling.sample_time_s,
+        ts_s: sampling.ts_s,
         period_samples: period,
         rows: cols.rows(),
     })

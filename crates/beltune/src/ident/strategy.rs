@@ -129,7 +129,7 @@ mod tests {
         let k_i = k_p * 2.0 * std::f64::consts::PI * 0.2 * crossover_hz;
         let run = closed_loop(&p, k_p, k_i, ts, quantum, periods);
         let cfg = EtfeConfig {
-            sample_time_s: ts,
+            ts_s: ts,
             period_samples: 4094,
             skip_periods: skip,
             band_hz: Some((1.0, 1000.0)),

@@ -21,7 +21,7 @@ fn run_open_loop(axis: &mut SimAxis, excitation: &[f64]) -> Record {
         command: Vec::with_capacity(excitation.len()),
         actual: Vec::with_capacity(excitation.len()),
         angle: Vec::with_capacity(excitation.len()),
-        ts: info.sample_time_s,
+        ts: info.ts_s,
     };
     for &tau in excitation {
         let m = axis.step(tau);
@@ -63,7 +63,7 @@ fn egc70_open_loop_with_averaging() {
     let rec = run_open_loop(&mut axis, &u);
     let drift = (axis.cart_position_m() - xi0).abs();
     let cfg = EtfeConfig {
-        sample_time_s: rec.ts,
+        ts_s: rec.ts,
         period_samples: period,
         skip_periods: 1,
         // below 3 Hz the stick-slip dominates; above 0.4/(P T_s) the PRBS is weak
@@ -134,7 +134,7 @@ fn builtin_linear_sets_through_the_simulator() {
             &rec.command,
             &rec.angle,
             &EtfeConfig {
-                sample_time_s: rec.ts,
+                ts_s: rec.ts,
                 period_samples: 4094,
                 skip_periods: 1,
                 band_hz: Some((1.0, 400.0f64.max(2.5 * truth.f_r_hz()))),
@@ -187,7 +187,7 @@ fn egc70_motion_regression() -> (MotionFriction, crate::model::FrictionTotals, f
     let plant = builtin("egc70", None).unwrap();
     let mut axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
     let info = axis.info();
-    let ts = info.sample_time_s;
+    let ts = info.ts_s;
     let truth = axis.friction_truth();
     let j = axis.linearized_truth().rigid_inertia();
     // 1.5 Hz position loop, velocity from a 5 ms low-passed difference. Above

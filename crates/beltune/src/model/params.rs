@@ -100,11 +100,13 @@ pub struct PhysicalParams {
     /// Current-loop dead time, s (3.30).
     pub dead_time_s: f64,
     /// Torque limit of the drive (saturation of the current setpoint), N m.
-    pub torque_limit_nm: f64,
+    #[serde(alias = "torque_limit_nm")]
+    pub torque_max_nm: f64,
     /// Motor encoder resolution, rad per count.
     pub motor_rad_per_count: f64,
     /// Sampling time of the drive, s.
-    pub sample_time_s: f64,
+    #[serde(alias = "sample_time_s")]
+    pub ts_s: f64,
 }
 
 /// Lengths of the three free belt segments at one cart position, m.
@@ -264,7 +266,7 @@ impl PhysicalParams {
 
     /// Number of whole samples of the dead time, `round(T_d / T_s)`.
     pub fn dead_time_samples(&self) -> usize {
-        (self.dead_time_s / self.sample_time_s).round() as usize
+        (self.dead_time_s / self.ts_s).round() as usize
     }
 
     /// Typed error for anything non-physical: non-finite values, non-positive
@@ -273,6 +275,11 @@ impl PhysicalParams {
     /// stroke), a tilt beyond +-90 deg, a dead time that is not a
     /// non-negative number of samples below one second.
     pub fn validate(&self) -> Result<()> {
+        use crate::error::require_range;
+        use bounds::*;
+        // Positivity first (the messages say "must be > 0"), then the
+        // plausibility bounds: every quantity has an upper bound, so that no
+        // derived frequency overflows and the simulator's sub-steps stay few.
         require_positive("theta_motor_kg_m2", self.theta_motor_kg_m2)?;
         require_non_negative("theta_coupling_kg_m2", self.theta_coupling_kg_m2)?;
         require_non_negative("theta_gearbox_kg_m2", self.theta_gearbox_kg_m2)?;
@@ -299,6 +306,51 @@ impl PhysicalParams {
         require_non_negative("d_end_pulley_n_s_per_m", self.d_end_pulley_n_s_per_m)?;
         require_non_negative("tau_c_end_pulley_nm", self.tau_c_end_pulley_nm)?;
         require_finite("tilt_rad", self.tilt_rad)?;
+        for (name, x) in [
+            ("theta_motor_kg_m2", self.theta_motor_kg_m2),
+            (
+                "theta_driving_pulley_kg_m2",
+                self.theta_driving_pulley_kg_m2,
+            ),
+            ("theta_end_pulley_kg_m2", self.theta_end_pulley_kg_m2),
+        ] {
+            require_range(name, x, INERTIA_MIN_KG_M2, INERTIA_MAX_KG_M2)?;
+        }
+        for (name, x) in [
+            ("theta_coupling_kg_m2", self.theta_coupling_kg_m2),
+            ("theta_gearbox_kg_m2", self.theta_gearbox_kg_m2),
+        ] {
+            require_range(name, x, 0.0, INERTIA_MAX_KG_M2)?;
+        }
+        require_range("r_m", self.r_m, 1e-4, 1.0)?;
+        require_range("i_g", self.i_g, 1e-2, 1e3)?;
+        require_range("c_b_n", self.c_b_n, 1.0, 1e9)?;
+        require_range("d_b_n_s", self.d_b_n_s, 0.0, 1e6)?;
+        for (name, x) in [
+            ("end_compliance_length_m", self.end_compliance_length_m),
+            ("pulley_distance_m", self.pulley_distance_m),
+            ("l_xi_m", self.l_xi_m),
+            ("cart_belt_span_m", self.cart_belt_span_m),
+            ("stroke_m", self.stroke_m),
+        ] {
+            require_range(name, x, 0.0, LENGTH_MAX_M)?;
+        }
+        require_range("m_cart_kg", self.m_cart_kg, MASS_MIN_KG, MASS_MAX_KG)?;
+        require_range("payload_kg", self.payload_kg, 0.0, MASS_MAX_KG)?;
+        for (name, x) in [
+            ("d_m_n_s_per_m", self.d_m_n_s_per_m),
+            ("d_c_n_s_per_m", self.d_c_n_s_per_m),
+            ("d_end_pulley_n_s_per_m", self.d_end_pulley_n_s_per_m),
+        ] {
+            require_range(name, x, 0.0, DAMPING_MAX_N_S_PER_M)?;
+        }
+        for (name, x) in [
+            ("tau_c_motor_nm", self.tau_c_motor_nm),
+            ("tau_c_end_pulley_nm", self.tau_c_end_pulley_nm),
+        ] {
+            require_range(name, x, 0.0, TORQUE_MAX_NM)?;
+        }
+        require_range("f_c_cart_n", self.f_c_cart_n, 0.0, FORCE_MAX_N)?;
         if self.tilt_rad.abs() > std::f64::consts::FRAC_PI_2 {
             return Err(Error::invalid(
                 "tilt_rad",
@@ -307,21 +359,16 @@ impl PhysicalParams {
             ));
         }
         require_non_negative("dead_time_s", self.dead_time_s)?;
-        require_positive("torque_limit_nm", self.torque_limit_nm)?;
+        require_positive("torque_max_nm", self.torque_max_nm)?;
+        require_range("torque_max_nm", self.torque_max_nm, 0.0, TORQUE_MAX_NM)?;
         require_positive("motor_rad_per_count", self.motor_rad_per_count)?;
-        require_positive("sample_time_s", self.sample_time_s)?;
+        require_range("motor_rad_per_count", self.motor_rad_per_count, 1e-9, 1.0)?;
+        check_sample_time(self.ts_s)?;
         if self.dead_time_s > 1.0 {
             return Err(Error::invalid(
                 "dead_time_s",
                 self.dead_time_s,
                 "a current-loop dead time above 1 s is not physical",
-            ));
-        }
-        if self.sample_time_s > 0.1 {
-            return Err(Error::invalid(
-                "sample_time_s",
-                self.sample_time_s,
-                "a drive sampling time above 100 ms is not supported",
             ));
         }
         // Geometry: every belt segment must have positive length over the whole stroke.
@@ -351,6 +398,48 @@ impl PhysicalParams {
         }
         Ok(())
     }
+}
+
+/// Plausibility bounds of plant parameters, SI units. Generous (a factor of
+/// 100 or more beyond any belt axis), but finite: with them every derived
+/// quantity (frequencies, inertia ratio) is finite.
+pub mod bounds {
+    /// Smallest motor-side or pulley inertia, kg m^2.
+    pub const INERTIA_MIN_KG_M2: f64 = 1e-12;
+    /// Largest inertia, kg m^2.
+    pub const INERTIA_MAX_KG_M2: f64 = 10.0;
+    /// Smallest cart mass, kg.
+    pub const MASS_MIN_KG: f64 = 1e-3;
+    /// Largest cart mass or payload, kg.
+    pub const MASS_MAX_KG: f64 = 1e4;
+    /// Largest length (stroke, pulley distance), m.
+    pub const LENGTH_MAX_M: f64 = 100.0;
+    /// Largest viscous damping, N s/m.
+    pub const DAMPING_MAX_N_S_PER_M: f64 = 1e6;
+    /// Largest torque (friction, torque limit), N m.
+    pub const TORQUE_MAX_NM: f64 = 1e4;
+    /// Largest force (cart friction), N.
+    pub const FORCE_MAX_N: f64 = 1e6;
+    /// Shortest sampling time, s.
+    pub const SAMPLE_TIME_MIN_S: f64 = 1e-6;
+    /// Longest sampling time, s.
+    pub const SAMPLE_TIME_MAX_S: f64 = 0.1;
+}
+
+/// A drive sampling time within [`bounds::SAMPLE_TIME_MIN_S`, `bounds::SAMPLE_TIME_MAX_S`].
+pub fn check_sample_time(ts_s: f64) -> Result<()> {
+    if ts_s.is_finite() && (bounds::SAMPLE_TIME_MIN_S..=bounds::SAMPLE_TIME_MAX_S).contains(&ts_s) {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        "ts_s",
+        ts_s,
+        format!(
+            "a drive sampling time must lie within [{} us, {} ms]",
+            bounds::SAMPLE_TIME_MIN_S * 1e6,
+            bounds::SAMPLE_TIME_MAX_S * 1e3
+        ),
+    ))
 }
 
 #[cfg(test)]
@@ -469,9 +558,9 @@ mod tests {
                 },
             ),
             (
-                "sample_time_s",
+                "ts_s",
                 PhysicalParams {
-                    sample_time_s: 0.0,
+                    ts_s: 0.0,
                     ..ok.clone()
                 },
             ),

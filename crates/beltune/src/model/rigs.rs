@@ -47,11 +47,13 @@ pub struct LinearPlant {
     /// Current-loop dead time, s.
     pub dead_time_s: f64,
     /// Torque limit, N m.
-    pub torque_limit_nm: f64,
+    #[serde(alias = "torque_limit_nm")]
+    pub torque_max_nm: f64,
     /// Motor encoder resolution, rad per count.
     pub motor_rad_per_count: f64,
     /// Sampling time, s.
-    pub sample_time_s: f64,
+    #[serde(alias = "sample_time_s")]
+    pub ts_s: f64,
 }
 
 impl LinearPlant {
@@ -59,18 +61,18 @@ impl LinearPlant {
     pub fn validate(&self) -> Result<()> {
         self.two_mass.validate()?;
         crate::error::require_non_negative("dead_time_s", self.dead_time_s)?;
-        crate::error::require_positive("torque_limit_nm", self.torque_limit_nm)?;
+        crate::error::require_positive("torque_max_nm", self.torque_max_nm)?;
         crate::error::require_positive("motor_rad_per_count", self.motor_rad_per_count)?;
-        crate::error::require_positive("sample_time_s", self.sample_time_s)?;
+        crate::error::require_range(
+            "torque_max_nm",
+            self.torque_max_nm,
+            0.0,
+            super::params::bounds::TORQUE_MAX_NM,
+        )?;
+        crate::error::require_range("motor_rad_per_count", self.motor_rad_per_count, 1e-9, 1.0)?;
+        super::params::check_sample_time(self.ts_s)?;
         if self.dead_time_s > 1.0 {
             return Err(Error::invalid("dead_time_s", self.dead_time_s, "above 1 s"));
-        }
-        if self.sample_time_s > 0.1 {
-            return Err(Error::invalid(
-                "sample_time_s",
-                self.sample_time_s,
-                "above 100 ms",
-            ));
         }
         Ok(())
     }
@@ -134,14 +136,14 @@ impl Plant {
     pub fn info(&self) -> AxisInfo {
         match self {
             Plant::Physical(p) => AxisInfo {
-                sample_time_s: p.sample_time_s,
+                ts_s: p.ts_s,
                 motor_rad_per_count: p.motor_rad_per_count,
-                torque_limit_nm: p.torque_limit_nm,
+                torque_max_nm: p.torque_max_nm,
             },
             Plant::Linear(l) => AxisInfo {
-                sample_time_s: l.sample_time_s,
+                ts_s: l.ts_s,
                 motor_rad_per_count: l.motor_rad_per_count,
-                torque_limit_nm: l.torque_limit_nm,
+                torque_max_nm: l.torque_max_nm,
             },
         }
     }
@@ -192,13 +194,13 @@ pub struct PlantSummary {
     /// Current-loop dead time, s.
     pub dead_time_s: f64,
     /// Torque limit, N m.
-    pub torque_limit_nm: f64,
+    pub torque_max_nm: f64,
     /// Encoder resolution, rad per count.
     pub motor_rad_per_count: f64,
     /// Belt travel per encoder count, m.
     pub belt_travel_per_count_m: f64,
     /// Sampling time, s.
-    pub sample_time_s: f64,
+    pub ts_s: f64,
     /// Usable stroke, m (physical plants).
     pub stroke_m: Option<f64>,
     /// `f_r`, `f_z` and `c` over the stroke (physical plants; thesis Figure 2.9).
@@ -259,10 +261,10 @@ impl Plant {
             worst_case_position_m: self.worst_case_position_m(),
             friction: self.friction_totals(),
             dead_time_s: self.dead_time_s(),
-            torque_limit_nm: info.torque_limit_nm,
+            torque_max_nm: info.torque_max_nm,
             motor_rad_per_count: info.motor_rad_per_count,
             belt_travel_per_count_m: info.motor_rad_per_count * wc.i_t,
-            sample_time_s: info.sample_time_s,
+            ts_s: info.ts_s,
             stroke_m: self.stroke_m(),
             position_sweep,
             physical,
@@ -326,10 +328,7 @@ pub fn load_toml(path: &Path) -> Result<Plant> {
     let file = path.display().to_string();
     // `Error::Parse` rather than `Error::Io`: the CLI prints the cause chain,
     // and `Io` would repeat its source.
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Parse {
-        path: file.clone(),
-        message: format!("cannot read the plant file: {e}"),
-    })?;
+    let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
     let plant: Plant = toml::from_str(&text).map_err(|e| Error::Parse {
         path: file.clone(),
         message: e.message().to_string()
@@ -422,9 +421,9 @@ pub fn egc70_params(payload_kg: f64) -> PhysicalParams {
         tau_c_end_pulley_nm: end_share * tc0,
         tilt_rad: 0.0,
         dead_time_s: DEAD_TIME_S,
-        torque_limit_nm: 3.1,
+        torque_max_nm: 3.1,
         motor_rad_per_count: BELT_TRAVEL_PER_COUNT_M / r,
-        sample_time_s: SAMPLE_TIME_S,
+        ts_s: SAMPLE_TIME_S,
     }
 }
 
@@ -441,9 +440,9 @@ fn linear_set(two_mass: TwoMassParams) -> LinearPlant {
     LinearPlant {
         two_mass,
         dead_time_s: DEAD_TIME_S,
-        torque_limit_nm: 3.1,
+        torque_max_nm: 3.1,
         motor_rad_per_count: BELT_TRAVEL_PER_COUNT_M / two_mass.i_t,
-        sample_time_s: SAMPLE_TIME_S,
+        ts_s: SAMPLE_TIME_S,
     }
 }
 

@@ -48,6 +48,17 @@ impl TwoMassParams {
         require_non_negative("d_m [N s/m]", self.d_m)?;
         require_non_negative("d_c [N s/m]", self.d_c)?;
         require_positive("i_t [m/rad]", self.i_t)?;
+        // Plausibility: finite upper (and lower) bounds, wide enough for
+        // rotary sets (i_t = 1, m_c in kg m^2) and current units, narrow
+        // enough that (2.44)-(2.47) stay finite.
+        use crate::error::require_range;
+        require_range("theta_e [kg m^2]", self.theta_e, 1e-12, 1e3)?;
+        require_range("m_c [kg]", self.m_c, 1e-12, 1e6)?;
+        require_range("c [N/m]", self.c, 1e-6, 1e12)?;
+        require_range("d [N s/m]", self.d, 0.0, 1e9)?;
+        require_range("d_m [N s/m]", self.d_m, 0.0, 1e9)?;
+        require_range("d_c [N s/m]", self.d_c, 0.0, 1e9)?;
+        require_range("i_t [m/rad]", self.i_t, 1e-6, 1e3)?;
         Ok(())
     }
 

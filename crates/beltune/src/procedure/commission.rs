@@ -12,30 +12,28 @@
 //! 6. controller design (chapter 4);
 //! 7. friction runs at constant velocity with the designed controller (3.6);
 //! 8. validation move with no, linear and nonlinear feedforward (chapter 5).
+//!
+//! Each stage lives in its own file under [`super::stages`]; this file holds
+//! the configuration, the result and the order of the stages.
+//! Every setting is in seconds, hertz or SI units, never in samples: the
+//! sample counts are derived for the axis' cycle time
+//! ([`crate::plant::AxisInfo::ts_s`]), so the same configuration
+//! commissions a 10 kHz simulator and a 1 kHz fieldbus master.
 
-use super::bootstrap::bootstrap_controller;
-use super::motion::{move_to, track, TrackOptions, TrackRecord};
 use super::progress::Progress;
 use super::result::{FrictionResult, IdentifiedModel, Validation};
-use super::runner::{Runner, Sample};
-use super::safety::{SafetyLimits, SafetySupervisor};
-use super::validation::{
-    run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
-    MoveSpec,
-};
-use crate::design::{design, ControllerDesign, DesignInput, DesignKnobs, FrictionParams};
-use crate::ident::dead_time::{estimate_dead_time, DeadTime};
-use crate::ident::etfe::{etfe, EtfeConfig, Frf};
-use crate::ident::fit::{fit_two_mass, FitConfig, TwoMassFit};
-use crate::ident::friction::{
-    fit_constant_velocity, fit_viscous_only, ConstantVelocityRun, FrictionFit,
-};
+use super::runner::Runner;
+use super::stages::{self, Stages};
+use super::validation::{MoveResult, MoveSpec};
+use crate::design::{ControllerDesign, DesignKnobs, FrictionParams};
+use crate::ident::dead_time::DeadTime;
+use crate::ident::etfe::Frf;
+use crate::ident::fit::TwoMassFit;
+use crate::ident::friction::{ConstantVelocityRun, FrictionFit};
 use crate::plant::Axis;
 use crate::{Error, Result};
-use beltune_rt::control::{CascadeConfig, CascadeController, Feedforward, Setpoint};
-use beltune_rt::prbs::Prbs;
-use beltune_rt::trajectory::{Limits, State, Trajectory};
-use std::time::Instant;
+use beltune_rt::control::{CascadeConfig, Feedforward};
+use beltune_rt::trajectory::Limits;
 
 /// What the drive knows before commissioning: data sheets and mounting.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -114,7 +112,7 @@ impl DataSheet {
             origin_m,
             travel_min_m: lo,
             travel_max_m: hi,
-            torque_max_nm: plant.info().torque_limit_nm,
+            torque_max_nm: plant.info().torque_max_nm,
             velocity_max_m_s: 2.5,
         }
     }
@@ -125,13 +123,43 @@ impl DataSheet {
     }
 }
 
+/// How far a travel window may reach beyond either end of the stroke, m (the
+/// default window's -10 mm, Table A.8).
+pub const TRAVEL_WINDOW_OVERTRAVEL_M: f64 = 0.01;
+
+/// Error if a travel window `(min, max)` reaches beyond the plant's stroke
+/// (by more than [`TRAVEL_WINDOW_OVERTRAVEL_M`]): the supervisor would let the
+/// cart run into the end stop.
+pub fn check_travel_window(
+    plant: &crate::model::rigs::Plant,
+    travel_window_m: Option<(f64, f64)>,
+) -> Result<()> {
+    let Some((lo, hi)) = travel_window_m else {
+        return Ok(());
+    };
+    let stroke = plant.stroke_m().unwrap_or(0.6);
+    let m = TRAVEL_WINDOW_OVERTRAVEL_M;
+    if !(lo.is_finite() && hi.is_finite() && lo >= -m && hi <= stroke + m && lo < hi) {
+        return Err(Error::invalid(
+            "travel window [m]",
+            if lo < -m { lo } else { hi },
+            format!(
+                "the window {lo}..{hi} m must lie inside the stroke 0..{stroke} m (up to {} mm beyond either end)",
+                m * 1e3
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Excitation settings (thesis 3.1, 3.4).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ExcitationConfig {
     /// PRBS order `n_PRBS`.
     pub prbs_order: u32,
-    /// PRBS clock period `P_PRBS`, samples.
-    pub clock_period: u32,
+    /// PRBS clock period `P_PRBS`, s (rounded to whole samples of the axis'
+    /// cycle time, at least one; 1.6 ms = 16 samples at 10 kHz).
+    pub clock_period_s: f64,
     /// Periods averaged (`n_m`).
     pub periods: usize,
     /// Leading periods discarded as transient.
@@ -151,10 +179,13 @@ pub struct ExcitationConfig {
     /// Lowest frequency used by the fit, Hz: below it the stick-slip of
     /// Coulomb friction dominates the response to a PRBS.
     pub fit_band_min_hz: f64,
-    /// Fraction of 2 ms windows in which the encoder must move for an amplitude to count.
+    /// Fraction of windows of [`Self::moving_window_s`] in which the encoder
+    /// must move for an amplitude to count.
     pub moving_fraction: f64,
-    /// Samples per amplitude test burst.
-    pub burst_samples: usize,
+    /// Length of the windows of the movement test, s.
+    pub moving_window_s: f64,
+    /// Length of one amplitude test burst, s.
+    pub burst_s: f64,
     /// Log-spaced lines used by the fit.
     pub n_log_lines: usize,
 }
@@ -163,7 +194,7 @@ impl Default for ExcitationConfig {
     fn default() -> Self {
         ExcitationConfig {
             prbs_order: 9,
-            clock_period: 16,
+            clock_period_s: 1.6e-3,
             periods: 2,
             skip_periods: 1,
             fixed_amplitude_nm: None,
@@ -173,9 +204,37 @@ impl Default for ExcitationConfig {
             amplitude_margin: 6.0,
             fit_band_min_hz: 3.0,
             moving_fraction: 0.9,
-            burst_samples: 1500,
+            moving_window_s: 2e-3,
+            burst_s: 0.15,
             n_log_lines: 60,
         }
+    }
+}
+
+/// Whole samples of `ts_s` in `duration_s`, rounded, at least one.
+fn samples_in(duration_s: f64, ts_s: f64) -> usize {
+    let n = (duration_s / ts_s).round();
+    if n.is_finite() && n >= 1.0 {
+        n.min(u32::MAX as f64) as usize
+    } else {
+        1
+    }
+}
+
+impl ExcitationConfig {
+    /// The PRBS clock period in samples of `ts_s`.
+    pub fn clock_samples(&self, ts_s: f64) -> u32 {
+        samples_in(self.clock_period_s, ts_s) as u32
+    }
+
+    /// The movement-test window in samples of `ts_s` (at least 2).
+    pub fn moving_window_samples(&self, ts_s: f64) -> usize {
+        samples_in(self.moving_window_s, ts_s).max(2)
+    }
+
+    /// One amplitude test burst in samples of `ts_s`.
+    pub fn burst_samples(&self, ts_s: f64) -> usize {
+        samples_in(self.burst_s, ts_s)
     }
 }
 
@@ -214,7 +273,7 @@ impl Default for CommissioningConfig {
 
 /// Limits of the positioning moves (low speed, a tenth of Table A.8's
 /// acceleration), m/s, m/s^2, m/s^3.
-fn positioning_limits(ds: &DataSheet) -> Limits {
+pub(super) fn positioning_limits(ds: &DataSheet) -> Limits {
     Limits {
         v_max: 0.5,
         v_min: -0.5,
@@ -225,6 +284,24 @@ fn positioning_limits(ds: &DataSheet) -> Limits {
         position_min: ds.travel_min_m,
         position_max: ds.travel_max_m,
     }
+}
+
+/// The identification experiment as recorded (stage 5): the PRBS torque
+/// command and the motor-side position, with the limits it ran under.
+#[derive(Clone, Debug, Default)]
+pub struct ExcitationTrace {
+    /// Time since the axis was taken, s.
+    pub time_s: Vec<f64>,
+    /// Torque command (holding torque plus PRBS), N m.
+    pub torque_command_nm: Vec<f64>,
+    /// Motor-side position `i_t phi_m`, m.
+    pub position_m: Vec<f64>,
+    /// Torque limit of the commissioning, N m.
+    pub torque_max_nm: f64,
+    /// Allowed travel, m.
+    pub travel_min_m: f64,
+    /// Allowed travel, m.
+    pub travel_max_m: f64,
 }
 
 /// Everything a commissioning run produced.
@@ -268,41 +345,6 @@ pub struct Commissioning {
     pub log: Vec<String>,
 }
 
-/// The identification experiment as recorded (stage 5): the PRBS torque
-/// command and the motor-side position, with the limits it ran under.
-#[derive(Clone, Debug, Default)]
-pub struct ExcitationTrace {
-    /// Time since the axis was taken, s.
-    pub time_s: Vec<f64>,
-    /// Torque command (holding torque plus PRBS), N m.
-    pub torque_command_nm: Vec<f64>,
-    /// Motor-side position `i_t phi_m`, m.
-    pub position_m: Vec<f64>,
-    /// Torque limit of the commissioning, N m.
-    pub torque_limit_nm: f64,
-    /// Allowed travel, m.
-    pub travel_min_m: f64,
-    /// Allowed travel, m.
-    pub travel_max_m: f64,
-}
-
-struct Stages<'r, 'a> {
-    runner: &'r mut Runner<'a>,
-    log: Vec<String>,
-    compute_s: f64,
-}
-
-impl<'r, 'a> Stages<'r, 'a> {
-    fn start(&mut self, name: &str, samples: u64) {
-        self.runner.progress().stage_started(name, samples);
-    }
-    fn finish(&mut self, name: &str, line: String) {
-        let line = format!("{line} [axis busy {:.1} s]", self.runner.busy_time_s());
-        self.runner.progress().stage_finished(&line);
-        self.log.push(format!("{name}: {line}"));
-    }
-}
-
 /// Commission `axis`. The axis must be homed (`datasheet.origin_m`).
 pub fn commission(
     axis: &mut dyn Axis,
@@ -312,336 +354,130 @@ pub fn commission(
 ) -> Result<Commissioning> {
     // ---- 1. plausibility ----
     progress.stage_started("plausibility", 0);
-    datasheet.validate()?;
     let info = axis.info();
-    let ts = info.sample_time_s;
-    let torque_max = datasheet.torque_max_nm.min(info.torque_limit_nm);
-    let j_ds = datasheet.rigid_inertia();
-    let limits = SafetyLimits {
-        travel_min_m: datasheet.travel_min_m,
-        travel_max_m: datasheet.travel_max_m,
-        torque_max_nm: torque_max,
-        velocity_max_m_s: datasheet.velocity_max_m_s,
-        following_error_max_m: cfg.following_error_max_m,
-    };
-    // Stop deceleration: what 60 % of the torque limit gives on the data-sheet
-    // inertia (the rest is margin for friction, gravity and the loop), at most 20 m/s^2.
-    let a_stop = (0.6 * torque_max / j_ds * datasheet.i_t_m).min(20.0);
-    let supervisor = SafetySupervisor::new(limits, a_stop)?;
-    let boot = bootstrap_controller(j_ds, datasheet.i_t_m, ts, torque_max)?;
-    let stop_limits = Limits {
-        a_max: a_stop,
-        a_min: -a_stop,
-        j_max: 20.0 * a_stop,
-        j_min: -20.0 * a_stop,
-        ..positioning_limits(datasheet)
-    };
-    let line = format!(
-        "data sheet ok: Theta_e {:.2} kg mm^2, i_t {:.3} mm/rad, rigid inertia {:.3e} kg m^2, torque limit {:.2} N m, travel [{:.0}, {:.0}] mm",
-        datasheet.theta_e_kg_m2 * 1e6,
-        datasheet.i_t_m * 1e3,
-        j_ds,
-        torque_max,
-        datasheet.travel_min_m * 1e3,
-        datasheet.travel_max_m * 1e3
-    );
-    progress.stage_finished(&line);
+    let ts = info.ts_s;
+    let plaus = stages::plausibility::plausibility(&info, datasheet, cfg)?;
+    progress.stage_finished(&plaus.line);
+    let torque_max = plaus.torque_max_nm;
     let mut runner = Runner::new(
         axis,
         progress,
-        supervisor,
+        plaus.supervisor,
         datasheet.i_t_m,
         datasheet.origin_m,
-        boot,
-        stop_limits,
+        plaus.bootstrap,
+        plaus.stop_limits,
     )?;
     let mut st = Stages {
         runner: &mut runner,
-        log: vec![format!("plausibility: {line}")],
+        log: vec![format!("plausibility: {}", plaus.line)],
         compute_s: 0.0,
     };
     let pos_limits = positioning_limits(datasheet);
 
-    // ---- 2a. take the axis: hold it where it is until the integrator carries
-    // the load (a vertical axis sags first), for a first holding torque ----
-    st.start("take axis", 0);
-    let start = st.runner.position_m();
-    let catch_s = 0.3;
-    let rec = hold(st.runner, &boot, catch_s)?;
-    let tail = &rec[rec.len() / 2..];
-    let first_hold = tail.iter().map(|s| s.torque_command_nm).sum::<f64>() / tail.len() as f64;
-    let mut boot = boot;
-    boot.torque_offset_nm = first_hold;
-    st.runner.set_stop_controller(boot);
-    let line = format!(
-        "held at {:.1} mm (sag {:.2} mm) with {first_hold:+.3} N m",
-        st.runner.position_m() * 1e3,
-        (st.runner.position_m() - start) * 1e3
-    );
-    st.finish("take axis", line);
-
-    // ---- 2. identification position ----
-    let width = datasheet.travel_max_m - datasheet.travel_min_m;
-    let id_pos = datasheet.travel_max_m - (0.12 * width).max(0.05);
-    st.start("move to worst-case position", 0);
-    move_to(st.runner, &boot, id_pos, &pos_limits, 0.1)?;
-    let line = format!(
-        "at {:.1} mm (cart far from the motor: longest belt segment, lowest resonance)",
-        st.runner.position_m() * 1e3
-    );
-    st.finish("position", line);
+    // ---- 2. take the axis, identification position ----
+    let taken = stages::take_axis::take_axis(&mut st, plaus.bootstrap, datasheet)?;
+    let boot = taken.bootstrap;
+    let id_pos = taken.identification_position_m;
 
     // ---- 3. holding torque ----
-    st.start("holding torque", 0);
-    let holding = holding_torque(st.runner, &boot, id_pos, datasheet)?;
-    let line = format!(
-        "{holding:+.4} N m (mean of slow up and down runs: friction cancels; offset for the open-loop excitation)"
-    );
-    st.finish("holding torque", line);
+    let holding = stages::holding_torque::holding_torque_stage(&mut st, &boot, id_pos, datasheet)?;
     let mut boot_hold = boot;
     boot_hold.torque_offset_nm = holding;
     st.runner.set_stop_controller(boot_hold);
 
     // ---- 4. excitation amplitude ----
     let ex = &cfg.excitation;
-    st.start("excitation amplitude", 0);
-    let amplitude = match ex.fixed_amplitude_nm {
-        Some(a) => crate::error::require_positive("excitation amplitude [N m]", a)?.min(torque_max),
-        None => find_amplitude(
-            st.runner,
-            &boot_hold,
-            id_pos,
-            &pos_limits,
-            holding,
-            torque_max,
-            ex,
-        )?,
-    };
-    let line = format!(
-        "A_PRBS = {:.3} N m (+-{:.3} N m around the holding torque)",
-        amplitude,
-        amplitude / 2.0
-    );
-    st.finish("excitation", line);
+    let amplitude = stages::amplitude::amplitude_stage(
+        &mut st,
+        &boot_hold,
+        id_pos,
+        &pos_limits,
+        holding,
+        torque_max,
+        ex,
+    )?;
 
     // ---- 5. identification ----
-    let mut prbs = Prbs::new(ex.prbs_order, ex.clock_period, amplitude)?;
-    let period = prbs.period_samples() as usize;
-    let n = period * (ex.periods + ex.skip_periods);
-    st.start("identification (open loop)", n as u64);
-    move_to(st.runner, &boot_hold, id_pos, &pos_limits, 0.05)?;
-    let mut cmd = Vec::with_capacity(n);
-    let mut act = Vec::with_capacity(n);
-    let mut ang = Vec::with_capacity(n);
-    let mut pos = Vec::with_capacity(n);
-    let t_start = st.runner.busy_time_s();
-    for _ in 0..n {
-        let tau = holding + prbs.step();
-        let s = st.runner.step(tau, None)?;
-        cmd.push(s.torque_command_nm);
-        act.push(s.torque_actual_nm);
-        ang.push(s.motor_angle_rad);
-        pos.push(s.position_m);
-    }
-    let t0 = Instant::now();
-    let f_max = 0.4 / ts; // below 0.4 f_s: the PRBS spectrum and the Tustin/ZOH effects stay mild
-    let ecfg = EtfeConfig {
-        sample_time_s: ts,
-        period_samples: period,
-        skip_periods: ex.skip_periods,
-        integrator: true,
-        band_hz: Some((
-            ex.fit_band_min_hz,
-            f_max.min(1.0 / (ex.clock_period as f64 * ts)),
-        )),
-        ..EtfeConfig::default()
-    };
-    let frf = etfe(&cmd, &ang, &ecfg)?;
+    let mut ident = stages::identification::identification(
+        &mut st,
+        &boot_hold,
+        id_pos,
+        &pos_limits,
+        holding,
+        amplitude,
+        ex,
+        datasheet,
+    )?;
+    let p = ident.fit.params;
     let excitation = ExcitationTrace {
-        time_s: (0..n).map(|k| t_start + k as f64 * ts).collect(),
-        torque_command_nm: cmd.clone(),
-        position_m: pos,
-        torque_limit_nm: torque_max,
+        time_s: std::mem::take(&mut ident.excitation_time_s),
+        torque_command_nm: std::mem::take(&mut ident.excitation_torque_nm),
+        position_m: std::mem::take(&mut ident.excitation_position_m),
+        torque_max_nm: torque_max,
         travel_min_m: datasheet.travel_min_m,
         travel_max_m: datasheet.travel_max_m,
     };
-    let frf_actual = etfe(&act, &ang, &ecfg)?;
-    let fcfg = FitConfig {
-        theta_e: Some(datasheet.theta_e_kg_m2),
-        i_t: datasheet.i_t_m,
-        n_log_lines: ex.n_log_lines,
-        ..FitConfig::default()
-    };
-    let fit = fit_two_mass(&frf, &fcfg)?;
-    let f_band = ecfg.band_hz.map(|b| b.1).unwrap_or(0.5 / ts);
-    if !(fit.f_z_hz.is_finite()
-        && fit.f_r_hz.is_finite()
-        && fit.f_r_hz < f_band
-        && fit.f_z_hz > 0.0)
-    {
-        return Err(Error::FitFailed {
-            reason: format!(
-                "the fitted model (f_r {:.3e} Hz, f_z {:.3e} Hz) has no resonance inside the measured band up to {:.0} Hz; check the excitation and the data sheet",
-                fit.f_r_hz, fit.f_z_hz, f_band
-            ),
-        });
-    }
-    let max_dt = (10e-3 / ts) as usize;
-    let dead_time = estimate_dead_time(&frf, &frf_actual, fit.f_r_hz, max_dt)?;
-    st.compute_s += t0.elapsed().as_secs_f64();
-    let identified = IdentifiedModel::from_fit(&fit, &frf, dead_time.seconds, id_pos);
-    let p = fit.params;
-    let mean_coh = identified.mean_coherence;
-    let line = format!(
-        "f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.2} kg, c {:.1} kN/m, d_m {:.2} N s/m, d_c {:.2} N s/m, dead time {:.2} ms, fit {:.2} dB rms, coherence {:.3}",
-        fit.f_r_hz,
-        fit.f_z_hz,
-        p.m_c,
-        p.c / 1e3,
-        p.d_m,
-        p.d_c,
-        dead_time.seconds * 1e3,
-        fit.fit_rms_db,
-        mean_coh
-    );
-    st.finish("identification", line);
 
     // ---- 6. design ----
-    st.start("controller design", 0);
-    let t0 = Instant::now();
-    let input = DesignInput {
-        model: p,
-        dead_time_s: dead_time.seconds,
-        t_r_s: cfg.t_r_s,
-        ts_s: ts,
-        friction: None,
-    };
-    let des = design(&input, &cfg.knobs)?;
-    st.compute_s += t0.elapsed().as_secs_f64();
-    let feedback = cascade_from_design(&des, torque_max, holding)?;
-    st.runner.set_stop_controller(feedback);
-    let line = format!(
-        "K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s; velocity loop {:.1} Hz / {:.1} deg, position loop {:.1} Hz / {:.1} deg, {:.2} dB at w_r",
-        des.k_p,
-        des.k_i,
-        des.k_pp,
-        des.velocity_margins.crossover_rad_s / (2.0 * std::f64::consts::PI),
-        des.velocity_margins.phase_margin_deg,
-        des.position_margins.crossover_rad_s / (2.0 * std::f64::consts::PI),
-        des.position_margins.phase_margin_deg,
-        des.gain_at_resonance_db
-    );
-    st.finish("design", line);
+    let designed = stages::design::design_stage(
+        &mut st,
+        &ident.fit,
+        ident.dead_time.seconds,
+        torque_max,
+        holding,
+        cfg,
+    )?;
+    let feedback = designed.feedback;
 
     // ---- 7. friction ----
-    st.start("friction runs", 0);
-    let n_t = (dead_time.seconds / ts).round() as usize;
+    let n_t = (ident.dead_time.seconds / ts).round() as usize;
     let mut ff_lin_cfg = feedback;
     ff_lin_cfg.feedforward = Feedforward::linear(p.rigid_inertia(), 0.0);
-    let points = friction_runs(st.runner, &ff_lin_cfg, datasheet, cfg, n_t, fit.f_z_hz)?;
-    let t0 = Instant::now();
-    let mut friction_fit = fit_constant_velocity(&points)?;
-    let linear_fit = fit_viscous_only(&points)?;
-    if friction_fit.coulomb_nm < 0.0 || friction_fit.viscous_nms_per_rad < 0.0 {
-        // A physical friction model has both terms >= 0; a negative Coulomb
-        // term means the runs show none (a purely viscous axis).
-        friction_fit = FrictionFit {
-            coulomb_nm: 0.0,
-            ..linear_fit
-        };
-    }
-    st.compute_s += t0.elapsed().as_secs_f64();
-    let torque_rms = (points.iter().map(|r| r.mean_torque_nm.powi(2)).sum::<f64>()
-        / points.len().max(1) as f64)
-        .sqrt();
-    let friction = FrictionResult {
-        viscous: friction_fit.viscous_nms_per_rad.max(0.0),
-        coulomb: friction_fit.coulomb_nm,
-        linear_viscous: linear_fit.viscous_nms_per_rad.max(0.0),
-        relative_residual: friction_fit.rms_residual_nm / torque_rms.max(f64::MIN_POSITIVE),
-        holding_torque_nm: holding,
-    };
-    let line = format!(
-        "d_v {:.3e} N m s/rad, tau_c {:.4} N m (viscous-only fit {:.3e}), {} runs, residual {:.3}",
-        friction.viscous,
-        friction.coulomb,
-        friction.linear_viscous,
-        points.len(),
-        friction.relative_residual
-    );
-    st.finish("friction", line);
-    let input = DesignInput {
+    let fr = stages::friction::friction_stage(
+        &mut st,
+        &ff_lin_cfg,
+        datasheet,
+        cfg,
+        n_t,
+        ident.fit.f_z_hz,
+        holding,
+    )?;
+    let input = crate::design::DesignInput {
         friction: Some(FrictionParams {
-            viscous_n_m_s_per_rad: friction.viscous,
-            coulomb_n_m: friction.coulomb,
+            viscous_nm_s_per_rad: fr.result.viscous_nm_s_per_rad,
+            coulomb_nm: fr.result.coulomb_nm,
         }),
-        ..input
+        ..designed.design.input
     };
     let des = ControllerDesign {
         feedforward: crate::design::Feedforward::design(&p, input.friction.as_ref())?,
         input,
-        ..des
+        ..designed.design
     };
 
     // ---- 8. validation ----
-    let m_e = p.rigid_inertia();
-    let opts = validation_track_options(&p, dead_time.seconds, ts, holding);
-    let move_samples = ((cfg.validation.settle_s + 1.5) / ts) as u64 * 3;
-    st.start("validation moves", move_samples);
-    let mut moves: Vec<MoveResult> = Vec::with_capacity(3);
-    let return_limits = Limits {
-        position_min: datasheet.travel_min_m,
-        position_max: datasheet.travel_max_m,
-        ..cfg.validation.limits
-    };
-    for variant in FeedforwardVariant::ALL {
-        let c = validation_controller(&feedback, m_e, &friction, variant);
-        // Return to the start with the thesis' own limits (it is not measured).
-        moves.push(run_move(
-            st.runner,
-            &feedback,
-            &return_limits,
-            &c,
-            opts,
-            &cfg.validation,
-        )?);
-    }
-    let validation = Validation {
-        none: moves[0].summary.clone(),
-        linear: moves[1].summary.clone(),
-        nonlinear: moves[2].summary.clone(),
-    };
-    let line = format!(
-        "max cart error: none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm; static (nonlinear) {:.1} um",
-        validation.none.max_tracking_error_m * 1e3,
-        validation.linear.max_tracking_error_m * 1e3,
-        validation.nonlinear.max_tracking_error_m * 1e3,
-        validation.nonlinear.static_error_m * 1e6
-    );
-    st.finish("validation", line);
+    let val = stages::validation_moves::validation_moves(
+        &mut st, &feedback, &ident.fit, &fr.result, n_t, holding, datasheet, cfg,
+    )?;
     let experiment_time_s = st.runner.busy_time_s();
     let log = std::mem::take(&mut st.log);
     let computation_time_s = st.compute_s;
-    let moves: [MoveResult; 3] = moves.try_into().map_err(|_| Error::TooShort {
-        what: "validation moves".into(),
-        needed: 3,
-        got: 0,
-    })?;
     Ok(Commissioning {
         datasheet: *datasheet,
         identification_position_m: id_pos,
         holding_torque_nm: holding,
         excitation_amplitude_nm: amplitude,
-        frf,
-        fit,
-        dead_time,
-        identified,
+        frf: ident.frf,
+        fit: ident.fit,
+        dead_time: ident.dead_time,
+        identified: ident.identified,
         design: des,
-        friction_points: points,
-        friction_fit,
-        friction,
-        moves,
-        validation,
+        friction_points: fr.points,
+        friction_fit: fr.fit,
+        friction: fr.result,
+        moves: val.moves,
+        validation: val.validation,
         excitation,
         experiment_time_s,
         computation_time_s,
@@ -660,207 +496,4 @@ pub fn cascade_from_design(
     c.feedforward = Feedforward::none();
     c.torque_offset_nm = torque_offset_nm;
     Ok(c)
-}
-
-/// Hold the current position with `ctrl` for `duration_s` (no following-error
-/// check: the load may sag while the integrator takes it).
-fn hold(runner: &mut Runner, ctrl: &CascadeConfig<f64>, duration_s: f64) -> Result<Vec<Sample>> {
-    let ts = runner.info().sample_time_s;
-    let mut c = CascadeController::new(*ctrl)?;
-    let target = runner.motor_angle_rad();
-    c.reset_to(target);
-    let n = (duration_s / ts).ceil() as usize;
-    let mut out = Vec::with_capacity(n);
-    for _ in 0..n {
-        let o = c.step(&Setpoint::hold(target), runner.motor_angle_rad());
-        out.push(runner.step(o.torque_nm, None)?);
-    }
-    Ok(out)
-}
-
-/// Stage 3: the torque that holds the cart against gravity, from a slow run up
-/// and a slow run down around `center_m`: the mean of the two mean torques
-/// cancels Coulomb and viscous friction (thesis chapter 7 proposes an
-/// integrating position loop; its static torque is only known within the
-/// friction band, this is not).
-fn holding_torque(
-    runner: &mut Runner,
-    ctrl: &CascadeConfig<f64>,
-    center_m: f64,
-    ds: &DataSheet,
-) -> Result<f64> {
-    let v = 0.1;
-    let half = 0.03;
-    let limits = Limits {
-        v_max: v,
-        v_min: -v,
-        a_max: 4.0,
-        a_min: -4.0,
-        j_max: 100.0,
-        j_min: -100.0,
-        position_min: ds.travel_min_m,
-        position_max: ds.travel_max_m,
-    };
-    move_to(runner, ctrl, center_m - half, &positioning_limits(ds), 0.05)?;
-    let mut torques = Vec::new();
-    for target in [center_m + half, center_m - half] {
-        let traj = Trajectory::plan(
-            &State::at_rest(runner.position_m()),
-            &State::at_rest(target),
-            &limits,
-        )?;
-        let rec = track(runner, ctrl, &traj, 0.0, TrackOptions::default())?;
-        let point = constant_velocity_point(&rec, v, None).ok_or_else(|| Error::TooShort {
-            what: "holding-torque run (constant-velocity part)".into(),
-            needed: 40,
-            got: 0,
-        })?;
-        torques.push(point.mean_torque_nm);
-    }
-    move_to(runner, ctrl, center_m, &positioning_limits(ds), 0.05)?;
-    Ok(0.5 * (torques[0] + torques[1]))
-}
-
-/// Stage 4: increase the PRBS amplitude from a small value until the motor
-/// moves in most 2 ms windows (the response clears friction and quantization),
-/// re-centring between bursts. Never beyond the maximum fraction of the torque limit.
-fn find_amplitude(
-    runner: &mut Runner,
-    hold: &CascadeConfig<f64>,
-    center_m: f64,
-    limits: &Limits,
-    holding_nm: f64,
-    torque_max: f64,
-    ex: &ExcitationConfig,
-) -> Result<f64> {
-    let window = 20usize;
-    let mut a = ex.amplitude_start_fraction * torque_max;
-    let a_max = ex.amplitude_max_fraction * torque_max;
-    loop {
-        let mut prbs = Prbs::new(ex.prbs_order, ex.clock_period, a)?;
-        move_to(runner, hold, center_m, limits, 0.05)?;
-        let mut counts = Vec::with_capacity(ex.burst_samples);
-        for _ in 0..ex.burst_samples {
-            runner.step(holding_nm + prbs.step(), None)?;
-            counts.push(runner.last().motor_counts);
-        }
-        let windows = counts.len() / window;
-        let moving = (0..windows)
-            .filter(|w| counts[w * window] != counts[(w + 1) * window - 1])
-            .count();
-        let fraction = moving as f64 / windows.max(1) as f64;
-        if fraction >= ex.moving_fraction {
-            return Ok((a * ex.amplitude_margin).min(a_max));
-        }
-        if a >= a_max {
-            return Err(Error::NoExcitation {
-                what: format!(
-                    "the axis does not move freely even at A_PRBS = {a:.3} N m ({:.0} % of 2 ms windows moving); check brakes and friction",
-                    fraction * 100.0
-                ),
-            });
-        }
-        a = (a * ex.amplitude_growth).min(a_max);
-    }
-}
-
-/// Stage 7: constant-velocity runs back and forth (thesis 3.6, "periodic
-/// triangular-shaped reference"), the running-in part discarded; one point per
-/// run: mean motor velocity and mean torque over the constant-velocity part.
-fn friction_runs(
-    runner: &mut Runner,
-    ctrl: &CascadeConfig<f64>,
-    ds: &DataSheet,
-    cfg: &CommissioningConfig,
-    preview: usize,
-    f_ring_hz: f64,
-) -> Result<Vec<ConstantVelocityRun>> {
-    let center = 0.5 * (ds.travel_min_m + ds.travel_max_m);
-    let half = 0.5 * cfg.friction_run_m;
-    let a_run = 10.0;
-    let pos_limits = positioning_limits(ds);
-    move_to(runner, ctrl, center - half, &pos_limits, 0.05)?;
-    let mut points = Vec::new();
-    let opts = TrackOptions {
-        preview_samples: preview,
-        check_following_error: true,
-        ..Default::default()
-    };
-    for &v in &cfg.friction_speeds_m_s {
-        for target in [center + half, center - half] {
-            let limits = Limits {
-                v_max: v,
-                v_min: -v,
-                a_max: a_run,
-                a_min: -a_run,
-                j_max: 20.0 * a_run,
-                j_min: -20.0 * a_run,
-                position_min: ds.travel_min_m,
-                position_max: ds.travel_max_m,
-            };
-            let traj = Trajectory::plan(
-                &State::at_rest(runner.position_m()),
-                &State::at_rest(target),
-                &limits,
-            )?;
-            let rec = track(runner, ctrl, &traj, 0.02, opts)?;
-            if let Some(p) = constant_velocity_point(&rec, v, Some(f_ring_hz)) {
-                // The torque offset (holding torque) is gravity, not friction (3.35).
-                points.push(ConstantVelocityRun {
-                    mean_torque_nm: p.mean_torque_nm - ctrl.torque_offset_nm,
-                    ..p
-                });
-            }
-        }
-    }
-    Ok(points)
-}
-
-/// Running-in time discarded at the start of a constant-velocity plateau
-/// (thesis 3.6), s: several time constants of the velocity loop and of the
-/// cart's oscillation after the acceleration phase.
-const RUNNING_IN_S: f64 = 0.05;
-
-/// Mean velocity and torque over the part of a run where the desired velocity
-/// is at its plateau, after the running-in time.
-///
-/// The cart rings at about the antiresonance after the acceleration phase
-/// (lightly damped belt mode); averaging over a whole number of periods of
-/// `f_ring_hz` cancels that oscillation from the mean torque and velocity.
-fn constant_velocity_point(
-    rec: &TrackRecord,
-    v: f64,
-    f_ring_hz: Option<f64>,
-) -> Option<ConstantVelocityRun> {
-    let plateau: Vec<usize> = (0..rec.samples.len())
-        .filter(|&k| (rec.desired_velocity_m_s[k].abs() - v).abs() < 1e-6 * v.max(1.0))
-        .collect();
-    let ts = rec.time_s.get(1).copied().unwrap_or(1.0);
-    let skip = (RUNNING_IN_S / ts).round() as usize;
-    if plateau.len() < skip + 100 {
-        return None;
-    }
-    let mut end = plateau.len();
-    if let Some(f) = f_ring_hz.filter(|f| f.is_finite() && *f > 0.0) {
-        let period = (1.0 / (f * ts)).round() as usize;
-        let whole = (end - skip) / period.max(1) * period;
-        if whole >= 100 {
-            end = skip + whole;
-        }
-    }
-    let plateau = &plateau[..end];
-    let used: &[usize] = &plateau[skip..];
-    let first = &rec.samples[used[0]];
-    let last = &rec.samples[*used.last()?];
-    let dt = rec.time_s[*used.last()?] - rec.time_s[used[0]];
-    let velocity_rad_s = (last.motor_angle_rad - first.motor_angle_rad) / dt;
-    let torque_nm = used
-        .iter()
-        .map(|&k| rec.samples[k].torque_command_nm)
-        .sum::<f64>()
-        / used.len() as f64;
-    Some(ConstantVelocityRun {
-        velocity_rad_s,
-        mean_torque_nm: torque_nm,
-    })
 }

@@ -121,13 +121,13 @@ const ROWS: [(&str, &str, &[&str], f64); 20] = [
     (
         "viscous friction d_v",
         "mN m s/rad",
-        &["friction", "viscous"],
+        &["friction", "viscous_nm_s_per_rad"],
         1e3,
     ),
     (
         "Coulomb friction tau_c",
         "N m",
-        &["friction", "coulomb"],
+        &["friction", "coulomb_nm"],
         1.0,
     ),
     ("K_P", "N m s/rad", &["controller", "k_p"], 1.0),

@@ -17,5 +17,6 @@ pub mod recorded;
 pub mod report_build;
 pub mod result;
 pub mod runner;
+pub mod stages;
 pub mod validation;
 pub mod verdict;

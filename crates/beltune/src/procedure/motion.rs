@@ -66,7 +66,7 @@ pub fn track(
     settle_s: f64,
     opts: TrackOptions,
 ) -> Result<TrackRecord> {
-    let ts = runner.info().sample_time_s;
+    let ts = runner.info().ts_s;
     let mut ctrl = CascadeController::new(*config)?;
     ctrl.reset_to(runner.motor_angle_rad());
     let conv = SetpointConversion::new(runner.i_t(), opts.belt_stretch)?;

@@ -47,7 +47,7 @@ pub struct ControllerToml {
     /// Sampling time `T_s`, s.
     pub ts_s: f64,
     /// Torque limit, N m.
-    pub torque_limit_nm: f64,
+    pub torque_max_nm: f64,
     /// Constant torque offset (holding torque), N m.
     pub torque_offset_nm: f64,
     /// Continuous gains.
@@ -126,9 +126,9 @@ pub struct FeedforwardToml {
 pub fn controller_toml(
     des: &ControllerDesign,
     friction: &FrictionResult,
-    torque_limit_nm: f64,
+    torque_max_nm: f64,
 ) -> Result<String> {
-    let cfg = cascade_from_design(des, torque_limit_nm, friction.holding_torque_nm)?;
+    let cfg = cascade_from_design(des, torque_max_nm, friction.holding_torque_nm)?;
     let s = des.discrete.prefilter;
     let v = cfg.velocity_filter;
     let (kind, omega_bw, omega_r, d_n) = match des.prefilter {
@@ -141,7 +141,7 @@ pub fn controller_toml(
     let model = des.input.model;
     let doc = ControllerToml {
         ts_s: des.input.ts_s,
-        torque_limit_nm,
+        torque_max_nm,
         torque_offset_nm: friction.holding_torque_nm,
         gains: GainsToml {
             k_pp_per_s: des.k_pp,
@@ -162,9 +162,9 @@ pub fn controller_toml(
         },
         feedforward: FeedforwardToml {
             inertia_kg_m2: model.rigid_inertia(),
-            viscous_nm_s_per_rad: friction.viscous,
-            coulomb_nm: friction.coulomb,
-            linear_viscous_nm_s_per_rad: friction.linear_viscous,
+            viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+            coulomb_nm: friction.coulomb_nm,
+            linear_viscous_nm_s_per_rad: friction.linear_viscous_nm_s_per_rad,
             preview_samples: (des.input.dead_time_s / des.input.ts_s).round() as usize,
             belt_stretch_s2: model.m_c / model.c,
             static_stretch_m: friction.holding_torque_nm / (model.i_t * model.c),
@@ -223,31 +223,300 @@ pub fn recorded_outputs(
     Ok((json, report))
 }
 
-/// Write the three files into `dir` (created if needed), each atomically.
-/// Returns their paths.
+/// The files of one commissioning result, in the order they are listed.
+pub const OUTPUT_FILES: [&str; 3] = ["commissioning.json", "controller.toml", "report.html"];
+
+/// Name of the symlink to the newest run in a history folder.
+pub const LATEST_LINK: &str = "latest";
+
+/// Where a commissioning run writes its result.
+#[derive(Clone, Debug, PartialEq)]
+pub enum OutputTarget {
+    /// A new timestamped folder `root/YYYY-MM-DDTHHMMSSZ` per run, with the
+    /// symlink `root/latest` pointing at the newest.
+    History {
+        /// The history folder (`commissioning` by default).
+        root: PathBuf,
+    },
+    /// Exactly this folder: new or empty; one holding a result (a
+    /// `commissioning.json`) only with `force`, and then the whole set is
+    /// replaced. A folder with other files is never replaced.
+    Exact {
+        /// The folder.
+        dir: PathBuf,
+        /// Replace an existing result.
+        force: bool,
+    },
+}
+
+/// Write the three files into `dir` as one set: [`crate::io::write_folder_atomic`]
+/// replaces the folder as a whole (new, empty or an existing result), so
+/// the files change together or not at all. Returns their paths.
 pub fn write_outputs(
     dir: &Path,
     json: &CommissioningJson,
     controller_toml: &str,
     report_html: &str,
 ) -> Result<Vec<PathBuf>> {
-    let json_text = serde_json::to_string_pretty(json).map_err(|e| Error::Report {
+    write_texts(dir, &json_text(json)?, controller_toml, report_html, &[])
+}
+
+/// Write the result to `target` (see [`OutputTarget`]); returns the paths.
+pub fn write_outputs_to(
+    target: &OutputTarget,
+    json: &CommissioningJson,
+    controller_toml: &str,
+    report_html: &str,
+) -> Result<Vec<PathBuf>> {
+    write_texts_to(target, &json_text(json)?, controller_toml, report_html, &[])
+}
+
+/// [`write_outputs_to`] with the report's data files (`frf.csv`, ... as
+/// (name, text)) in the same set: all files appear together or not at all.
+pub fn write_outputs_with_data(
+    target: &OutputTarget,
+    json: &CommissioningJson,
+    controller_toml: &str,
+    report_html: &str,
+    data_files: &[(String, String)],
+) -> Result<Vec<PathBuf>> {
+    write_texts_to(
+        target,
+        &json_text(json)?,
+        controller_toml,
+        report_html,
+        data_files,
+    )
+}
+
+fn json_text(json: &CommissioningJson) -> Result<String> {
+    serde_json::to_string_pretty(json).map_err(|e| Error::Report {
         reason: format!("commissioning.json: {e}"),
-    })?;
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
-    let files = [
-        ("commissioning.json", json_text.as_bytes()),
-        ("controller.toml", controller_toml.as_bytes()),
-        ("report.html", report_html.as_bytes()),
+    })
+}
+
+fn write_texts(
+    dir: &Path,
+    json_text: &str,
+    controller_toml: &str,
+    report_html: &str,
+    data_files: &[(String, String)],
+) -> Result<Vec<PathBuf>> {
+    check_finite_text("controller.toml", controller_toml)?;
+    crate::io::clean_stale_temporaries(&output_parent(dir));
+    let mut files: Vec<(&str, &[u8])> = vec![
+        (OUTPUT_FILES[0], json_text.as_bytes()),
+        (OUTPUT_FILES[1], controller_toml.as_bytes()),
+        (OUTPUT_FILES[2], report_html.as_bytes()),
     ];
-    let mut out = Vec::new();
-    for (name, bytes) in files {
-        let p = dir.join(name);
-        crate::io::write_atomic(&p, bytes)?;
-        out.push(p);
+    files.extend(data_files.iter().map(|(n, t)| (n.as_str(), t.as_bytes())));
+    crate::io::write_folder_atomic(dir, &files)
+}
+
+fn write_texts_to(
+    target: &OutputTarget,
+    json_text: &str,
+    controller_toml: &str,
+    report_html: &str,
+    data_files: &[(String, String)],
+) -> Result<Vec<PathBuf>> {
+    match target {
+        OutputTarget::Exact { dir, force } => {
+            check_exact_target(dir, *force)?;
+            write_texts(dir, json_text, controller_toml, report_html, data_files)
+        }
+        OutputTarget::History { root } => {
+            std::fs::create_dir_all(root).map_err(|source| Error::Io {
+                path: root.clone(),
+                source,
+            })?;
+            crate::io::clean_stale_temporaries(root);
+            let stamp = humantime::format_rfc3339_seconds(std::time::SystemTime::now())
+                .to_string()
+                .replace(':', "");
+            let mut name = stamp.clone();
+            let mut k = 1;
+            while std::fs::symlink_metadata(root.join(&name)).is_ok() {
+                k += 1;
+                name = format!("{stamp}-{k}");
+            }
+            let files = write_texts(
+                &root.join(&name),
+                json_text,
+                controller_toml,
+                report_html,
+                data_files,
+            )?;
+            point_latest(root, &name)?;
+            Ok(files)
+        }
     }
-    Ok(out)
+}
+
+/// The folder beside which the temporary of `dir` lives.
+fn output_parent(dir: &Path) -> PathBuf {
+    match dir.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// `--out DIR` without `--force` must be new or empty; with it, a folder that
+/// holds a result. A folder with other contents is refused either way.
+fn check_exact_target(dir: &Path, force: bool) -> Result<()> {
+    let err = |message: String| Error::Parse {
+        path: dir.display().to_string(),
+        message,
+    };
+    let entries: Vec<String> = match std::fs::read_dir(dir) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => {
+            return Err(err(format!(
+                "cannot use as output folder: {}",
+                crate::io::describe(&e)
+            )))
+        }
+        Ok(d) => d
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect(),
+    };
+    if entries.is_empty() {
+        return Ok(());
+    }
+    if !entries.iter().any(|e| e == OUTPUT_FILES[0]) {
+        return Err(err(
+            "the output folder is not empty and holds no commissioning result; \
+             choose a new or empty folder"
+                .into(),
+        ));
+    }
+    if !force {
+        return Err(err(
+            "the output folder already holds a commissioning result; pass --force to \
+             replace it, or leave out --out to keep every run under commissioning/"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Point `root/latest` at `name`: a new symlink renamed over the old one.
+fn point_latest(root: &Path, name: &str) -> Result<()> {
+    let link = root.join(LATEST_LINK);
+    if std::fs::symlink_metadata(&link).is_ok_and(|m| !m.file_type().is_symlink()) {
+        return Err(Error::Parse {
+            path: link.display().to_string(),
+            message: "is not a symlink; remove it so that it can point at the newest run".into(),
+        });
+    }
+    let tmp = root.join(crate::io::temporary_name(LATEST_LINK));
+    let io = |source| Error::Io {
+        path: link.clone(),
+        source,
+    };
+    std::os::unix::fs::symlink(name, &tmp).map_err(io)?;
+    std::fs::rename(&tmp, &link).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(e)
+    })?;
+    crate::io::sync_dir(root);
+    Ok(())
+}
+
+/// Nothing non-finite reaches a file: `inf`/`nan` in a TOML text is an error.
+fn check_finite_text(name: &str, text: &str) -> Result<()> {
+    let bad = text.lines().find(|l| {
+        let v = l.split_once('=').map_or("", |(_, v)| v);
+        v.split(|c: char| !(c.is_ascii_alphanumeric() || c == '.'))
+            .any(|w| matches!(w, "inf" | "nan" | "NaN"))
+    });
+    match bad {
+        Some(line) => Err(Error::Report {
+            reason: format!(
+                "{name}: refusing to write a non-finite value: `{}`",
+                line.trim()
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod output_tests {
+    use super::*;
+
+    const JSON: &str = "{}";
+
+    fn temp(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("beltune-out-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn history_keeps_every_run_and_latest_points_at_the_newest_issue_16_4() {
+        let root = temp("history").join("commissioning");
+        let target = OutputTarget::History { root: root.clone() };
+        let a = write_texts_to(&target, JSON, "a = 1\n", "<p>1</p>", &[]).unwrap();
+        let b = write_texts_to(&target, JSON, "a = 2\n", "<p>2</p>", &[]).unwrap();
+        assert_ne!(a[0].parent(), b[0].parent());
+        assert_eq!(std::fs::read_to_string(&a[1]).unwrap(), "a = 1\n");
+        let latest = root.join(LATEST_LINK);
+        assert_eq!(
+            std::fs::read_to_string(latest.join("controller.toml")).unwrap(),
+            "a = 2\n"
+        );
+        // Two runs and the link, no temporaries.
+        assert_eq!(std::fs::read_dir(&root).unwrap().count(), 3);
+        std::fs::remove_dir_all(root.parent().unwrap()).unwrap();
+    }
+
+    #[test]
+    fn exact_output_needs_force_over_a_result_and_refuses_foreign_folders_issue_16_4() {
+        let dir = temp("exact");
+        let out = dir.join("out");
+        let exact = |force| OutputTarget::Exact {
+            dir: out.clone(),
+            force,
+        };
+        write_texts_to(&exact(false), JSON, "a = 1\n", "", &[]).unwrap();
+        let e = write_texts_to(&exact(false), JSON, "a = 2\n", "", &[]).unwrap_err();
+        assert!(e.to_string().contains("--force"), "{e}");
+        write_texts_to(&exact(true), JSON, "a = 2\n", "", &[]).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(out.join("controller.toml")).unwrap(),
+            "a = 2\n"
+        );
+        let foreign = dir.join("foreign");
+        std::fs::create_dir_all(&foreign).unwrap();
+        std::fs::write(foreign.join("notes.txt"), "mine").unwrap();
+        let target = OutputTarget::Exact {
+            dir: foreign.clone(),
+            force: true,
+        };
+        let e = write_texts_to(&target, JSON, "a = 1\n", "", &[]).unwrap_err();
+        assert!(e.to_string().contains("not empty"), "{e}");
+        assert!(foreign.join("notes.txt").exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_non_finite_controller_is_never_written_issue_13_2() {
+        let dir = temp("finite");
+        let out = dir.join("out");
+        for bad in [
+            "k_p = inf\n",
+            "k_p = -inf\n",
+            "k_p = nan\n",
+            "sos = [1.0, nan]\n",
+        ] {
+            let e = write_texts(&out, JSON, bad, "", &[]).unwrap_err();
+            assert!(e.to_string().contains("non-finite"), "{bad}: {e}");
+        }
+        assert!(!out.exists());
+        write_texts(&out, JSON, "kind = \"notch\"\nk = 1e300\n", "", &[]).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

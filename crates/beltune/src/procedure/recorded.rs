@@ -57,9 +57,9 @@ pub fn commission_recorded(
         ),
     };
     let friction = motion_friction.map(|m| FrictionResult {
-        viscous: m.viscous.max(0.0),
-        coulomb: m.coulomb.max(0.0),
-        linear_viscous: m.viscous.max(0.0),
+        viscous_nm_s_per_rad: m.viscous.max(0.0),
+        coulomb_nm: m.coulomb.max(0.0),
+        linear_viscous_nm_s_per_rad: m.viscous.max(0.0),
         relative_residual: m.relative_residual,
         holding_torque_nm: m.offset,
     });
@@ -67,10 +67,10 @@ pub fn commission_recorded(
         model: p,
         dead_time_s,
         t_r_s,
-        ts_s: identification.sample_time_s,
+        ts_s: identification.ts_s,
         friction: friction.as_ref().map(|f| FrictionParams {
-            viscous_n_m_s_per_rad: f.viscous,
-            coulomb_n_m: f.coulomb,
+            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+            coulomb_nm: f.coulomb_nm,
         }),
     };
     let des = design(&input, knobs)?;
@@ -95,12 +95,12 @@ pub fn commission_recorded(
     log.push(match &friction {
         Some(f) => format!(
             "friction (from the motion record): d_v {:.4e}, tau_c {:.4e}, offset {:.4e}, relative residual {:.3}",
-            f.viscous, f.coulomb, f.holding_torque_nm, f.relative_residual
+            f.viscous_nm_s_per_rad, f.coulomb_nm, f.holding_torque_nm, f.relative_residual
         ),
         None => format!("friction: {skipped}: no motion record given"),
     });
     log.push(format!("validation moves: {skipped}"));
-    let record_time_s = identification.rows as f64 * identification.sample_time_s;
+    let record_time_s = identification.rows as f64 * identification.ts_s;
     Ok(RecordedCommissioning {
         identification,
         identified,

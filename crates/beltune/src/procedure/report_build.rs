@@ -437,8 +437,8 @@ pub fn build_report(
             .iter()
             .map(|p| p.mean_torque_nm)
             .collect(),
-        viscous_nm_s_per_rad: run.friction.viscous,
-        coulomb_nm: run.friction.coulomb,
+        viscous_nm_s_per_rad: run.friction.viscous_nm_s_per_rad,
+        coulomb_nm: run.friction.coulomb_nm,
     };
     let variants = FeedforwardVariant::ALL;
     let moves = run
@@ -480,16 +480,16 @@ pub fn build_report(
                 "viscous friction d_v",
                 "mN m s/rad",
                 None,
-                f.viscous * 1e3,
-                truth.map(|t| t.viscous * 1e3),
+                f.viscous_nm_s_per_rad * 1e3,
+                truth.map(|t| t.viscous_nm_s_per_rad * 1e3),
                 3,
             ),
             row(
                 "Coulomb friction tau_c",
                 "N m",
                 None,
-                f.coulomb,
-                truth.map(|t| t.coulomb),
+                f.coulomb_nm,
+                truth.map(|t| t.coulomb_nm),
                 4,
             ),
             row(
@@ -527,7 +527,7 @@ pub fn build_report(
         torque_nm: tau,
         position_time_s: t_pos,
         position_m: pos,
-        torque_limit_nm: ex.torque_limit_nm,
+        torque_limit_nm: ex.torque_max_nm,
         travel_min_m: ex.travel_min_m,
         travel_max_m: ex.travel_max_m,
     };
@@ -646,7 +646,7 @@ pub fn recorded_report(
                 "viscous friction d_v",
                 "(torque unit) s/rad",
                 None,
-                f.viscous,
+                f.viscous_nm_s_per_rad,
                 None,
                 5,
             ),
@@ -654,7 +654,7 @@ pub fn recorded_report(
                 "Coulomb friction tau_c",
                 "(torque unit)",
                 None,
-                f.coulomb,
+                f.coulomb_nm,
                 None,
                 5,
             ),

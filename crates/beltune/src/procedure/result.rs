@@ -76,12 +76,16 @@ impl IdentifiedModel {
 /// Friction seen at the motor (3.36).
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct FrictionResult {
-    /// Viscous coefficient `d_v~`, N m s/rad.
-    pub viscous: f64,
-    /// Coulomb torque `tau_c~`, N m.
-    pub coulomb: f64,
-    /// Viscous-only fit (the "linear" feedforward), N m s/rad.
-    pub linear_viscous: f64,
+    /// Viscous coefficient `d_v~`, N m s/rad (key `viscous` before schema 1).
+    #[serde(alias = "viscous")]
+    pub viscous_nm_s_per_rad: f64,
+    /// Coulomb torque `tau_c~`, N m (key `coulomb` before schema 1).
+    #[serde(alias = "coulomb")]
+    pub coulomb_nm: f64,
+    /// Viscous-only fit (the "linear" feedforward), N m s/rad (key
+    /// `linear_viscous` before schema 1).
+    #[serde(alias = "linear_viscous")]
+    pub linear_viscous_nm_s_per_rad: f64,
     /// Relative residual of the (3.36) fit.
     pub relative_residual: f64,
     /// Holding torque (gravity on a tilted axis), N m.
@@ -132,7 +136,9 @@ pub struct Truth {
     /// Dead time, s.
     pub dead_time_s: f64,
     /// Viscous friction at the motor, N m s/rad.
-    pub viscous: f64,
+    #[serde(alias = "viscous")]
+    pub viscous_nm_s_per_rad: f64,
     /// Coulomb friction at the motor, N m.
-    pub coulomb: f64,
+    #[serde(alias = "coulomb")]
+    pub coulomb_nm: f64,
 }

@@ -62,11 +62,11 @@ impl<'a> Runner<'a> {
         stop_limits: Limits,
     ) -> Result<Self> {
         let info = axis.info();
-        crate::error::require_positive("sample_time_s", info.sample_time_s)?;
+        crate::error::require_positive("ts_s", info.ts_s)?;
         crate::error::require_positive("motor_rad_per_count", info.motor_rad_per_count)?;
         crate::error::require_positive("i_t", i_t)?;
         crate::error::require_finite("origin_m", origin_m)?;
-        let coeffs = velocity_filter(SUPERVISION_T_R_S, info.sample_time_s)?;
+        let coeffs = velocity_filter(SUPERVISION_T_R_S, info.ts_s)?;
         let mut velocity = FirstOrder::new(coeffs);
         velocity.reset_to(origin_m, 0.0);
         Ok(Runner {
@@ -122,7 +122,7 @@ impl<'a> Runner<'a> {
 
     /// Busy time so far, s.
     pub fn busy_time_s(&self) -> f64 {
-        self.samples as f64 * self.info.sample_time_s
+        self.samples as f64 * self.info.ts_s
     }
 
     /// The last measurement.
@@ -156,11 +156,13 @@ impl<'a> Runner<'a> {
     }
 
     /// Apply one torque command (saturated to the axis' limit) after the
-    /// supervisor approved the state; on a violation, stop and return the error.
+    /// supervisor approved the state; on a violation, stop and return the
+    /// error. A failed exchange ends in the drive's quick stop and
+    /// [`Error::Axis`].
     pub fn step(&mut self, torque_nm: f64, following_error_m: Option<f64>) -> Result<Sample> {
         let limit = self
             .info
-            .torque_limit_nm
+            .torque_max_nm
             .min(self.supervisor.limits().torque_max_nm);
         let torque = if torque_nm.is_finite() {
             torque_nm.clamp(-limit, limit)
@@ -175,23 +177,70 @@ impl<'a> Runner<'a> {
         ) {
             return Err(self.stop_after(v));
         }
-        Ok(self.raw_step(torque))
+        self.raw_step(torque)
     }
 
-    fn raw_step(&mut self, torque_nm: f64) -> Sample {
-        let m = self.axis.step(torque_nm);
+    fn raw_step(&mut self, torque_nm: f64) -> Result<Sample> {
+        let m = match self.axis.exchange(torque_nm) {
+            Ok(m) => m,
+            Err(error) => {
+                // The host can no longer control the axis: the drive stops it.
+                let quick_stop = self.axis.quick_stop().err();
+                return Err(Error::Axis { error, quick_stop });
+            }
+        };
         self.last = m;
         self.samples += 1;
         self.progress.advance(1);
         let pos = self.position_m();
         self.velocity_m_s = self.velocity.step(pos);
-        Sample {
+        Ok(Sample {
             torque_command_nm: torque_nm,
             torque_actual_nm: m.torque_actual_nm,
             motor_angle_rad: self.motor_angle_rad(),
             position_m: pos,
             cart_position_m: m.cart_position_m,
+        })
+    }
+
+    /// Run the computation `f` without leaving the axis unsupervised. For an
+    /// axis whose time runs in real time ([`Axis::runs_in_real_time`]), `f`
+    /// runs on a scoped thread while this thread keeps the axis in closed loop
+    /// every cycle: the stop controller (bootstrap or designed) holds the
+    /// position the axis had when the computation started, under the
+    /// supervisor (following error included). An error of the hold (a
+    /// violation, a failed exchange) is returned after `f` has finished; a
+    /// panic in `f` is resumed here. For a simulated axis `f` just runs
+    /// (its time stands still meanwhile).
+    pub fn hold_while<T: Send>(&mut self, f: impl FnOnce() -> T + Send) -> Result<T> {
+        if !self.axis.runs_in_real_time() {
+            return Ok(f());
         }
+        let mut ctrl = CascadeController::new(self.stop_controller)?;
+        let hold_angle = self.motor_angle_rad();
+        ctrl.reset_to(hold_angle);
+        let sp = Setpoint::at(MotionSample {
+            angle_rad: hold_angle,
+            velocity_rad_s: 0.0,
+            acceleration_rad_s2: 0.0,
+        });
+        std::thread::scope(|scope| {
+            let job = scope.spawn(f);
+            let mut held = Ok(());
+            while !job.is_finished() {
+                let out = ctrl.step(&sp, self.motor_angle_rad());
+                let following = (self.motor_angle_rad() - hold_angle) * self.i_t;
+                if let Err(e) = self.step(out.torque_nm, Some(following)) {
+                    held = Err(e);
+                    break;
+                }
+            }
+            let value = match job.join() {
+                Ok(v) => v,
+                Err(panic) => std::panic::resume_unwind(panic),
+            };
+            held.map(|()| value)
+        })
     }
 
     /// Stop after a violation and turn it into the error that ends the command.
@@ -209,7 +258,7 @@ impl<'a> Runner<'a> {
     /// controller; returns the rest position, m. The supervisor is not asked
     /// during the stop (it is the reaction), but the torque stays limited.
     pub fn stop(&mut self) -> Result<f64> {
-        let ts = self.info.sample_time_s;
+        let ts = self.info.ts_s;
         let v = if self.velocity_m_s.is_finite() {
             self.velocity_m_s
         } else {
@@ -232,7 +281,7 @@ impl<'a> Runner<'a> {
         let mut ctrl = CascadeController::new(self.stop_controller)?;
         ctrl.reset_to(self.motor_angle_rad());
         let n = ((traj.duration_s() + STOP_SETTLE_S) / ts).ceil() as u64;
-        let limit = self.info.torque_limit_nm;
+        let limit = self.info.torque_max_nm;
         for k in 0..n {
             let s = traj.sample(k as f64 * ts);
             let sp = Setpoint::at(MotionSample {
@@ -246,8 +295,128 @@ impl<'a> Runner<'a> {
             } else {
                 0.0
             };
-            self.raw_step(tau);
+            self.raw_step(tau)?;
         }
         Ok(self.position_m())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::rigs;
+    use crate::plant::AxisError;
+    use crate::procedure::bootstrap::bootstrap_controller;
+    use crate::procedure::progress::NoProgress;
+    use crate::procedure::safety::SafetyLimits;
+    use crate::sim::{SimAxis, SimConfig};
+
+    /// A simulated axis that claims real time and counts its exchanges.
+    struct RealTime {
+        sim: SimAxis,
+        real_time: bool,
+        exchanges: u64,
+    }
+
+    impl Axis for RealTime {
+        fn info(&self) -> AxisInfo {
+            self.sim.info()
+        }
+        fn exchange(
+            &mut self,
+            torque_command_nm: f64,
+        ) -> std::result::Result<Measurement, AxisError> {
+            self.exchanges += 1;
+            // a bus cycle takes time: the computation thread runs meanwhile
+            std::thread::sleep(std::time::Duration::from_micros(100));
+            self.sim.exchange(torque_command_nm)
+        }
+        fn quick_stop(&mut self) -> std::result::Result<(), AxisError> {
+            Ok(())
+        }
+        fn runs_in_real_time(&self) -> bool {
+            self.real_time
+        }
+    }
+
+    fn with_runner<R>(real_time: bool, f: impl FnOnce(&mut Runner) -> R) -> (R, u64, f64) {
+        let plant = rigs::builtin("egc70", None).unwrap();
+        let info = plant.info();
+        let start = 0.3;
+        let mut axis = RealTime {
+            sim: SimAxis::new(
+                &plant,
+                SimConfig {
+                    initial_cart_position_m: Some(start),
+                    ..SimConfig::default()
+                },
+            )
+            .unwrap(),
+            real_time,
+            exchanges: 0,
+        };
+        let i_t = 0.078 / (2.0 * std::f64::consts::PI);
+        let j = 1.4e-4 + i_t * i_t * 12.16;
+        let ctrl = bootstrap_controller(j, i_t, info.ts_s, info.torque_max_nm).unwrap();
+        let sup = SafetySupervisor::new(
+            SafetyLimits {
+                travel_min_m: 0.0,
+                travel_max_m: 0.6,
+                torque_max_nm: info.torque_max_nm,
+                velocity_max_m_s: 1.0,
+                following_error_max_m: 0.01,
+            },
+            5.0,
+        )
+        .unwrap();
+        let limits = Limits {
+            v_max: 0.5,
+            v_min: -0.5,
+            a_max: 4.0,
+            a_min: -4.0,
+            j_max: 40.0,
+            j_min: -40.0,
+            position_min: 0.0,
+            position_max: 0.6,
+        };
+        let mut progress = NoProgress;
+        let mut runner =
+            Runner::new(&mut axis, &mut progress, sup, i_t, start, ctrl, limits).unwrap();
+        let r = f(&mut runner);
+        let drift = (runner.position_m() - start).abs();
+        drop(runner);
+        (r, axis.exchanges, drift)
+    }
+
+    #[test]
+    fn issue_14_a_real_time_axis_is_held_in_closed_loop_while_the_computation_runs() {
+        let ((value, during), exchanges, drift) = with_runner(true, |runner| {
+            let before = runner.busy_samples();
+            let v = runner
+                .hold_while(|| {
+                    std::thread::sleep(std::time::Duration::from_millis(30));
+                    42
+                })
+                .unwrap();
+            (v, runner.busy_samples() - before)
+        });
+        assert_eq!(value, 42);
+        // 30 ms of computation at about 0.1 ms per exchange: dozens of cycles held
+        assert!(during >= 20, "{during} cycles held");
+        assert_eq!(exchanges, during);
+        // the axis (vertical load none, friction) stays where it was
+        assert!(drift < 1e-3, "drift {drift} m");
+    }
+
+    #[test]
+    fn a_simulated_axis_waits_for_the_computation() {
+        let (during, exchanges, _) = with_runner(false, |runner| {
+            let before = runner.busy_samples();
+            runner
+                .hold_while(|| std::thread::sleep(std::time::Duration::from_millis(5)))
+                .unwrap();
+            runner.busy_samples() - before
+        });
+        assert_eq!((during, exchanges), (0, 0));
     }
 }

@@ -200,10 +200,14 @@ pub fn validation_controller(
     let mut c = *feedback;
     c.feedforward = match variant {
         FeedforwardVariant::None => Feedforward::none(),
-        FeedforwardVariant::Linear => Feedforward::linear(m_e_kg_m2, friction.linear_viscous),
-        FeedforwardVariant::Nonlinear => {
-            Feedforward::nonlinear(m_e_kg_m2, friction.viscous, friction.coulomb)
+        FeedforwardVariant::Linear => {
+            Feedforward::linear(m_e_kg_m2, friction.linear_viscous_nm_s_per_rad)
         }
+        FeedforwardVariant::Nonlinear => Feedforward::nonlinear(
+            m_e_kg_m2,
+            friction.viscous_nm_s_per_rad,
+            friction.coulomb_nm,
+        ),
     };
     c.filter_desired_velocity = true;
     c.feedforward_preview = true;
@@ -211,16 +215,16 @@ pub fn validation_controller(
 }
 
 /// The tracking options of a validation move for the design model `p`:
-/// dead-time preview, belt-stretch compensation and the static stretch under
-/// the holding torque `holding_nm`.
+/// feedforward preview by `preview_samples` (the current-loop dead time),
+/// belt-stretch compensation and the static stretch under the holding torque
+/// `holding_nm`.
 pub fn validation_track_options(
     p: &crate::model::TwoMassParams,
-    dead_time_s: f64,
-    ts_s: f64,
+    preview_samples: usize,
     holding_nm: f64,
 ) -> TrackOptions {
     TrackOptions {
-        preview_samples: (dead_time_s / ts_s).round() as usize,
+        preview_samples,
         belt_stretch: beltune_rt::control::BeltStretch::On {
             m_c_kg: p.m_c,
             c_n_per_m: p.c,
@@ -256,7 +260,7 @@ pub fn simulate_validation_move(
         ..crate::sim::SimConfig::default()
     };
     let mut axis = crate::sim::SimAxis::new(plant, config)?;
-    let torque_max = info.torque_limit_nm;
+    let torque_max = info.torque_max_nm;
     let feedback = super::commission::cascade_from_design(des, torque_max, 0.0)?;
     let a_stop = SIM_STOP_DECELERATION_M_S2;
     let supervisor = SafetySupervisor::new(
@@ -288,7 +292,8 @@ pub fn simulate_validation_move(
     )?;
     let model = des.input.model;
     let controller = validation_controller(&feedback, model.rigid_inertia(), friction, variant);
-    let opts = validation_track_options(&model, des.input.dead_time_s, des.input.ts_s, 0.0);
+    let preview = (des.input.dead_time_s / des.input.ts_s).round() as usize;
+    let opts = validation_track_options(&model, preview, 0.0);
     run_move(
         &mut runner,
         &feedback,

@@ -29,7 +29,7 @@ use crate::error::{require_finite, require_non_negative, require_positive};
 use crate::model::params::{FrictionTotals, PhysicalParams};
 use crate::model::three_mass::ThreeMassState;
 use crate::model::{Plant, TwoMassParams};
-use crate::plant::{Axis, AxisInfo, Measurement};
+use crate::plant::{Axis, AxisError, AxisInfo, Measurement};
 use crate::{Error, Result};
 use mech::Mech;
 use nalgebra::{SMatrix, SVector};
@@ -86,6 +86,11 @@ impl Default for SimConfig {
 /// RK4 accuracy target: the largest `w_max h` of a sub-step. RK4's relative
 /// frequency error is about `(w h)^4 / 120`, below 4e-5 at 0.25.
 const MAX_OMEGA_H: f64 = 0.25;
+
+/// Most RK4 sub-steps per sample. egc70 needs a few dozen; a plant that
+/// needs more (a stiffness or damping far beyond any belt axis) would run
+/// for hours, so it is refused instead.
+pub const MAX_SUBSTEPS: usize = 4096;
 
 #[derive(Clone, Debug)]
 enum Dynamics {
@@ -150,7 +155,7 @@ impl SimAxis {
             (Plant::Linear(_), None) => 0.0,
             (_, Some(x)) => x,
         };
-        let n_delay = (plant.dead_time_s() / info.sample_time_s).round() as usize;
+        let n_delay = (plant.dead_time_s() / info.ts_s).round() as usize;
         let mut axis = SimAxis {
             dynamics: Dynamics::Linear {
                 phi: SMatrix::zeros(),
@@ -162,7 +167,7 @@ impl SimAxis {
             config,
             info,
             n_sub: 1,
-            h_sub: info.sample_time_s,
+            h_sub: info.ts_s,
             delay: vec![0.0; n_delay],
             delay_pos: 0,
             applied_torque_nm: 0.0,
@@ -208,15 +213,28 @@ impl SimAxis {
                 if let Some(hmax) = self.config.max_substep_s {
                     h = h.min(hmax);
                 }
-                self.n_sub = ((p.sample_time_s / h).ceil() as usize).max(1);
-                self.h_sub = p.sample_time_s / self.n_sub as f64;
+                let n = (p.ts_s / h).ceil();
+                if !n.is_finite() || n > MAX_SUBSTEPS as f64 {
+                    return Err(Error::invalid(
+                        "plant",
+                        n,
+                        format!(
+                            "too stiff or too damped to simulate: a sample of {} us needs {n:.0} \
+                             integration sub-steps (limit {MAX_SUBSTEPS}); check the stiffness, \
+                             damping and inertia values",
+                            p.ts_s * 1e6
+                        ),
+                    ));
+                }
+                self.n_sub = (n as usize).max(1);
+                self.h_sub = p.ts_s / self.n_sub as f64;
             }
             Plant::Linear(l) => {
-                let (phi, gamma) = linear::zoh(&l.two_mass, l.sample_time_s);
+                let (phi, gamma) = linear::zoh(&l.two_mass, l.ts_s);
                 let x = SVector::<f64, 4>::new(xi_m / l.two_mass.i_t, 0.0, xi_m, 0.0);
                 self.dynamics = Dynamics::Linear { phi, gamma, x };
                 self.n_sub = 1;
-                self.h_sub = l.sample_time_s;
+                self.h_sub = l.ts_s;
             }
         }
         Ok(())
@@ -234,7 +252,7 @@ impl SimAxis {
 
     /// Simulated time, s (samples times `T_s`).
     pub fn time_s(&self) -> f64 {
-        self.steps as f64 * self.info.sample_time_s
+        self.steps as f64 * self.info.ts_s
     }
 
     /// Samples simulated so far.
@@ -327,7 +345,7 @@ impl SimAxis {
 
     /// The simulated dead time, `n T_s` (the plant's dead time rounded to whole samples), s.
     pub fn dead_time_s(&self) -> f64 {
-        self.delay.len() as f64 * self.info.sample_time_s
+        self.delay.len() as f64 * self.info.ts_s
     }
 
     /// The friction totals seen at the motor (3.36): the mean torque at
@@ -371,19 +389,18 @@ impl SimAxis {
     }
 }
 
-impl Axis for SimAxis {
-    fn info(&self) -> AxisInfo {
-        self.info
-    }
-
-    fn step(&mut self, torque_command_nm: f64) -> Measurement {
+impl SimAxis {
+    /// One sample: apply `torque_command_nm` (saturated, through the
+    /// current-loop dead time) for one sample period and measure. A simulated
+    /// exchange cannot fail; [`Axis::exchange`] wraps this.
+    pub fn step(&mut self, torque_command_nm: f64) -> Measurement {
         let cmd = if torque_command_nm.is_finite() {
             torque_command_nm
         } else {
             self.rejected_commands += 1;
             0.0
         };
-        let lim = self.info.torque_limit_nm;
+        let lim = self.info.torque_max_nm;
         let sat = cmd.clamp(-lim, lim);
         let tau = if self.delay.is_empty() {
             sat
@@ -415,6 +432,23 @@ impl Axis for SimAxis {
             torque_actual_nm: tau + noise,
             cart_position_m: Some(cart),
         }
+    }
+}
+
+impl Axis for SimAxis {
+    fn info(&self) -> AxisInfo {
+        self.info
+    }
+
+    fn exchange(&mut self, torque_command_nm: f64) -> Result<Measurement, AxisError> {
+        Ok(self.step(torque_command_nm))
+    }
+
+    /// The simulated drive has no stop function of its own: it removes the
+    /// torque that is still on its way through the current-loop dead time.
+    fn quick_stop(&mut self) -> Result<(), AxisError> {
+        self.delay.iter_mut().for_each(|t| *t = 0.0);
+        Ok(())
     }
 }
 

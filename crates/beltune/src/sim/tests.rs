@@ -40,7 +40,7 @@ fn simulated_frf(
     let phases: Vec<f64> = (0..lines.len())
         .map(|k| -PI * (k * (k + 1)) as f64 / n_l)
         .collect();
-    let t_s = axis.info().sample_time_s;
+    let t_s = axis.info().ts_s;
     let q = axis.info().motor_rad_per_count;
     let u_of = |i: usize| -> f64 {
         let t = (i % PERIOD_SAMPLES) as f64 * t_s;
@@ -54,7 +54,7 @@ fn simulated_frf(
         .map(|i| u_of(i).abs())
         .fold(0.0, f64::max);
     assert!(
-        peak < axis.info().torque_limit_nm,
+        peak < axis.info().torque_max_nm,
         "the multisine would saturate: {peak} N m"
     );
     let mut u_sum = vec![0.0; PERIOD_SAMPLES];
@@ -112,7 +112,7 @@ fn linear_sets_frf_matches_transfer_function_1_to_400_hz() {
             ..SimConfig::default()
         };
         let mut axis = SimAxis::new(&plant, cfg).unwrap();
-        let (td, ts) = (axis.dead_time_s(), axis.info().sample_time_s);
+        let (td, ts) = (axis.dead_time_s(), axis.info().ts_s);
         assert!((td - 1e-3).abs() < 1e-12);
         let sim = simulated_frf(&mut axis, 0.2, 2, 3);
         let g = plant
@@ -142,7 +142,7 @@ fn three_mass_simulation_frf_matches_its_linearization() {
     };
     let plant = Plant::Physical(p.clone());
     let mut axis = SimAxis::new(&plant, cfg).unwrap();
-    let (td, ts) = (axis.dead_time_s(), axis.info().sample_time_s);
+    let (td, ts) = (axis.dead_time_s(), axis.info().ts_s);
     // the rigid-body pole i_t^2 (d_m + d_c) / J is at 1.3 rad/s: 8 s of
     // transient leave e^-10 of the start-up drift
     let sim = simulated_frf(&mut axis, 0.02, 8, 2);
@@ -178,7 +178,7 @@ fn two_mass_simulation_frf_matches_2_38() {
     };
     let plant = Plant::Physical(p.clone());
     let mut axis = SimAxis::new(&plant, cfg).unwrap();
-    let (td, ts) = (axis.dead_time_s(), axis.info().sample_time_s);
+    let (td, ts) = (axis.dead_time_s(), axis.info().ts_s);
     let sim = simulated_frf(&mut axis, 0.01, 8, 2);
     assert!(
         (axis.cart_position_m() - xi).abs() < 0.02,
@@ -284,7 +284,7 @@ fn rigid_inertia(p: &PhysicalParams) -> f64 {
 
 /// Run `seconds` with a constant torque command.
 fn run_constant(axis: &mut SimAxis, tau: f64, seconds: f64) -> Vec<Measurement> {
-    let n = (seconds / axis.info().sample_time_s).round() as usize;
+    let n = (seconds / axis.info().ts_s).round() as usize;
     (0..n).map(|_| axis.step(tau)).collect()
 }
 
@@ -295,7 +295,7 @@ fn run_ramp_then_constant(
     ramp_s: f64,
     hold_s: f64,
 ) -> Vec<Measurement> {
-    let t_s = axis.info().sample_time_s;
+    let t_s = axis.info().ts_s;
     let n_ramp = (ramp_s / t_s).round() as usize;
     let mut out: Vec<Measurement> = (0..n_ramp)
         .map(|k| axis.step(tau * (k + 1) as f64 / n_ramp as f64))
@@ -539,9 +539,9 @@ fn dead_time_and_saturation() {
         ..SimConfig::default()
     };
     let mut axis = SimAxis::new(&plant, cfg).unwrap();
-    let n = (axis.dead_time_s() / axis.info().sample_time_s).round() as usize;
+    let n = (axis.dead_time_s() / axis.info().ts_s).round() as usize;
     assert_eq!(n, 10);
-    let lim = axis.info().torque_limit_nm;
+    let lim = axis.info().torque_max_nm;
     for k in 0..30 {
         let m = axis.step(10.0);
         let expect = if k < n { 0.0 } else { lim };
@@ -679,7 +679,7 @@ fn constant_velocity_run(
     };
     let mut axis = SimAxis::new(plant, cfg).unwrap();
     let j = rigid_inertia(p);
-    let ts = axis.info().sample_time_s;
+    let ts = axis.info().ts_s;
     let w_c = 2.0 * PI * 2.0;
     let (k_p, k_i) = (j * w_c, j * w_c * w_c / 4.0);
     let n = (travel_m / (w_rad_s.abs() * p.i_t()) / ts) as usize;
@@ -742,7 +742,7 @@ fn friction_is_symmetric_and_matches_the_totals_at_constant_velocity() {
         let fit = crate::ident::friction::fit_constant_velocity(&runs).unwrap();
         let rel = |a: f64, b: f64| (a / b - 1.0).abs();
         assert!(
-            rel(fit.viscous_nms_per_rad, TABLE_A10_VISCOUS_NM_S_PER_RAD) < FIT_TOL,
+            rel(fit.viscous_nm_s_per_rad, TABLE_A10_VISCOUS_NM_S_PER_RAD) < FIT_TOL,
             "{model:?} {fit:?}"
         );
         assert!(

@@ -1,0 +1,87 @@
+//! The master on a network interface: ethercrab's raw-socket TX/RX future
+//! (Linux `AF_PACKET`, EtherType 0x88A4) polled together with each exchange,
+//! and cycles paced by the monotonic clock.
+
+use super::{Clock, Transport};
+use crate::Error;
+use core::future::Future;
+use core::pin::Pin;
+use core::task::{Context, Poll};
+use ethercrab::{PduRx, PduTx};
+use std::time::{Duration, Instant};
+
+type TxRx<'sto> = Pin<
+    Box<dyn Future<Output = Result<(PduTx<'sto>, PduRx<'sto>), ethercrab::error::Error>> + 'sto>,
+>;
+
+/// A raw socket on an interface.
+pub struct RawSocket<'sto> {
+    task: TxRx<'sto>,
+    next_cycle: Option<Instant>,
+    /// Pace the cycles in real time (a real drive needs it; a test against
+    /// an SM-synchronous virtual drive may run unpaced).
+    pub paced: bool,
+}
+
+/// The one-line error for a socket that cannot be opened.
+pub fn socket_error(interface: &str, e: &std::io::Error) -> Error {
+    let hint = if e.kind() == std::io::ErrorKind::PermissionDenied
+        || e.raw_os_error() == Some(libc::EPERM)
+    {
+        " (raw sockets need root or CAP_NET_RAW)"
+    } else {
+        ""
+    };
+    Error::Socket {
+        interface: interface.to_string(),
+        message: e.to_string(),
+        hint,
+    }
+}
+
+impl<'sto> RawSocket<'sto> {
+    /// Open `interface`; a one-line error without the rights for a raw socket.
+    pub fn open(interface: &str, tx: PduTx<'sto>, rx: PduRx<'sto>) -> Result<Self, Error> {
+        let task = ethercrab::std::tx_rx_task(interface, tx, rx)
+            .map_err(|e| socket_error(interface, &e))?;
+        Ok(RawSocket {
+            task: Box::pin(task),
+            next_cycle: None,
+            paced: true,
+        })
+    }
+}
+
+impl Transport for RawSocket<'_> {
+    fn poll_io(&mut self, cx: &mut Context<'_>) -> Poll<Result<(), ethercrab::error::Error>> {
+        match self.task.as_mut().poll(cx) {
+            Poll::Ready(Ok(_)) => Poll::Ready(Err(ethercrab::error::Error::SendFrame)),
+            Poll::Ready(Err(e)) => Poll::Ready(Err(e)),
+            Poll::Pending => Poll::Pending,
+        }
+    }
+
+    fn end_of_cycle(&mut self, cycle_ns: u64) {
+        if !self.paced {
+            return;
+        }
+        let now = Instant::now();
+        let cycle = Duration::from_nanos(cycle_ns);
+        let next = match self.next_cycle {
+            Some(t) if t + cycle > now => t + cycle,
+            _ => now + cycle,
+        };
+        if next > now {
+            std::thread::sleep(next - now);
+        }
+        self.next_cycle = Some(next);
+    }
+
+    fn real_time(&self) -> bool {
+        true
+    }
+
+    fn clock(&self) -> Clock {
+        Clock::Monotonic
+    }
+}

@@ -1,0 +1,85 @@
+//! Stage 4: the PRBS amplitude, increased from a small value until the motor
+//! moves in most short windows (the response clears friction and encoder
+//! quantization), re-centring between bursts, times a margin (Coulomb friction
+//! must be small against the excitation for the small-signal FRF to show the
+//! linear model), never beyond the maximum fraction of the torque limit.
+
+use super::super::commission::ExcitationConfig;
+use super::super::motion::move_to;
+use super::super::runner::Runner;
+use super::Stages;
+use crate::{Error, Result};
+use beltune_rt::control::CascadeConfig;
+use beltune_rt::prbs::Prbs;
+use beltune_rt::trajectory::Limits;
+
+/// Stage 4 (or the fixed amplitude of the configuration): `A_PRBS`, N m.
+#[allow(clippy::too_many_arguments)]
+pub fn amplitude_stage(
+    st: &mut Stages,
+    hold: &CascadeConfig<f64>,
+    center_m: f64,
+    limits: &Limits,
+    holding_nm: f64,
+    torque_max: f64,
+    ex: &ExcitationConfig,
+) -> Result<f64> {
+    st.start("excitation amplitude", 0);
+    let amplitude = match ex.fixed_amplitude_nm {
+        Some(a) => crate::error::require_positive("excitation amplitude [N m]", a)?.min(torque_max),
+        None => find_amplitude(
+            st.runner, hold, center_m, limits, holding_nm, torque_max, ex,
+        )?,
+    };
+    let line = format!(
+        "A_PRBS = {:.3} N m (+-{:.3} N m around the holding torque)",
+        amplitude,
+        amplitude / 2.0
+    );
+    st.finish("excitation", line);
+    Ok(amplitude)
+}
+
+fn find_amplitude(
+    runner: &mut Runner,
+    hold: &CascadeConfig<f64>,
+    center_m: f64,
+    limits: &Limits,
+    holding_nm: f64,
+    torque_max: f64,
+    ex: &ExcitationConfig,
+) -> Result<f64> {
+    let ts = runner.info().ts_s;
+    let window = ex.moving_window_samples(ts);
+    let burst = ex.burst_samples(ts).max(window);
+    let clock = ex.clock_samples(ts);
+    let mut a = ex.amplitude_start_fraction * torque_max;
+    let a_max = ex.amplitude_max_fraction * torque_max;
+    loop {
+        let mut prbs = Prbs::new(ex.prbs_order, clock, a)?;
+        move_to(runner, hold, center_m, limits, 0.05)?;
+        let mut counts = Vec::with_capacity(burst);
+        for _ in 0..burst {
+            runner.step(holding_nm + prbs.step(), None)?;
+            counts.push(runner.last().motor_counts);
+        }
+        let windows = counts.len() / window;
+        let moving = (0..windows)
+            .filter(|w| counts[w * window] != counts[(w + 1) * window - 1])
+            .count();
+        let fraction = moving as f64 / windows.max(1) as f64;
+        if fraction >= ex.moving_fraction {
+            return Ok((a * ex.amplitude_margin).min(a_max));
+        }
+        if a >= a_max {
+            return Err(Error::NoExcitation {
+                what: format!(
+                    "the axis does not move freely even at A_PRBS = {a:.3} N m ({:.0} % of {:.0} ms windows moving); check brakes and friction",
+                    fraction * 100.0,
+                    ex.moving_window_s * 1e3
+                ),
+            });
+        }
+        a = (a * ex.amplitude_growth).min(a_max);
+    }
+}

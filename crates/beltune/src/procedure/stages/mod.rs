@@ -1,0 +1,65 @@
+//! The commissioning stages, one file per stage, in the order
+//! [`super::commission::commission`] runs them. Each stage takes the
+//! [`Stages`] context (the runner that drives the axis, the log, the
+//! computation time), does its experiment or computation, and returns its
+//! result as a named struct; none reaches back to an earlier stage.
+//!
+//! | stage | file |
+//! | --- | --- |
+//! | 1. plausibility of the data sheet, supervisor and bootstrap controller | [`plausibility`] |
+//! | 2. take the axis, move to the worst-case position | [`take_axis`] |
+//! | 3. holding torque | [`holding_torque`] |
+//! | 4. excitation amplitude | [`amplitude`] |
+//! | 5. open-loop identification | [`identification`] |
+//! | 6. controller design | [`design`] |
+//! | 7. friction runs | [`friction`] |
+//! | 8. validation moves | [`validation_moves`] |
+
+pub mod amplitude;
+pub mod design;
+pub mod friction;
+pub mod holding_torque;
+pub mod identification;
+pub mod plausibility;
+pub mod take_axis;
+pub mod validation_moves;
+
+use super::runner::Runner;
+
+/// The context every stage works in: the runner that drives the axis, one log
+/// line per finished stage, and the wall-clock time spent computing.
+pub struct Stages<'r, 'a> {
+    /// The runner (axis, supervisor, progress).
+    pub runner: &'r mut Runner<'a>,
+    /// One line per finished stage, `name: text [axis busy ...]`.
+    pub log: Vec<String>,
+    /// Wall-clock time spent computing (FFT, fit, design), s.
+    pub compute_s: f64,
+}
+
+impl<'r, 'a> Stages<'r, 'a> {
+    /// Announce a stage (progress bar with `samples` steps, 0 = unknown).
+    pub fn start(&mut self, name: &str, samples: u64) {
+        self.runner.progress().stage_started(name, samples);
+    }
+
+    /// Finish a stage with its log line (the busy time is appended).
+    pub fn finish(&mut self, name: &str, line: String) {
+        let line = format!("{line} [axis busy {:.1} s]", self.runner.busy_time_s());
+        self.runner.progress().stage_finished(&line);
+        self.log.push(format!("{name}: {line}"));
+    }
+
+    /// Run a computation and add its wall-clock time to [`Stages::compute_s`].
+    /// The axis is never left alone meanwhile: an axis whose time runs in
+    /// real time is held in closed loop every cycle ([`Runner::hold_while`]).
+    pub fn compute<T: Send>(
+        &mut self,
+        f: impl FnOnce() -> crate::Result<T> + Send,
+    ) -> crate::Result<T> {
+        let t0 = std::time::Instant::now();
+        let out = self.runner.hold_while(f);
+        self.compute_s += t0.elapsed().as_secs_f64();
+        out?
+    }
+}

@@ -1,0 +1,77 @@
+//! Stage 1: plausibility of the data-sheet values, and what the later stages
+//! need from them before the axis moves: the safety supervisor, the stop
+//! limits and the bootstrap controller (designed from the data sheet alone).
+
+use super::super::bootstrap::bootstrap_controller;
+use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
+use super::super::safety::{SafetyLimits, SafetySupervisor};
+use crate::plant::AxisInfo;
+use crate::Result;
+use beltune_rt::control::CascadeConfig;
+use beltune_rt::trajectory::Limits;
+
+/// What stage 1 hands on.
+pub struct Plausibility {
+    /// Torque limit of the commissioning: the smaller of the data sheet's and
+    /// the axis', N m.
+    pub torque_max_nm: f64,
+    /// Rigid-body inertia from the data sheet, kg m^2.
+    pub rigid_inertia_kg_m2: f64,
+    /// The supervisor for all later stages.
+    pub supervisor: SafetySupervisor,
+    /// The bootstrap controller (data-sheet inertia, no offset yet).
+    pub bootstrap: CascadeConfig<f64>,
+    /// Limits of the supervisor's stop trajectory.
+    pub stop_limits: Limits,
+    /// The stage's log line.
+    pub line: String,
+}
+
+/// Stage 1: validate the data sheet and derive the supervisor, the stop
+/// limits and the bootstrap controller.
+pub fn plausibility(
+    info: &AxisInfo,
+    datasheet: &DataSheet,
+    cfg: &CommissioningConfig,
+) -> Result<Plausibility> {
+    datasheet.validate()?;
+    let ts = info.ts_s;
+    let torque_max = datasheet.torque_max_nm.min(info.torque_max_nm);
+    let j_ds = datasheet.rigid_inertia();
+    let limits = SafetyLimits {
+        travel_min_m: datasheet.travel_min_m,
+        travel_max_m: datasheet.travel_max_m,
+        torque_max_nm: torque_max,
+        velocity_max_m_s: datasheet.velocity_max_m_s,
+        following_error_max_m: cfg.following_error_max_m,
+    };
+    // Stop deceleration: what 60 % of the torque limit gives on the data-sheet
+    // inertia (the rest is margin for friction, gravity and the loop), at most 20 m/s^2.
+    let a_stop = (0.6 * torque_max / j_ds * datasheet.i_t_m).min(20.0);
+    let supervisor = SafetySupervisor::new(limits, a_stop)?;
+    let bootstrap = bootstrap_controller(j_ds, datasheet.i_t_m, ts, torque_max)?;
+    let stop_limits = Limits {
+        a_max: a_stop,
+        a_min: -a_stop,
+        j_max: 20.0 * a_stop,
+        j_min: -20.0 * a_stop,
+        ..positioning_limits(datasheet)
+    };
+    let line = format!(
+        "data sheet ok: Theta_e {:.2} kg mm^2, i_t {:.3} mm/rad, rigid inertia {:.3e} kg m^2, torque limit {:.2} N m, travel [{:.0}, {:.0}] mm",
+        datasheet.theta_e_kg_m2 * 1e6,
+        datasheet.i_t_m * 1e3,
+        j_ds,
+        torque_max,
+        datasheet.travel_min_m * 1e3,
+        datasheet.travel_max_m * 1e3
+    );
+    Ok(Plausibility {
+        torque_max_nm: torque_max,
+        rigid_inertia_kg_m2: j_ds,
+        supervisor,
+        bootstrap,
+        stop_limits,
+        line,
+    })
+}

@@ -1,0 +1,84 @@
+//! Stage 2: take the axis (hold it where it is until the integrator carries
+//! the load: a vertical axis sags first) for a first holding torque, then move
+//! to the identification position, the cart farthest from the motor (longest
+//! belt segment, lowest resonance: the worst case, thesis 2.2).
+
+use super::super::commission::{positioning_limits, DataSheet};
+use super::super::motion::move_to;
+use super::super::runner::{Runner, Sample};
+use super::Stages;
+use crate::Result;
+use beltune_rt::control::{CascadeConfig, CascadeController, Setpoint};
+
+/// How long the axis is held when it is taken, s.
+const CATCH_S: f64 = 0.3;
+
+/// What stage 2 hands on.
+pub struct TakenAxis {
+    /// The bootstrap controller with the first holding torque as its offset.
+    pub bootstrap: CascadeConfig<f64>,
+    /// The identification position, m.
+    pub identification_position_m: f64,
+}
+
+/// Stage 2: take the axis with `bootstrap` and move to the worst-case position.
+pub fn take_axis(
+    st: &mut Stages,
+    bootstrap: CascadeConfig<f64>,
+    datasheet: &DataSheet,
+) -> Result<TakenAxis> {
+    st.start("take axis", 0);
+    let start = st.runner.position_m();
+    let rec = hold(st.runner, &bootstrap, CATCH_S)?;
+    let tail = &rec[rec.len() / 2..];
+    let first_hold = tail.iter().map(|s| s.torque_command_nm).sum::<f64>() / tail.len() as f64;
+    let mut boot = bootstrap;
+    boot.torque_offset_nm = first_hold;
+    st.runner.set_stop_controller(boot);
+    let line = format!(
+        "held at {:.1} mm (sag {:.2} mm) with {first_hold:+.3} N m",
+        st.runner.position_m() * 1e3,
+        (st.runner.position_m() - start) * 1e3
+    );
+    st.finish("take axis", line);
+
+    let width = datasheet.travel_max_m - datasheet.travel_min_m;
+    let id_pos = datasheet.travel_max_m - (0.12 * width).max(0.05);
+    st.start("move to worst-case position", 0);
+    move_to(
+        st.runner,
+        &boot,
+        id_pos,
+        &positioning_limits(datasheet),
+        0.1,
+    )?;
+    let line = format!(
+        "at {:.1} mm (cart far from the motor: longest belt segment, lowest resonance)",
+        st.runner.position_m() * 1e3
+    );
+    st.finish("position", line);
+    Ok(TakenAxis {
+        bootstrap: boot,
+        identification_position_m: id_pos,
+    })
+}
+
+/// Hold the current position with `ctrl` for `duration_s` (no following-error
+/// check: the load may sag while the integrator takes it).
+pub fn hold(
+    runner: &mut Runner,
+    ctrl: &CascadeConfig<f64>,
+    duration_s: f64,
+) -> Result<Vec<Sample>> {
+    let ts = runner.info().ts_s;
+    let mut c = CascadeController::new(*ctrl)?;
+    let target = runner.motor_angle_rad();
+    c.reset_to(target);
+    let n = (duration_s / ts).ceil() as usize;
+    let mut out = Vec::with_capacity(n);
+    for _ in 0..n {
+        let o = c.step(&Setpoint::hold(target), runner.motor_angle_rad());
+        out.push(runner.step(o.torque_nm, None)?);
+    }
+    Ok(out)
+}
