@@ -39,6 +39,10 @@ enum Command {
     Serve(cmd::serve::Args),
     /// Compare two commissioning folders: FRFs, fits, loops, moves, parameter changes.
     Compare(cmd::compare::Args),
+    /// Export a controller.toml as firmware source (Rust module or C header).
+    Export(cmd::export::Args),
+    /// Write an excitation signal (PRBS, chirp, multisine) to play on another drive.
+    Excitation(cmd::excitation::Args),
     /// Answer as a virtual CiA 402 servo drive (EtherCAT SubDevice) on a network interface.
     VirtualDrive(cmd::virtual_drive::Args),
 }
@@ -70,6 +74,8 @@ fn main() {
         Command::Commission(a) => cmd::commission::run(a),
         Command::Serve(a) => cmd::serve::run(a),
         Command::Compare(a) => cmd::compare::run(a),
+        Command::Export(a) => cmd::export::run(a),
+        Command::Excitation(a) => cmd::excitation::run(a),
         Command::VirtualDrive(a) => cmd::virtual_drive::run(a),
     };
     if let Err(e) = result {

@@ -86,19 +86,24 @@ fn identify_measured_bench_writes_model_and_frf() {
         "i_t",
         "dead_time_s",
     ] {
-        assert!(v[key].is_number(), "{key}: {}", v[key]);
+        assert!(
+            v["identified"][key].is_number(),
+            "{key}: {}",
+            v["identified"][key]
+        );
     }
     // the fitted modes within 3 % of the measured FRF's peak and dip (issue 4)
-    let f_r = v["f_r_hz"].as_f64().unwrap();
-    let f_z = v["f_z_hz"].as_f64().unwrap();
-    let peak = v["features"]["resonance_hz"].as_f64().unwrap();
-    let dip = v["features"]["antiresonance_hz"].as_f64().unwrap();
+    let f_r = v["identified"]["f_r_hz"].as_f64().unwrap();
+    let f_z = v["identified"]["f_z_hz"].as_f64().unwrap();
+    let peak = v["fit"]["features"]["resonance_hz"].as_f64().unwrap();
+    let dip = v["fit"]["features"]["antiresonance_hz"].as_f64().unwrap();
     assert!(
         (f_r / peak - 1.0).abs() < 0.03 && (f_z / dip - 1.0).abs() < 0.03,
         "{v}"
     );
-    assert_eq!(v["i_t"].as_f64(), Some(1.0));
-    assert_eq!(v["units"].as_str(), Some("current"));
+    assert_eq!(v["identified"]["i_t"].as_f64(), Some(1.0));
+    assert_eq!(v["identified"]["units"].as_str(), Some("current"));
+    assert_eq!(v["schema_version"].as_u64(), Some(1));
     let text = std::fs::read_to_string(&frf).unwrap();
     let mut lines = text.lines();
     assert!(lines.next().unwrap().contains("coherence"));

@@ -149,11 +149,12 @@ fn assert_one_line_error(args: &[&str], needle: &str, status: i32) {
 fn invalid_requests_print_one_line_and_fail() {
     let mut negative_jerk = THESIS_MOVE.to_vec();
     negative_jerk[10] = "-40";
-    assert_one_line_error(&negative_jerk, "j_max", 2);
+    // The flag as typed, not the core's field name (issue 13 item 14).
+    assert_one_line_error(&negative_jerk, "--j-max", 2);
 
     let mut positive_j_min = THESIS_MOVE.to_vec();
     positive_j_min.extend(["--j-min", "5"]);
-    assert_one_line_error(&positive_j_min, "j_min", 2);
+    assert_one_line_error(&positive_j_min, "--j-min", 2);
 
     let mut outside = THESIS_MOVE.to_vec();
     outside[4] = "0.7,0,0";

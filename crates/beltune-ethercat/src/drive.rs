@@ -75,8 +75,16 @@ pub struct DriveConfig {
     /// Position 0x6064 at power-up, increments: near the 32-bit end so that the
     /// master must unwrap.
     pub initial_position_inc: i32,
-    /// Damping of the quick stop, N m s/rad (braking torque `-D omega`).
-    pub quick_stop_damping_nm_s: f64,
+    /// Damping of the quick stop, N m s/rad (braking torque `-D omega`);
+    /// `None`: `D = 0.25 Theta_e / (T + T_d)`, a quarter of what the motor
+    /// inertia alone tolerates over one cycle plus the current-loop dead time
+    /// (above it the braking loop oscillates at the belt resonance, where the
+    /// motor moves without the cart).
+    pub quick_stop_damping_nm_s: Option<f64>,
+    /// Advertise distributed clocks (ESC feature register 0x0008); without
+    /// them the drive runs SM-synchronous: one cycle per output frame, which
+    /// makes a test independent of the host's scheduling.
+    pub distributed_clocks: bool,
     /// Speed below which a quick stop is complete, rad/s.
     pub quick_stop_done_rad_s: f64,
 }
@@ -88,7 +96,8 @@ impl Default for DriveConfig {
             sim: SimConfig::default(),
             rated_fraction: 0.5,
             initial_position_inc: i32::MAX - 20_000,
-            quick_stop_damping_nm_s: 0.3,
+            quick_stop_damping_nm_s: None,
+            distributed_clocks: true,
             quick_stop_done_rad_s: 0.05,
         }
     }
@@ -110,6 +119,7 @@ pub struct Firmware {
     load_nm_per_inc: u32,
     last_torque_nm: f64,
     cycles: u64,
+    quick_stop_damping: f64,
 }
 
 /// The virtual drive: ESC and firmware.
@@ -166,6 +176,21 @@ impl VirtualDrive {
             Some(load_nm_per_inc),
         )?;
         let od = dictionary(&scaling, cycle_ns, load_nm_per_inc);
+        let theta_e = match &plant {
+            Plant::Physical(p) => p.theta_e(),
+            Plant::Linear(l) => l.two_mass.theta_e,
+        };
+        let quick_stop_damping = match cfg.quick_stop_damping_nm_s {
+            Some(d) if d.is_finite() && d > 0.0 => d,
+            Some(d) => {
+                return Err(Error::Config {
+                    name: "quick stop damping",
+                    reason: format!("{d} N m s/rad is not positive"),
+                })
+            }
+            None => 0.25 * theta_e / (cfg.cycle_s + plant.dead_time_s()),
+        };
+        let distributed_clocks = cfg.distributed_clocks;
         let firmware = Firmware {
             od,
             sim,
@@ -181,11 +206,11 @@ impl VirtualDrive {
             load_nm_per_inc,
             last_torque_nm: 0.0,
             cycles: 0,
+            quick_stop_damping,
         };
-        Ok(VirtualDrive {
-            esc: Esc::new(crate::esc::sii::build(&sii_content())),
-            firmware,
-        })
+        let mut esc = Esc::new(crate::esc::sii::build(&sii_content()));
+        esc.set_distributed_clocks(distributed_clocks);
+        Ok(VirtualDrive { esc, firmware })
     }
 
     /// Handle one frame in place; false if it is not an EtherCAT frame.
@@ -341,7 +366,7 @@ impl Application for Firmware {
                     self.state = State::SwitchOnDisabled; // quick stop option 2: done, power off
                     0.0
                 } else {
-                    (-self.cfg.quick_stop_damping_nm_s * omega).clamp(-lim, lim)
+                    (-self.quick_stop_damping * omega).clamp(-lim, lim)
                 }
             }
             _ => 0.0,

@@ -118,7 +118,7 @@ pub fn serve(
         if n <= 0 {
             continue;
         }
-        if from.sll_pkttype == libc::PACKET_OUTGOING as u8 {
+        if from.sll_pkttype == libc::PACKET_OUTGOING {
             continue;
         }
         let frame = &mut buf[..n as usize];

@@ -126,9 +126,10 @@ fn too_big(path: &Path, limit: u64) -> Error {
 /// Refuse anything but a regular file (a FIFO would block, a device such as
 /// `/dev/zero` never ends) and a file larger than `limit` bytes.
 pub fn check_readable_file(path: &Path, limit: u64) -> Result<()> {
-    let m = std::fs::metadata(path).map_err(|e| Error::Parse {
-        path: path.display().to_string(),
-        message: format!("cannot open: {}", describe(&e)),
+    // A missing or unreadable file stays an I/O error (exit status 1).
+    let m = std::fs::metadata(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
     })?;
     if m.is_dir() {
         return Err(Error::Parse {
@@ -196,9 +197,9 @@ impl<R: Read> Read for CappedReader<R> {
 /// ([`Error::Parse`] naming the file otherwise).
 pub fn read_capped(path: &Path, limit: u64) -> Result<Vec<u8>> {
     check_readable_file(path, limit)?;
-    let f = std::fs::File::open(path).map_err(|e| Error::Parse {
-        path: path.display().to_string(),
-        message: format!("cannot open: {}", describe(&e)),
+    let f = std::fs::File::open(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
     })?;
     let mut out = Vec::new();
     CappedReader::new(f, limit)

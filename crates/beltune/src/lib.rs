@@ -19,6 +19,7 @@
 
 pub mod design;
 pub mod error;
+pub mod export;
 pub mod ident;
 pub mod io;
 pub mod lti;
@@ -28,5 +29,6 @@ pub mod procedure;
 pub mod provenance;
 pub mod report;
 pub mod sim;
+pub mod units;
 
 pub use error::{Error, Result};

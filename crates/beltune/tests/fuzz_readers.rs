@@ -225,7 +225,7 @@ proptest! {
     ) {
         let text = model_text(&values, json);
         if let Ok(m) = ModelFile::parse(&text, "fuzz") {
-            if let Ok(input) = m.design_input(beltune::design::DEFAULT_TS_S) {
+            if let Ok(input) = m.design_input(Some(beltune::design::DEFAULT_TS_S)) {
                 if let Ok(d) = design(&input, &DesignKnobs::default()) {
                     for v in [d.k_p, d.k_i, d.k_pp, d.omega_r_rad_s, d.omega_z_rad_s] {
                         prop_assert!(v.is_finite(), "{text}: {v}");
@@ -259,7 +259,7 @@ proptest! {
             filter_attenuation_db: att,
         };
         let m = ModelFile::parse(&model_text(&[f64::NAN; 8], false), "egc70").unwrap();
-        let input = m.design_input(beltune::design::DEFAULT_TS_S).unwrap();
+        let input = m.design_input(Some(beltune::design::DEFAULT_TS_S)).unwrap();
         if let Ok(d) = design(&input, &knobs) {
             for v in [d.k_p, d.k_i, d.k_pp] {
                 prop_assert!(v.is_finite() && v > 0.0, "{knobs:?}: {v}");

@@ -8,7 +8,7 @@ use crate::progress::BarProgress;
 use anyhow::Context;
 use beltune::design::DesignKnobs;
 use beltune::ident::{
-    identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig,
+    identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig, ModelUnits,
     MotionFrictionConfig, RecordedExcitation,
 };
 use beltune::model::rigs::Plant;
@@ -96,10 +96,15 @@ pub struct Args {
     /// Recorded data: transmission i_t in m/rad (default 1).
     #[arg(long, allow_negative_numbers = true)]
     pub transmission: Option<f64>,
-    /// Recorded data: the drive's torque limit, in the unit of the input column
-    /// (N m, or A for a current record), written to controller.toml (default 3.1).
+    /// Recorded data (required): the drive's torque limit, in the unit of the
+    /// input column (N m, or A with --current-units), written to controller.toml.
+    /// The record's peak is not a limit, so there is no default.
     #[arg(long, allow_negative_numbers = true)]
     pub torque_limit: Option<f64>,
+    /// Recorded data: the input column is a motor current in A (torque constant
+    /// unknown): model, gains and limits in current units (A s/rad, A).
+    #[arg(long)]
+    pub current_units: bool,
     /// Recorded data: a CSV of any motion for the friction regression (same time column name).
     #[arg(long, requires_all = ["friction_torque", "friction_position"])]
     pub friction_csv: Option<PathBuf>,
@@ -109,6 +114,22 @@ pub struct Args {
     /// Friction record: motor-angle column, rad.
     #[arg(long)]
     pub friction_position: Option<String>,
+    /// Commission a drive on EtherCAT: the network interface of the bus (a
+    /// CiA 402 drive in cyclic synchronous torque mode; raw sockets need root
+    /// or CAP_NET_RAW). `--plant` and `--payload` then only give the data
+    /// sheet (inertia, transmission, moving mass, travel, torque limit).
+    #[arg(long, value_name = "IFACE", conflicts_with = "csv")]
+    pub ethercat: Option<String>,
+    /// EtherCAT: position of the drive on the bus (0 = the first SubDevice).
+    #[arg(long, default_value_t = 0, requires = "ethercat")]
+    pub subdevice: usize,
+    /// EtherCAT: bus cycle (the drive's SYNC0 period), us.
+    #[arg(long, default_value_t = 1000, requires = "ethercat")]
+    pub cycle_us: u32,
+    /// EtherCAT: how long to wait for a frame, ms (3 consecutive lost frames
+    /// end the commissioning with a quick stop).
+    #[arg(long, default_value_t = 10.0, requires = "ethercat")]
+    pub frame_timeout_ms: f64,
     /// No progress bars or log lines.
     #[arg(long)]
     pub quiet: bool,
@@ -171,7 +192,7 @@ fn bad(msg: impl Into<String>) -> anyhow::Error {
 
 /// Error if any flag of the other mode was given: nothing is silently ignored.
 fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
-    let recorded_only: [(&str, bool); 11] = [
+    let recorded_only: [(&str, bool); 12] = [
         ("--time", args.time.is_some()),
         ("--input", args.input.is_some()),
         ("--output", args.output.is_some()),
@@ -181,6 +202,7 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
         ("--inertia", args.inertia.is_some()),
         ("--transmission", args.transmission.is_some()),
         ("--torque-limit", args.torque_limit.is_some()),
+        ("--current-units", args.current_units),
         ("--friction-csv", args.friction_csv.is_some()),
         (
             "--friction-torque/--friction-position",
@@ -299,6 +321,11 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     let (Some(input), Some(output)) = (&args.input, &args.output) else {
         return Err(bad("--csv needs --input and --output column names"));
     };
+    let units = if args.current_units {
+        ModelUnits::Current
+    } else {
+        ModelUnits::Torque
+    };
     check_flag("--inertia", args.inertia, 0.0, 1e3, true)?;
     check_flag("--transmission", args.transmission, 0.0, 1e3, true)?;
     check_flag(
@@ -309,7 +336,12 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
         true,
     )?;
     let time = args.time.clone().unwrap_or_else(|| "t_s".to_string());
-    let torque_limit = args.torque_limit.unwrap_or(3.1);
+    let unit = if args.current_units { "A" } else { "N m" };
+    let Some(torque_limit) = args.torque_limit else {
+        return Err(bad(format!(
+            "--csv needs --torque-limit: the drive's torque limit in {unit} (the record's peak is not a limit)"
+        )));
+    };
     let id = identify_recorded(&RecordedExcitation {
         csv,
         time: &time,
@@ -323,6 +355,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
             theta_e: args.inertia,
             free_inertia: args.inertia.is_none(),
             i_t: args.transmission.unwrap_or(1.0),
+            units,
             ..FitConfig::default()
         },
     })?;
@@ -352,7 +385,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     let run = commission_recorded(id, friction, knobs, 2e-3)?;
     let source = csv.display().to_string();
     let provenance = Provenance::of_this_process(None);
-    let (json, report) = recorded_outputs(&run, &source, Some(&provenance))?;
+    let (json, report) = recorded_outputs(&run, &source, torque_limit, provenance.clone())?;
     let friction = run.friction.clone().unwrap_or_default();
     for (name, v) in [
         ("Coulomb friction", friction.coulomb_nm),
@@ -368,7 +401,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
             )));
         }
     }
-    let toml = controller_toml(&run.design, &friction, torque_limit)?;
+    let toml = controller_toml(&run.design, &friction, torque_limit, units, provenance)?;
     let html = render_html(&report)?;
     let data = recorded_data_files(&run)?;
     let files = write_outputs_with_data(&target(args), &json, &toml, &html, &data)?;
@@ -435,6 +468,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = args.prbs_clock_ms {
         cfg.excitation.clock_period_s = p * 1e-3;
     }
+    if let Some(interface) = args.ethercat.clone() {
+        return run_ethercat(&args, &interface, &ds, &cfg);
+    }
     let sim_cfg = SimConfig {
         seed: args.seed.unwrap_or(1),
         initial_cart_position_m: Some(start_position),
@@ -457,19 +493,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         coulomb_nm: friction.coulomb_nm,
     };
     let name = args.plant.clone().unwrap_or_else(|| "egc70".to_string());
-    let json = commissioning_json(&run, &name, Some(truth.clone()));
-    let toml = controller_toml(&run.design, &run.friction, ds.torque_max_nm)?;
+    let provenance = Provenance::of_this_process(Some(args.seed.unwrap_or(1)));
+    let json = commissioning_json(&run, &name, Some(truth.clone()), provenance.clone());
+    let toml = controller_toml(
+        &run.design,
+        &run.friction,
+        ds.torque_max_nm,
+        ModelUnits::Torque,
+        provenance,
+    )?;
     let before = match &plant {
         Plant::Physical(p) => Some(p.linearize(run.identification_position_m)?),
         Plant::Linear(_) => None,
     };
-    let provenance = Provenance::of_this_process(Some(args.seed.unwrap_or(1)));
     let report = build_report(
         &run,
         &name,
         before.as_ref(),
         Some(&truth),
-        Some(&provenance),
+        Some(&json.provenance),
     )?;
     let html = render_html(&report)?;
     let data = data_files(&run, &report)?;
@@ -499,6 +541,112 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         println!(
             "axis busy {:.1} s, computation {:.2} s, wall time {:.1} s",
+            run.experiment_time_s,
+            run.computation_time_s,
+            started.elapsed().as_secs_f64()
+        );
+        for f in files {
+            println!("wrote {}", f.display());
+        }
+    }
+    Ok(())
+}
+
+/// Commission the drive on an EtherCAT bus (`--ethercat IFACE`).
+fn run_ethercat(
+    args: &Args,
+    interface: &str,
+    ds: &DataSheet,
+    cfg: &CommissioningConfig,
+) -> anyhow::Result<()> {
+    use beltune_ethercat::master::wire::RawSocket;
+    use beltune_ethercat::master::{EthercatAxis, MasterConfig, Storage};
+    if !(args.frame_timeout_ms.is_finite() && (0.1..=1000.0).contains(&args.frame_timeout_ms)) {
+        return Err(anyhow::Error::new(crate::exit::Failure::new(
+            crate::exit::ExitStatus::BadInput,
+            format!(
+                "--frame-timeout-ms {} is outside 0.1 ..= 1000",
+                args.frame_timeout_ms
+            ),
+        )));
+    }
+    let storage = Storage::new();
+    let master = MasterConfig {
+        subdevice: args.subdevice,
+        cycle_s: f64::from(args.cycle_us) * 1e-6,
+        frame_timeout_s: args.frame_timeout_ms * 1e-3,
+        ..MasterConfig::default()
+    };
+    let mut axis = EthercatAxis::open(&storage, master, |tx, rx| {
+        RawSocket::open(interface, tx, rx)
+    })
+    .with_context(|| format!("EtherCAT on {interface}"))?;
+    let id = axis.identity().clone();
+    let sc = axis.scaling();
+    if !args.quiet {
+        eprintln!(
+            "EtherCAT {interface}: SubDevice {} of {}: {} (vendor {:#010x}, product {:#010x}, rev {:#010x}, serial {}), {}; rated torque {:.3} N m, limit {:.3} N m, {} increments per {} rev{}",
+            args.subdevice,
+            id.subdevices,
+            id.name,
+            id.vendor_id,
+            id.product_code,
+            id.revision,
+            id.serial,
+            if id.dc { "SYNC0" } else { "no distributed clocks" },
+            sc.rated_torque_nm,
+            sc.torque_limit_nm(),
+            sc.encoder_increments,
+            sc.motor_revolutions,
+            if sc.load_m_per_inc.is_some() { ", load-side encoder" } else { "" }
+        );
+    }
+    let mut progress = BarProgress::new(args.quiet);
+    let started = Instant::now();
+    let run = commission(&mut axis, ds, cfg, &mut progress).context("commissioning stopped")?;
+    // leave the drive switched off and at rest
+    let _ = axis.quick_stop();
+    let name = format!(
+        "EtherCAT {interface} SubDevice {} ({})",
+        args.subdevice, id.name
+    );
+    let provenance = Provenance::of_this_process(None);
+    let json = commissioning_json(&run, &name, None, provenance.clone());
+    let toml = controller_toml(
+        &run.design,
+        &run.friction,
+        ds.torque_max_nm,
+        ModelUnits::Torque,
+        provenance,
+    )?;
+    let report = build_report(&run, &name, None, None, Some(&json.provenance))?;
+    let html = render_html(&report)?;
+    let data = data_files(&run, &report)?;
+    let files = write_outputs_with_data(&target(args), &json, &toml, &html, &data)?;
+    if !args.quiet {
+        let v = &run.validation;
+        println!(
+            "identified: f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.2} kg, c {:.1} kN/m, dead time {:.2} ms (drive and bus)",
+            run.identified.f_r_hz,
+            run.identified.f_z_hz,
+            run.identified.m_c,
+            run.identified.c / 1e3,
+            run.identified.dead_time_s * 1e3
+        );
+        println!(
+            "controller (host side, CST): K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s",
+            run.design.k_p, run.design.k_i, run.design.k_pp
+        );
+        println!(
+            "validation, max cart error ({}): none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm (static {:.1} um)",
+            if sc.load_m_per_inc.is_some() { "load-side encoder" } else { "motor side: the drive has no load-side encoder" },
+            v.none.max_tracking_error_m * 1e3,
+            v.linear.max_tracking_error_m * 1e3,
+            v.nonlinear.max_tracking_error_m * 1e3,
+            v.nonlinear.static_error_m * 1e6
+        );
+        println!(
+            "axis busy {:.1} s, computation {:.2} s (axis held meanwhile), wall time {:.1} s",
             run.experiment_time_s,
             run.computation_time_s,
             started.elapsed().as_secs_f64()

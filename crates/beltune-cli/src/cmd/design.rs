@@ -11,15 +11,16 @@ use std::path::PathBuf;
 /// Arguments of `beltune design`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Identified model: TOML (theta_e, m_c, c, d_m, d_c, i_t, dead_time_s, t_r_s, optional d, viscous,
-    /// coulomb) or the JSON written by `beltune identify`.
+    /// Identified model (docs/schema.md): `commissioning.json`, the JSON written by
+    /// `beltune identify --json`, or a TOML with theta_e, m_c, c, d_m, d_c, i_t and optional
+    /// dead_time_s, t_r_s, d, viscous_nm_s_per_rad, coulomb_nm.
     #[arg(long)]
     model: PathBuf,
     #[command(flatten)]
     knobs: super::knobs::KnobArgs,
-    /// Sampling time of the controller in s (1e-6 ..= 0.1).
-    #[arg(long, default_value_t = design::DEFAULT_TS_S, allow_negative_numbers = true)]
-    ts: f64,
+    /// Sampling time of the controller in s, 1e-6 ..= 0.1 (default: the model's `ts_s`, else 100 us).
+    #[arg(long, allow_negative_numbers = true)]
+    ts: Option<f64>,
     /// Write the design as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -32,30 +33,44 @@ struct JsonOut<'a> {
     summary: DesignSummary,
     discrete: &'a design::DiscreteController,
     feedforward: &'a design::Feedforward,
+    drive_form: design::DriveForm,
     design: &'a ControllerDesign,
 }
 
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if let Err(e) = beltune::model::params::check_sample_time(args.ts) {
-        return Err(anyhow::Error::new(crate::exit::Failure::new(
-            crate::exit::ExitStatus::BadInput,
-            format!("--ts {}: {}", beltune::error::short_number(args.ts), e),
-        )));
+    let check_ts = |ts: f64, what: &str| -> anyhow::Result<()> {
+        beltune::model::params::check_sample_time(ts).map_err(|e| {
+            anyhow::Error::new(crate::exit::Failure::new(
+                crate::exit::ExitStatus::BadInput,
+                format!("{what} {}: {}", beltune::error::short_number(ts), e),
+            ))
+        })
+    };
+    if let Some(ts) = args.ts {
+        check_ts(ts, "--ts")?;
     }
     if let Some(out) = &args.json {
         super::util::check_not_an_input("--json", out, &[&args.model])?;
     }
     let model = ModelFile::load(&args.model)?;
+    check_ts(model.design_ts_s(args.ts), "the model's ts_s")?;
     let input = model.design_input(args.ts)?;
     let knobs = args.knobs.knobs()?;
     let d = design::design(&input, &knobs)?;
-    print!("{}", human_summary(&d));
+    if !model.identified.dead_time_measured {
+        println!(
+            "dead time:  not measured; {} ms assumed (thesis 3.30)",
+            model.identified.dead_time_s * 1e3
+        );
+    }
+    print!("{}", human_summary(&d, model.identified.units));
     if let Some(path) = &args.json {
         let doc = JsonOut {
             summary: d.summary(),
             discrete: &d.discrete,
             feedforward: &d.feedforward,
+            drive_form: design::DriveForm::of(&d),
             design: &d,
         };
         let text = serde_json::to_string_pretty(&doc).context("serializing the design")?;
@@ -65,8 +80,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn human_summary(d: &ControllerDesign) -> String {
+fn human_summary(d: &ControllerDesign, units: beltune::ident::ModelUnits) -> String {
     let s = d.summary();
+    let l = beltune::units::labels(units);
+    let (tv, ta, inertia, torque) = (
+        l.torque_per_velocity,
+        l.torque_per_angle,
+        l.inertia,
+        l.torque,
+    );
     let filter = match d.prefilter {
         design::Prefilter::Butterworth { omega_bw_rad_s } => {
             format!("Butterworth, w_bw = {omega_bw_rad_s:.2} rad/s")
@@ -85,10 +107,10 @@ fn human_summary(d: &ControllerDesign) -> String {
     format!(
         "model:      w_r = {:.2} rad/s ({:.2} Hz), w_z = {:.2} rad/s ({:.2} Hz)\n\
          prefilter:  {filter}\n\
-         velocity:   K_P = {:.5} N m s/rad, K_I = {:.5} N m/rad\n\
+         velocity:   K_P = {:.5} {tv}, K_I = {:.5} {ta}\n\
          \x20           w_c = {:.2} rad/s, PM = {:.2} deg, GM = {:.2} dB, |L(j w_r)| = {:.2} dB ({rule})\n\
          position:   K_PP = {:.4} 1/s, w_c = {:.2} rad/s, PM = {:.2} deg, GM = {:.2} dB\n\
-         feedforward: m_e = {:.4e} kg m^2, d_v = {:.4e} N m s/rad, tau_c = {:.4} N m, K_v = 1\n\
+         feedforward: m_e = {:.4e} {inertia}, d_v = {:.4e} {tv}, tau_c = {:.4} {torque}, K_v = 1\n\
          discrete:   T_s = {} s, closed-loop pole radius {:.6} (velocity), {:.6} (position)\n",
         d.omega_r_rad_s,
         d.omega_r_rad_s / std::f64::consts::TAU,

@@ -3,10 +3,12 @@
 //! model, optional current-loop dead time. Thesis chapter 3.
 
 use super::util::write_atomic;
+use beltune::design::model_file::{IdentifiedModel, ModelFile, DEFAULT_DEAD_TIME_S};
 use beltune::ident::{
     fit::model_magnitude_db, identify_recorded, DeadTime, EtfeConfig, FitConfig, ModelUnits,
     RecordedExcitation, TwoMassFit,
 };
+use beltune::provenance::Provenance;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -61,32 +63,31 @@ pub struct Args {
     /// Write the FRF with coherence and line status here (CSV).
     #[arg(long)]
     pub frf_csv: Option<PathBuf>,
-    /// Write the fitted model here (JSON; the model file of `beltune design`).
+    /// Write the fitted model here (JSON; the model file of `beltune design`, docs/schema.md).
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// The drive's torque limit, in the unit of --input (N m, or A with
+    /// --current-units), recorded in the --json model.
+    #[arg(long)]
+    pub torque_limit: Option<f64>,
 }
 
-/// The model file: flat keys that `beltune design` reads, plus details.
+/// The model file (docs/schema.md): an identified-model record that `beltune
+/// design --model` reads, plus the fit details.
 #[derive(serde::Serialize)]
 struct ModelJson {
-    f_r_hz: f64,
-    f_z_hz: f64,
-    theta_e: f64,
-    m_c: f64,
-    c: f64,
-    d: f64,
-    d_m: f64,
-    d_c: f64,
-    i_t: f64,
-    fit_rms_db: f64,
-    /// Current-loop dead time, s; null when no actual-torque column was given.
-    dead_time_s: Option<f64>,
-    dead_time_samples: Option<usize>,
-    ts_s: f64,
-    units: ModelUnits,
+    #[serde(flatten)]
+    record: ModelFile,
+    fit: FitDetails,
+}
+
+/// What the fit saw beyond the model.
+#[derive(serde::Serialize)]
+struct FitDetails {
     free_inertia: bool,
-    n_lines: usize,
     n_periods: usize,
+    /// Dead time in samples; null when no actual-torque column was given.
+    dead_time_samples: Option<usize>,
     uncertainty: Option<beltune::ident::ParamUncertainty>,
     features: beltune::ident::FrfFeatures,
 }
@@ -128,6 +129,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
         }
     }
+    let torque_max = match args.torque_limit {
+        Some(t) if !(t.is_finite() && t > 0.0) => {
+            return Err(anyhow::Error::new(crate::exit::Failure::new(
+                crate::exit::ExitStatus::BadInput,
+                format!("--torque-limit {t}: must be a positive number"),
+            )))
+        }
+        t => t,
+    };
     let band = match (args.min_freq_hz, args.max_freq_hz) {
         (None, None) => None,
         (lo, hi) => Some((lo.unwrap_or(0.0), hi.unwrap_or(f64::MAX))),
@@ -165,29 +175,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         write_atomic(path, frf_csv(frf, fit).as_bytes())?;
     }
     if let Some(path) = &args.json {
-        let p = fit.params;
+        let mut identified = IdentifiedModel::from_fit(
+            fit,
+            frf,
+            dead_time.map_or(DEFAULT_DEAD_TIME_S, |d| d.seconds),
+            f64::NAN,
+        );
+        identified.dead_time_measured = dead_time.is_some();
+        identified.ts_s = Some(id.ts_s);
+        identified.torque_max_nm = torque_max;
         let json = ModelJson {
-            f_r_hz: fit.f_r_hz,
-            f_z_hz: fit.f_z_hz,
-            theta_e: p.theta_e,
-            m_c: p.m_c,
-            c: p.c,
-            d: p.d,
-            d_m: p.d_m,
-            d_c: p.d_c,
-            i_t: p.i_t,
-            fit_rms_db: fit.fit_rms_db,
-            dead_time_s: dead_time.map(|d| d.seconds),
-            dead_time_samples: dead_time.map(|d| d.samples),
-            ts_s: id.ts_s,
-            units: fit.units,
-            free_inertia: fit.free_inertia,
-            n_lines: fit.n_lines,
-            n_periods: frf.n_periods,
-            uncertainty: fit.uncertainty,
-            features: fit.features,
+            record: ModelFile::new(identified, None, Provenance::of_this_process(None)),
+            fit: FitDetails {
+                free_inertia: fit.free_inertia,
+                n_periods: frf.n_periods,
+                dead_time_samples: dead_time.map(|d| d.samples),
+                uncertainty: fit.uncertainty,
+                features: fit.features,
+            },
         };
-        let mut text = serde_json::to_string_pretty(&json)?;
+        let mut v = serde_json::to_value(&json)?;
+        if fit.units == ModelUnits::Current {
+            beltune::units::relabel_keys(&mut v, &beltune::units::current_key);
+        }
+        let mut text = serde_json::to_string_pretty(&v)?;
         text.push('\n');
         write_atomic(path, text.as_bytes())?;
     }

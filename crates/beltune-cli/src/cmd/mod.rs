@@ -3,6 +3,8 @@
 pub mod commission;
 pub mod compare;
 pub mod design;
+pub mod excitation;
+pub mod export;
 pub mod friction;
 pub mod identify;
 pub mod knobs;

@@ -117,8 +117,56 @@ fn samples_csv(traj: &Trajectory, ts: f64) -> anyhow::Result<String> {
     Ok(out)
 }
 
+/// The limits as the flags name them: one line naming the flag (the core's
+/// own names, such as `-v_min`, are not what the user typed).
+fn check_flags(args: &Args) -> anyhow::Result<()> {
+    let bad = |m: String| {
+        anyhow::Error::new(crate::exit::Failure::new(
+            crate::exit::ExitStatus::BadInput,
+            m,
+        ))
+    };
+    let short = beltune::error::short_number;
+    for (flag, v) in [
+        ("--v-max", args.v_max),
+        ("--a-max", args.a_max),
+        ("--j-max", args.j_max),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(bad(format!(
+                "{flag} must be finite and > 0, got {}",
+                short(v)
+            )));
+        }
+    }
+    for (flag, v) in [
+        ("--v-min", args.v_min),
+        ("--a-min", args.a_min),
+        ("--j-min", args.j_min),
+    ] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v < 0.0) {
+                return Err(bad(format!(
+                    "{flag} must be finite and < 0, got {}",
+                    short(v)
+                )));
+            }
+        }
+    }
+    for (flag, s) in [("--start", &args.start), ("--target", &args.target)] {
+        if ![s.position, s.velocity, s.acceleration]
+            .iter()
+            .all(|x| x.is_finite())
+        {
+            return Err(bad(format!("{flag} must be three finite numbers")));
+        }
+    }
+    Ok(())
+}
+
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    check_flags(&args)?;
     let limits = limits(&args);
     let traj =
         Trajectory::plan(&args.start, &args.target, &limits).context("planning the trajectory")?;

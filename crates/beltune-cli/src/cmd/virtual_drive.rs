@@ -32,6 +32,10 @@ pub struct Args {
     /// Seed of the simulated measurement noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Offer no distributed clocks: the drive runs SM-synchronous, one cycle
+    /// per process-data frame (independent of the host's timing).
+    #[arg(long)]
+    pub no_dc: bool,
 }
 
 static STOP: AtomicBool = AtomicBool::new(false);
@@ -55,13 +59,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             initial_cart_position_m: Some(args.start_position),
             ..SimConfig::default()
         },
+        distributed_clocks: !args.no_dc,
         ..DriveConfig::default()
     };
     let mut drive = VirtualDrive::new(&plant, cfg).context("virtual drive")?;
     // SAFETY: installing an async-signal-safe handler (an atomic store).
     unsafe {
-        libc::signal(libc::SIGINT, on_signal as libc::sighandler_t);
-        libc::signal(libc::SIGTERM, on_signal as libc::sighandler_t);
+        libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
+        libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
     }
     eprintln!(
         "virtual drive `{}` on {}: plant {}, cycle {} us; Ctrl-C stops",

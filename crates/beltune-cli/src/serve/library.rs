@@ -78,7 +78,7 @@ pub struct ValidationFile {
 #[derive(Debug, Clone, Deserialize)]
 pub struct CommissioningFile {
     /// Identified model (the keys `beltune design` reads; extra keys are ignored).
-    pub identified: beltune::design::ModelFile,
+    pub identified: beltune::design::IdentifiedModel,
     /// Identified friction (optional).
     #[serde(default)]
     pub friction: Option<FrictionTotals>,
@@ -107,6 +107,8 @@ pub struct DesignModel {
     /// The exact design input of an in-process commissioning (sampling time,
     /// velocity filter), if known.
     pub input: Option<DesignInput>,
+    /// Torque limit of the drive from the record, N m (`None`: egc70's).
+    pub torque_max_nm: Option<f64>,
 }
 
 /// Read `dir/commissioning.json` (and `dir/frf.csv` when present); every
@@ -114,10 +116,14 @@ pub struct DesignModel {
 pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     let path = dir.join(COMMISSIONING_FILE);
     let text = beltune::io::read_to_string_capped(&path, beltune::io::MAX_TEXT_BYTES)?;
-    let file: CommissioningFile =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let file = beltune::design::ModelFile::parse(&text, &path.display().to_string())
+        .with_context(|| format!("parsing {}", path.display()))?;
     let json: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let commissioned = json
+        .get("validation")
+        .and_then(|v| v.get("nonlinear"))
+        .and_then(|n| serde_json::from_value::<MoveSummary>(n.clone()).ok());
     let id = file.identified;
     let params = id.params();
     params
@@ -125,7 +131,13 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         .with_context(|| format!("{}: identified model", path.display()))?;
     beltune::error::require_positive("dead_time_s [s]", id.dead_time_s)
         .with_context(|| format!("{}: identified model", path.display()))?;
-    if let Some(f) = file.friction {
+    let friction = file.friction.map(|f| FrictionTotals {
+        viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+        coulomb_nm: f.coulomb_nm,
+        linear_viscous_nm_s_per_rad: Some(f.linear_viscous_nm_s_per_rad),
+        holding_torque_nm: Some(f.holding_torque_nm),
+    });
+    if let Some(f) = friction {
         beltune::error::require_non_negative(
             "friction.viscous [N m s/rad]",
             f.viscous_nm_s_per_rad,
@@ -146,11 +158,12 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         source: format!("commissioning {}", dir.display()),
         params,
         dead_time_s: id.dead_time_s,
-        friction: file.friction,
+        friction,
         frf,
-        commissioned: file.validation.map(|v| v.nonlinear),
+        commissioned,
         json: Some(json),
         input: None,
+        torque_max_nm: id.torque_max_nm,
     })
 }
 
@@ -190,8 +203,8 @@ pub struct LibraryTuner {
     friction: FrictionResult,
     nominal_payload_kg: f64,
     move_plant: MovePlant,
-    /// Torque limit written to controller.toml and used in the move: the egc70
-    /// drive's (a commissioning.json does not record it), N m.
+    /// Torque limit written to controller.toml and used in the move: the
+    /// record's (`identified.torque_max_nm`), else the egc70 drive's, N m.
     torque_max_nm: f64,
 }
 
@@ -209,7 +222,10 @@ impl LibraryTuner {
         input
             .validate()
             .with_context(|| format!("design input from {}", model.source))?;
-        let torque_max_nm = rigs::builtin("egc70", None)?.info().torque_max_nm;
+        let torque_max_nm = match model.torque_max_nm {
+            Some(t) => t,
+            None => rigs::builtin("egc70", None)?.info().torque_max_nm,
+        };
         let f = model.friction.unwrap_or(FrictionTotals {
             viscous_nm_s_per_rad: 0.0,
             coulomb_nm: 0.0,
@@ -251,8 +267,13 @@ impl LibraryTuner {
     ) -> anyhow::Result<Self> {
         let fit = &run.fit;
         let lines = plots::frf_lines(&run.frf, &fit.model.tf(&fit.params), run.dead_time.seconds)?;
-        let json = serde_json::to_value(outputs::commissioning_json(run, name, None))
-            .context("commissioning.json of the built-in run")?;
+        let json = serde_json::to_value(outputs::commissioning_json(
+            run,
+            name,
+            None,
+            Provenance::of_this_process(Some(BUILTIN_SEED)),
+        ))
+        .context("commissioning.json of the built-in run")?;
         let model = DesignModel {
             source: format!(
                 "built-in {name} commissioned at start-up ({} kg payload, seed {BUILTIN_SEED})",
@@ -270,6 +291,7 @@ impl LibraryTuner {
             commissioned: Some(run.validation.nonlinear.clone()),
             json: Some(json),
             input: Some(run.design.input),
+            torque_max_nm: None,
         };
         let mut tuner = LibraryTuner::new(model)?;
         tuner.torque_max_nm = plant.info().torque_max_nm;
@@ -606,8 +628,15 @@ impl Tuner for LibraryTuner {
 
 impl LibraryTuner {
     fn controller_toml_of(&self, d: &ControllerDesign) -> Result<String, TuneError> {
-        let body = outputs::controller_toml(d, &self.friction, self.torque_max_nm)
-            .map_err(|e| TuneError::Internal(e.to_string()))?;
+        let body = outputs::controller_toml(
+            d,
+            &self.friction,
+            self.torque_max_nm,
+            beltune::ident::ModelUnits::Torque,
+            Provenance::of_this_process(None),
+        )
+        .map_err(|e| TuneError::Internal(e.to_string()))?;
+
         let k = &d.knobs;
         let hz = |w: f64| w / (2.0 * std::f64::consts::PI);
         Ok(format!(
@@ -688,11 +717,7 @@ impl LibraryTuner {
         let id = self.model.json.as_ref().and_then(|j| j.get("identified"));
         let number = |k: &str| id.and_then(|i| i.get(k)).and_then(|v| v.as_f64());
         let label = self.move_label();
-        let mut input = report_build::verdict_input(
-            &beltune::procedure::result::IdentifiedModel::default(),
-            d,
-            sim.map(|m| &m.summary),
-        );
+        let mut input = report_build::verdict_input(None, d, sim.map(|m| &m.summary));
         input.mean_coherence = number("mean_coherence");
         input.fit_rms_db = number("fit_rms_db");
         let verdict = beltune::procedure::verdict::verdict(&input);

@@ -213,6 +213,16 @@ impl Esc {
         esc
     }
 
+    /// Offer distributed clocks (feature register 0x0008 bits 2, 3) or not
+    /// (the registers stay, but a master will not configure SYNC0).
+    pub fn set_distributed_clocks(&mut self, on: bool) {
+        if on {
+            self.mem[0x0008] |= 0x0C;
+        } else {
+            self.mem[0x0008] &= !0x0C;
+        }
+    }
+
     /// The AL state.
     pub fn al_state(&self) -> AlState {
         self.al_state

@@ -108,7 +108,7 @@ impl Transport for InProcess<'_> {
         Poll::Pending
     }
 
-    fn end_of_cycle(&mut self, cycle_ns: u64) {
+    fn end_of_cycle(&mut self, cycle_ns: u64, _dc_wait: Option<std::time::Duration>) {
         // the rest of the cycle after the frames of this one
         let next = self.cycle_start_ns + cycle_ns;
         let now = self.now_ns();

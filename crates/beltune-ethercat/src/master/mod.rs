@@ -48,8 +48,9 @@ pub trait Transport {
     /// waker. `Ready(Err)` ends the exchange with an error.
     fn poll_io(&mut self, cx: &mut Context<'_>) -> Poll<Result<(), ethercrab::error::Error>>;
     /// One bus cycle of `cycle_ns` is over (in-process: advance the simulated
-    /// clock; on a wire: wait until the next cycle starts).
-    fn end_of_cycle(&mut self, cycle_ns: u64);
+    /// clock; on a wire: wait until the next cycle starts, `dc_wait` from now
+    /// when distributed clocks tell it).
+    fn end_of_cycle(&mut self, cycle_ns: u64, dc_wait: Option<Duration>);
     /// The master's clock for distributed clocks, ns.
     fn clock(&self) -> Clock;
     /// Whether the bus' time runs in real time (see `Axis::runs_in_real_time`).
@@ -355,7 +356,8 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
                         DcConfiguration {
                             start_delay: Duration::from_nanos(10 * cycle_ns),
                             sync0_period: Duration::from_nanos(cycle_ns),
-                            sync0_shift: Duration::ZERO,
+                            // frames in the middle of the cycle, away from the SYNC0 edges
+                            sync0_shift: Duration::from_nanos(cycle_ns / 2),
                         },
                     )
                     .await
@@ -395,8 +397,26 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
             lost: 0,
             failed: None,
         };
+        axis.expected_wkc = axis.expected_working_counter();
         axis.start()?;
         Ok(axis)
+    }
+
+    /// LRW working counter of the whole bus: +1 per SubDevice with inputs,
+    /// +2 per SubDevice with outputs (ETG.1000.4).
+    fn expected_working_counter(&self) -> u16 {
+        let md = &self.maindevice;
+        let count = |i: usize, o: usize| u16::from(i > 0) + 2 * u16::from(o > 0);
+        match &self.group {
+            Group::Dc(g) => g
+                .iter(md)
+                .map(|sd| count(sd.inputs_raw().len(), sd.outputs_raw().len()))
+                .sum(),
+            Group::NoDc(g) => g
+                .iter(md)
+                .map(|sd| count(sd.inputs_raw().len(), sd.outputs_raw().len()))
+                .sum(),
+        }
     }
 
     /// The drive's identity.
@@ -438,18 +458,20 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
                         sd.outputs_raw_mut()[..olen].copy_from_slice(&buf[..olen]);
                     }
                     run(&mut self.transport, g.tx_rx_dc(md))
-                        .map(|r| (r.working_counter, r.all_op()))
+                        .map(|r| (r.working_counter, r.all_op(), Some(r.extra.next_cycle_wait)))
                 }
                 Group::NoDc(g) => {
                     if let Ok(sd) = g.subdevice(md, n) {
                         sd.outputs_raw_mut()[..olen].copy_from_slice(&buf[..olen]);
                     }
-                    run(&mut self.transport, g.tx_rx(md)).map(|r| (r.working_counter, r.all_op()))
+                    run(&mut self.transport, g.tx_rx(md))
+                        .map(|r| (r.working_counter, r.all_op(), None))
                 }
             };
-            self.transport.end_of_cycle(self.cycle_ns);
+            let dc_wait = r.as_ref().ok().and_then(|x| x.2);
+            self.transport.end_of_cycle(self.cycle_ns, dc_wait);
             match r {
-                Ok(x) => x,
+                Ok((w, op, _)) => (w, op),
                 Err(_) => {
                     self.lost += 1;
                     if self.lost > self.cfg.max_lost_frames {
@@ -628,7 +650,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
     /// Cycles without sending anything (a master that stops sending), for tests.
     pub fn pause_cycles(&mut self, cycles: u64) {
         for _ in 0..cycles {
-            self.transport.end_of_cycle(self.cycle_ns);
+            self.transport.end_of_cycle(self.cycle_ns, None);
         }
     }
 }

@@ -61,18 +61,25 @@ impl Transport for RawSocket<'_> {
         }
     }
 
-    fn end_of_cycle(&mut self, cycle_ns: u64) {
+    fn end_of_cycle(&mut self, cycle_ns: u64, dc_wait: Option<Duration>) {
         if !self.paced {
             return;
         }
         let now = Instant::now();
         let cycle = Duration::from_nanos(cycle_ns);
-        let next = match self.next_cycle {
-            Some(t) if t + cycle > now => t + cycle,
+        let next = match (dc_wait, self.next_cycle) {
+            // distributed clocks: the next SYNC0 plus the shift, from the drive's time
+            (Some(w), _) if w <= 2 * cycle => now + w,
+            (_, Some(t)) if t + cycle > now => t + cycle,
             _ => now + cycle,
         };
-        if next > now {
-            std::thread::sleep(next - now);
+        // sleep most of the way, spin the rest (sleep overshoots by tens of us)
+        let margin = Duration::from_micros(80);
+        if next > now + margin {
+            std::thread::sleep(next - now - margin);
+        }
+        while Instant::now() < next {
+            std::hint::spin_loop();
         }
         self.next_cycle = Some(next);
     }

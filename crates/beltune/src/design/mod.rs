@@ -14,6 +14,7 @@
 //! The conditions (4.7)-(4.9) and (4.13)/(4.14) are the specification; the printed
 //! gains of Tables A.6/A.7 do not follow from them and are not reproduced.
 
+pub mod drive_form;
 pub mod dynamics;
 pub mod feedforward;
 pub mod model_file;
@@ -22,9 +23,10 @@ pub mod prefilter;
 pub mod sampled;
 pub mod velocity;
 
+pub use drive_form::DriveForm;
 pub use dynamics::Dynamics;
 pub use feedforward::{Feedforward, FrictionParams};
-pub use model_file::ModelFile;
+pub use model_file::{IdentifiedModel, ModelFile, SCHEMA_VERSION};
 pub use prefilter::{Prefilter, PrefilterKind};
 pub use sampled::{DiscreteController, DiscreteLoops, DiscreteStability};
 pub use velocity::{PiGains, VelocityPlant, VelocityRule};

@@ -1,5 +1,12 @@
-//! The identified model as a file: TOML written by hand, or the JSON that
-//! `beltune identify` writes (same top-level keys; extra keys are ignored).
+//! The identified-model record (schema [`SCHEMA_VERSION`], docs/schema.md): what
+//! `beltune identify --json` and `beltune commission` (`commissioning.json`)
+//! write, and what `beltune design --model`, `beltune serve` and the export read.
+//!
+//! A record is a JSON or TOML document with `schema_version`, `provenance`,
+//! `identified` ([`IdentifiedModel`]) and `friction` ([`FrictionResult`]);
+//! `commissioning.json` is such a document with more sections. A hand-written
+//! model may also be flat (the keys of [`IdentifiedModel`] at the top, with
+//! optional `viscous_nm_s_per_rad` / `coulomb_nm`), as files before schema 1 were:
 //!
 //! ```toml
 //! theta_e = 71.73e-6   # kg m^2
@@ -8,73 +15,196 @@
 //! d_m = 33.17          # N s/m (translational equivalent)
 //! d_c = 226.42         # N s/m
 //! i_t = 0.0124141      # m/rad
-//! dead_time_s = 1e-3
+//! dead_time_s = 1e-3   # optional: 1 ms (thesis 3.30) assumed when absent or null
 //! t_r_s = 2e-3         # optional, default 2 ms
 //! d = 0.0              # optional belt damping, N s/m
-//! viscous = 2.53e-3    # optional friction, N m s/rad
-//! coulomb = 0.125      # optional friction, N m
+//! viscous_nm_s_per_rad = 2.53e-3  # optional friction (old key: viscous)
+//! coulomb_nm = 0.125              # optional friction (old key: coulomb)
 //! ```
+//!
+//! With `units = "current"` every N m of a unit reads A (the input was a motor
+//! current and the torque constant is unknown): see [`crate::units`].
 
 use super::{DesignInput, FrictionParams, DEFAULT_TS_S, DEFAULT_T_R_S};
+use crate::ident::{Frf, ModelUnits, TwoMassFit};
 use crate::model::TwoMassParams;
+use crate::provenance::Provenance;
 use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// Identified model plus the loop data the design needs.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ModelFile {
-    /// `Theta_e`, kg m^2.
+/// Version of the record layout (`commissioning.json`, `controller.toml`, the
+/// `identify --json` model). Files without `schema_version` are version 0 and
+/// read with the old keys.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// Dead time assumed when it was not measured (no actual-torque column), s
+/// (thesis (3.30): 10 samples of 100 us).
+pub const DEFAULT_DEAD_TIME_S: f64 = 1e-3;
+
+/// The identified two-mass model (thesis Table A.4 layout), the loop data the
+/// design needs and the quality of the fit. In the record's units ([`Self::units`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawModel")]
+pub struct IdentifiedModel {
+    /// Unit system of the record: `torque` (SI) or `current` (every N m reads A).
+    pub units: ModelUnits,
+    /// Resonance frequency (2.44), Hz (recomputed from the parameters on reading).
+    pub f_r_hz: f64,
+    /// Antiresonance frequency (2.45), Hz (recomputed from the parameters on reading).
+    pub f_z_hz: f64,
+    /// Motor-side inertia `Theta_e`, kg m^2.
     pub theta_e: f64,
-    /// `m_c`, kg.
+    /// Moving mass `m_c`, kg.
     pub m_c: f64,
-    /// `c`, N/m.
+    /// Belt stiffness `c`, N/m.
     pub c: f64,
-    /// `d_m`, N s/m.
-    pub d_m: f64,
-    /// `d_c`, N s/m.
-    pub d_c: f64,
-    /// `i_t`, m/rad.
-    pub i_t: f64,
-    /// Belt damping `d`, N s/m (optional, default 0).
-    #[serde(default)]
+    /// Belt damping `d`, N s/m (0 in the fitted model (2.42)).
     pub d: f64,
-    /// Dead time `t_T`, s.
+    /// Motor damping (translational equivalent) `d_m`, N s/m.
+    pub d_m: f64,
+    /// Cart damping `d_c`, N s/m.
+    pub d_c: f64,
+    /// Transmission `i_t`, m/rad.
+    pub i_t: f64,
+    /// Current-loop dead time `t_T` (3.30) the design uses, s.
     pub dead_time_s: f64,
-    /// Velocity filter `T_R`, s (optional, default 2 ms).
-    #[serde(default = "default_t_r")]
+    /// `false` when the dead time was not measured and [`DEFAULT_DEAD_TIME_S`]
+    /// is assumed (written as `dead_time_s = null` before schema 1).
+    pub dead_time_measured: bool,
+    /// Velocity filter time constant `T_R`, s.
     pub t_r_s: f64,
-    /// Viscous friction `d_v~`, N m s/rad (optional).
-    #[serde(default, alias = "viscous")]
-    pub viscous_nm_s_per_rad: Option<f64>,
-    /// Coulomb friction `tau_c~`, N m (optional).
-    #[serde(default, alias = "coulomb")]
-    pub coulomb_nm: Option<f64>,
+    /// Sampling time of the record (and of the drive), s; `None` if unknown.
+    pub ts_s: Option<f64>,
+    /// Torque limit of the drive, N m (A in current units); `None` if unknown.
+    pub torque_max_nm: Option<f64>,
+    /// RMS error of the magnitude fit (3.33), dB (NaN / `null`: unknown).
+    pub fit_rms_db: f64,
+    /// One-sigma uncertainty of `m_c`, kg (NaN / `null`: unknown).
+    pub m_c_sigma: f64,
+    /// One-sigma uncertainty of `c`, N/m (NaN / `null`: unknown).
+    pub c_sigma: f64,
+    /// Mean magnitude-squared coherence over the lines used by the fit (NaN / `null`: unknown).
+    pub mean_coherence: f64,
+    /// Number of FRF lines used by the fit (0: unknown).
+    pub lines_used: usize,
+    /// Cart position at which the FRF was measured, m (NaN / `null`: unknown, e.g. recorded data).
+    pub position_m: f64,
 }
 
-fn default_t_r() -> f64 {
-    DEFAULT_T_R_S
+/// What a file may hold: every field optional or with an old spelling.
+#[derive(Deserialize)]
+struct RawModel {
+    #[serde(default)]
+    units: ModelUnits,
+    theta_e: f64,
+    m_c: f64,
+    c: f64,
+    #[serde(default)]
+    d: f64,
+    d_m: f64,
+    d_c: f64,
+    i_t: f64,
+    #[serde(default)]
+    dead_time_s: Option<f64>,
+    #[serde(default)]
+    dead_time_measured: Option<bool>,
+    #[serde(default)]
+    t_r_s: Option<f64>,
+    #[serde(default, alias = "sample_time_s")]
+    ts_s: Option<f64>,
+    #[serde(default, alias = "torque_limit_nm")]
+    torque_max_nm: Option<f64>,
+    #[serde(default)]
+    fit_rms_db: Option<f64>,
+    #[serde(default)]
+    m_c_sigma: Option<f64>,
+    #[serde(default)]
+    c_sigma: Option<f64>,
+    #[serde(default)]
+    mean_coherence: Option<f64>,
+    #[serde(default, alias = "n_lines")]
+    lines_used: Option<usize>,
+    #[serde(default)]
+    position_m: Option<f64>,
 }
 
-impl ModelFile {
-    /// Parse JSON (if the text starts with `{`) or TOML; `origin` names the source in errors.
-    pub fn parse(text: &str, origin: &str) -> Result<Self> {
-        let parsed: std::result::Result<ModelFile, String> = if text.trim_start().starts_with('{') {
-            serde_json::from_str(text).map_err(|e| e.to_string())
-        } else {
-            toml::from_str(text).map_err(|e| e.to_string().replace('\n', " "))
+impl TryFrom<RawModel> for IdentifiedModel {
+    type Error = String;
+    fn try_from(r: RawModel) -> std::result::Result<Self, String> {
+        let params = TwoMassParams {
+            theta_e: r.theta_e,
+            m_c: r.m_c,
+            c: r.c,
+            d: r.d,
+            d_m: r.d_m,
+            d_c: r.d_c,
+            i_t: r.i_t,
         };
-        let m = parsed.map_err(|message| Error::Parse {
-            path: origin.to_string(),
-            message,
-        })?;
-        m.design_input(DEFAULT_TS_S)?.validate()?;
-        Ok(m)
+        params.validate().map_err(|e| e.to_string())?;
+        let measured = r.dead_time_measured.unwrap_or(r.dead_time_s.is_some());
+        let nan = f64::NAN;
+        Ok(IdentifiedModel {
+            units: r.units,
+            f_r_hz: params.f_r_hz(),
+            f_z_hz: params.f_z_hz(),
+            theta_e: r.theta_e,
+            m_c: r.m_c,
+            c: r.c,
+            d: r.d,
+            d_m: r.d_m,
+            d_c: r.d_c,
+            i_t: r.i_t,
+            dead_time_s: r.dead_time_s.unwrap_or(DEFAULT_DEAD_TIME_S),
+            dead_time_measured: measured,
+            t_r_s: r.t_r_s.unwrap_or(DEFAULT_T_R_S),
+            ts_s: r.ts_s,
+            torque_max_nm: r.torque_max_nm,
+            fit_rms_db: r.fit_rms_db.unwrap_or(nan),
+            m_c_sigma: r.m_c_sigma.unwrap_or(nan),
+            c_sigma: r.c_sigma.unwrap_or(nan),
+            mean_coherence: r.mean_coherence.unwrap_or(nan),
+            lines_used: r.lines_used.unwrap_or(0),
+            position_m: r.position_m.unwrap_or(nan),
+        })
     }
+}
 
-    /// Read and parse a file.
-    pub fn load(path: &Path) -> Result<Self> {
-        let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
-        ModelFile::parse(&text, &path.display().to_string())
+impl IdentifiedModel {
+    /// The summary of a fit on `frf`, with the dead time used and the cart
+    /// position of the measurement (NaN when unknown, e.g. recorded data).
+    /// Sampling time and torque limit are unknown here (`None`): the caller sets them.
+    pub fn from_fit(fit: &TwoMassFit, frf: &Frf, dead_time_s: f64, position_m: f64) -> Self {
+        let used = frf.usable_indices();
+        let mean_coherence = if used.is_empty() {
+            0.0
+        } else {
+            used.iter().map(|&i| frf.coherence[i]).sum::<f64>() / used.len() as f64
+        };
+        let p = fit.params;
+        IdentifiedModel {
+            units: fit.units,
+            f_r_hz: fit.f_r_hz,
+            f_z_hz: fit.f_z_hz,
+            theta_e: p.theta_e,
+            m_c: p.m_c,
+            c: p.c,
+            d: p.d,
+            d_m: p.d_m,
+            d_c: p.d_c,
+            i_t: p.i_t,
+            dead_time_s,
+            dead_time_measured: true,
+            t_r_s: DEFAULT_T_R_S,
+            ts_s: None,
+            torque_max_nm: None,
+            fit_rms_db: fit.fit_rms_db,
+            m_c_sigma: fit.uncertainty.map(|u| u.m_c).unwrap_or(f64::NAN),
+            c_sigma: fit.uncertainty.map(|u| u.c).unwrap_or(f64::NAN),
+            mean_coherence,
+            lines_used: fit.n_lines,
+            position_m,
+        }
     }
 
     /// The two-mass parameters.
@@ -89,24 +219,188 @@ impl ModelFile {
             i_t: self.i_t,
         }
     }
+}
 
-    /// The design input at sampling time `ts_s` (not validated).
-    pub fn design_input(&self, ts_s: f64) -> Result<DesignInput> {
-        let friction = if self.viscous_nm_s_per_rad.is_some() || self.coulomb_nm.is_some() {
-            let f = FrictionParams {
-                viscous_nm_s_per_rad: self.viscous_nm_s_per_rad.unwrap_or(0.0),
-                coulomb_nm: self.coulomb_nm.unwrap_or(0.0),
-            };
-            f.validate()?;
-            Some(f)
+/// Friction seen at the motor (3.36), N m based (A in current units).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct FrictionResult {
+    /// Viscous coefficient `d_v~`, N m s/rad (key `viscous` before schema 1).
+    #[serde(alias = "viscous")]
+    pub viscous_nm_s_per_rad: f64,
+    /// Coulomb torque `tau_c~`, N m (key `coulomb` before schema 1).
+    #[serde(alias = "coulomb")]
+    pub coulomb_nm: f64,
+    /// Viscous-only fit (the "linear" feedforward), N m s/rad (key
+    /// `linear_viscous` before schema 1).
+    #[serde(alias = "linear_viscous")]
+    pub linear_viscous_nm_s_per_rad: f64,
+    /// Relative residual of the (3.36) fit (0 when not given).
+    #[serde(default)]
+    pub relative_residual: f64,
+    /// Holding torque (gravity on a tilted axis, or the record's constant
+    /// offset), N m (0 when not given).
+    #[serde(default)]
+    pub holding_torque_nm: f64,
+}
+
+impl FrictionResult {
+    /// The friction parameters of the design (feedforward (4.16)).
+    pub fn params(&self) -> FrictionParams {
+        FrictionParams {
+            viscous_nm_s_per_rad: self.viscous_nm_s_per_rad,
+            coulomb_nm: self.coulomb_nm,
+        }
+    }
+}
+
+/// An identified-model record: the part of `commissioning.json` (or of the
+/// `identify --json` file) that a design needs.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ModelFile {
+    /// [`SCHEMA_VERSION`] of the file (0: a file from before schema 1).
+    pub schema_version: u32,
+    /// Who wrote it (absent in hand-written and old files).
+    pub provenance: Option<Provenance>,
+    /// The model.
+    pub identified: IdentifiedModel,
+    /// Friction, if identified.
+    pub friction: Option<FrictionResult>,
+}
+
+/// The document form (`commissioning.json`, `identify --json`); other keys are ignored.
+#[derive(Deserialize)]
+struct Document {
+    #[serde(default)]
+    schema_version: u32,
+    #[serde(default)]
+    provenance: Option<Provenance>,
+    identified: IdentifiedModel,
+    #[serde(default)]
+    friction: Option<FrictionResult>,
+}
+
+/// The flat form (hand-written, or `identify --json` before schema 1).
+#[derive(Deserialize)]
+struct FlatFriction {
+    #[serde(default, alias = "viscous")]
+    viscous_nm_s_per_rad: Option<f64>,
+    #[serde(default, alias = "coulomb")]
+    coulomb_nm: Option<f64>,
+}
+
+impl ModelFile {
+    /// A schema-[`SCHEMA_VERSION`] record.
+    pub fn new(
+        identified: IdentifiedModel,
+        friction: Option<FrictionResult>,
+        provenance: Provenance,
+    ) -> Self {
+        ModelFile {
+            schema_version: SCHEMA_VERSION,
+            provenance: Some(provenance),
+            identified,
+            friction,
+        }
+    }
+
+    /// Parse JSON (if the text starts with `{`) or TOML; `origin` names the
+    /// source in errors. The model and friction are validated.
+    pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        let perr = |message: String| Error::Parse {
+            path: origin.to_string(),
+            message,
+        };
+        let value: serde_json::Value = if text.trim_start().starts_with('{') {
+            serde_json::from_str(text).map_err(|e| perr(e.to_string()))?
         } else {
-            None
+            let t: toml::Value =
+                toml::from_str(text).map_err(|e| perr(e.to_string().replace('\n', " ")))?;
+            serde_json::to_value(t).map_err(|e| perr(e.to_string()))?
+        };
+        let mut value = value;
+        let units_of =
+            |v: &serde_json::Value| v.get("units").and_then(|u| u.as_str()) == Some("current");
+        if value.get("identified").is_some_and(units_of) || units_of(&value) {
+            crate::units::relabel_keys(&mut value, &crate::units::torque_key);
+        }
+        let file = if value.get("identified").is_some() {
+            let d: Document = serde_json::from_value(value).map_err(|e| perr(e.to_string()))?;
+            if d.schema_version > SCHEMA_VERSION {
+                return Err(perr(format!(
+                    "schema_version {} is newer than this beltune reads ({SCHEMA_VERSION})",
+                    d.schema_version
+                )));
+            }
+            ModelFile {
+                schema_version: d.schema_version,
+                provenance: d.provenance,
+                identified: d.identified,
+                friction: d.friction,
+            }
+        } else {
+            let f: FlatFriction =
+                serde_json::from_value(value.clone()).map_err(|e| perr(e.to_string()))?;
+            let identified: IdentifiedModel =
+                serde_json::from_value(value).map_err(|e| perr(e.to_string()))?;
+            let friction =
+                (f.viscous_nm_s_per_rad.is_some() || f.coulomb_nm.is_some()).then(|| {
+                    let v = f.viscous_nm_s_per_rad.unwrap_or(0.0);
+                    FrictionResult {
+                        viscous_nm_s_per_rad: v,
+                        coulomb_nm: f.coulomb_nm.unwrap_or(0.0),
+                        linear_viscous_nm_s_per_rad: v,
+                        relative_residual: 0.0,
+                        holding_torque_nm: 0.0,
+                    }
+                });
+            ModelFile {
+                schema_version: 0,
+                provenance: None,
+                identified,
+                friction,
+            }
+        };
+        file.design_input(None)?.validate()?;
+        if let Some(t) = file.identified.torque_max_nm {
+            crate::error::require_positive("torque_max_nm", t)?;
+        }
+        if let Some(ts) = file.identified.ts_s {
+            crate::error::require_positive("ts_s", ts)?;
+        }
+        Ok(file)
+    }
+
+    /// Read and parse a file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
+        ModelFile::parse(&text, &path.display().to_string())
+    }
+
+    /// The two-mass parameters.
+    pub fn params(&self) -> TwoMassParams {
+        self.identified.params()
+    }
+
+    /// The sampling time a design uses: `ts_s`, else the record's, else 100 us.
+    pub fn design_ts_s(&self, ts_s: Option<f64>) -> f64 {
+        ts_s.or(self.identified.ts_s).unwrap_or(DEFAULT_TS_S)
+    }
+
+    /// The design input at sampling time `ts_s` (see [`Self::design_ts_s`]; not validated).
+    pub fn design_input(&self, ts_s: Option<f64>) -> Result<DesignInput> {
+        let friction = match &self.friction {
+            Some(f) => {
+                let p = f.params();
+                p.validate()?;
+                Some(p)
+            }
+            None => None,
         };
         Ok(DesignInput {
             model: self.params(),
-            dead_time_s: self.dead_time_s,
-            t_r_s: self.t_r_s,
-            ts_s,
+            dead_time_s: self.identified.dead_time_s,
+            t_r_s: self.identified.t_r_s,
+            ts_s: self.design_ts_s(ts_s),
             friction,
         })
     }
@@ -119,17 +413,56 @@ mod tests {
     const TOML: &str = "theta_e = 71.73e-6\nm_c = 13.44\nc = 203.74e3\nd_m = 33.17\nd_c = 226.42\ni_t = 0.0124141\ndead_time_s = 1e-3\nviscous = 2.53e-3\ncoulomb = 0.125\n";
 
     #[test]
-    fn toml_and_identify_json_with_extras() {
+    fn toml_and_old_identify_json_with_extras() {
         let m = ModelFile::parse(TOML, "a.toml").unwrap();
-        assert_eq!(m.t_r_s, 2e-3);
-        assert_eq!(m.d, 0.0);
-        let inp = m.design_input(1e-4).unwrap();
+        assert_eq!(m.schema_version, 0);
+        assert_eq!(m.identified.t_r_s, 2e-3);
+        assert_eq!(m.identified.d, 0.0);
+        let inp = m.design_input(Some(1e-4)).unwrap();
         assert_eq!(inp.friction.unwrap().coulomb_nm, 0.125);
+        // (2.44) recomputed from the parameters, not taken from the file
+        assert!((m.identified.f_r_hz - m.params().f_r_hz()).abs() < 1e-12);
         let json = r#"{"theta_e": 71.73e-6, "m_c": 13.44, "c": 203740.0, "d_m": 33.17, "d_c": 226.42,
-            "i_t": 0.0124141, "dead_time_s": 0.001, "f_r_hz": 107.1, "fit": {"cost": 0.1}, "frf": [1, 2]}"#;
+            "i_t": 0.0124141, "dead_time_s": 0.001, "f_r_hz": 107.1, "fit": {"cost": 0.1}, "frf": [1, 2],
+            "sample_time_s": 2e-4}"#;
         let j = ModelFile::parse(json, "m.json").unwrap();
-        assert_eq!(j.m_c, 13.44);
-        assert!(j.design_input(1e-4).unwrap().friction.is_none());
+        assert_eq!(j.identified.m_c, 13.44);
+        assert_eq!(j.design_ts_s(None), 2e-4);
+        assert!(j.design_input(None).unwrap().friction.is_none());
+    }
+
+    #[test]
+    fn unmeasured_dead_time_is_assumed_and_marked() {
+        let t = TOML.replace("dead_time_s = 1e-3\n", "");
+        let m = ModelFile::parse(&t, "a.toml").unwrap();
+        assert_eq!(m.identified.dead_time_s, DEFAULT_DEAD_TIME_S);
+        assert!(!m.identified.dead_time_measured);
+        let j = r#"{"theta_e": 7e-5, "m_c": 13.4, "c": 2e5, "d_m": 33, "d_c": 226, "i_t": 0.0124, "dead_time_s": null}"#;
+        let m = ModelFile::parse(j, "m.json").unwrap();
+        assert!(!m.identified.dead_time_measured);
+    }
+
+    #[test]
+    fn document_round_trip_json_and_toml() {
+        let flat = ModelFile::parse(TOML, "a.toml").unwrap();
+        let mut id = flat.identified.clone();
+        id.ts_s = Some(1e-4);
+        id.torque_max_nm = Some(3.1);
+        id.units = ModelUnits::Current;
+        let doc = ModelFile::new(id, flat.friction.clone(), Provenance::now(vec![], Some(3)));
+        let json = serde_json::to_string_pretty(&doc).unwrap();
+        let back = ModelFile::parse(&json, "m.json").unwrap();
+        // NaN fields (unknown) come back as NaN: compare the rest
+        assert_eq!(back.identified.units, ModelUnits::Current);
+        assert_eq!(back.identified.torque_max_nm, Some(3.1));
+        assert_eq!(back.friction, doc.friction);
+        assert_eq!(back.provenance, doc.provenance);
+        assert_eq!(back.schema_version, SCHEMA_VERSION);
+        assert_eq!(back.params(), doc.params());
+        let toml_text = toml::to_string(&doc).unwrap();
+        let back = ModelFile::parse(&toml_text, "m.toml").unwrap();
+        assert_eq!(back.params(), doc.params());
+        assert_eq!(back.identified.ts_s, Some(1e-4));
     }
 
     #[test]
@@ -140,5 +473,10 @@ mod tests {
         assert!(e.to_string().contains("m_c"), "{e}");
         assert!(ModelFile::parse("{", "x.json").is_err());
         assert!(ModelFile::load(Path::new("/nonexistent/model.toml")).is_err());
+        let newer = r#"{"schema_version": 99, "identified": {"theta_e": 7e-5, "m_c": 13.4, "c": 2e5, "d_m": 33, "d_c": 226, "i_t": 0.0124}}"#;
+        let e = ModelFile::parse(newer, "n.json").unwrap_err();
+        assert!(e.to_string().contains("newer"), "{e}");
+        let lim = TOML.to_string() + "torque_max_nm = -3\n";
+        assert!(ModelFile::parse(&lim, "x.toml").is_err());
     }
 }

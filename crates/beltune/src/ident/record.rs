@@ -77,6 +77,7 @@ pub fn read_csv_columns(path: &Path, names: &[&str]) -> Result<CsvColumns> {
     };
     crate::io::check_readable_file(path, crate::io::MAX_CSV_BYTES).map_err(|e| match e {
         Error::Parse { message, .. } => csv_err(message),
+        Error::Io { source, .. } => csv_err(format!("cannot open: {source}")),
         other => other,
     })?;
     let mut reader = csv::ReaderBuilder::new()

@@ -192,7 +192,7 @@ pub fn parameter_changes(a: &Value, b: &Value) -> Table {
 }
 
 fn model_tf(json: &Value) -> Option<(crate::lti::Tf, f64)> {
-    let id: crate::design::ModelFile =
+    let id: super::result::IdentifiedModel =
         serde_json::from_value(json.get("identified")?.clone()).ok()?;
     Some((FitModel::default().tf(&id.params()), id.dead_time_s))
 }

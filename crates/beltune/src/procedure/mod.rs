@@ -10,6 +10,7 @@ pub use safety::{SafetyLimits, SafetySupervisor, Violation};
 pub mod bootstrap;
 pub mod commission;
 pub mod compare;
+pub mod controller_file;
 pub mod motion;
 pub mod outputs;
 pub mod plots;

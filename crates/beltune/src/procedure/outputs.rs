@@ -4,26 +4,37 @@
 //! [`write_outputs`], which writes each file atomically and only after all
 //! three were built, so a failed run leaves nothing half-written.
 
-use super::commission::{cascade_from_design, Commissioning};
+use super::commission::Commissioning;
+use super::controller_file::ControllerFile;
 use super::recorded::RecordedCommissioning;
 use super::result::{FrictionResult, IdentifiedModel, Truth, Validation};
-use crate::design::{ControllerDesign, DesignSummary, Prefilter};
-use crate::report::Report;
+use crate::design::{ControllerDesign, DesignSummary, DriveForm, SCHEMA_VERSION};
+use crate::ident::ModelUnits;
+use crate::provenance::Provenance;
+use crate::report::{ParameterRow, Report};
 use crate::{Error, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
-/// `commissioning.json`.
+/// `commissioning.json` (schema [`SCHEMA_VERSION`], docs/schema.md): an
+/// identified-model record ([`crate::design::ModelFile`]) with the controller,
+/// the validation and the log.
 #[derive(Clone, Debug, Serialize)]
 pub struct CommissioningJson {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// Who wrote it: beltune version, date, command line, seed.
+    pub provenance: Provenance,
     /// Name of the axis (built-in plant name or file).
     pub plant: String,
-    /// The identified model.
+    /// The identified model (with sampling time, torque limit and units).
     pub identified: IdentifiedModel,
     /// Friction (`null` when it could not be measured).
     pub friction: Option<FrictionResult>,
     /// Controller: gains, prefilter, achieved margins.
     pub controller: DesignSummary,
+    /// The controller in drive-menu form (`T_n`, `K_v`, filter frequency and damping).
+    pub drive_form: DriveForm,
     /// The three validation moves (`null` for recorded data: no axis to move).
     pub validation: Option<Validation>,
     /// How long the axis was busy, s.
@@ -41,139 +52,33 @@ pub struct CommissioningJson {
     pub log: Vec<String>,
 }
 
-/// Sections of `controller.toml`.
-#[derive(Clone, Debug, Serialize)]
-pub struct ControllerToml {
-    /// Sampling time `T_s`, s.
-    pub ts_s: f64,
-    /// Torque limit, N m.
-    pub torque_max_nm: f64,
-    /// Constant torque offset (holding torque), N m.
-    pub torque_offset_nm: f64,
-    /// Continuous gains.
-    pub gains: GainsToml,
-    /// Prefilter in the velocity loop.
-    pub prefilter: PrefilterToml,
-    /// Velocity filter `G_R = s/(T_R s + 1)` (6.1), Tustin.
-    pub velocity_filter: FirstOrderToml,
-    /// Feedforward (4.16) and its refinements.
-    pub feedforward: FeedforwardToml,
+impl CommissioningJson {
+    /// The JSON text; in current units the unit suffixes of the keys are the
+    /// current spelling ([`crate::units::relabel_keys`]).
+    pub fn to_json_text(&self) -> Result<String> {
+        let err = |e: serde_json::Error| Error::Report {
+            reason: format!("commissioning.json: {e}"),
+        };
+        let mut v = serde_json::to_value(self).map_err(err)?;
+        if self.identified.units == ModelUnits::Current {
+            crate::units::relabel_keys(&mut v, &crate::units::current_key);
+        }
+        let mut text = serde_json::to_string_pretty(&v).map_err(err)?;
+        text.push('\n');
+        Ok(text)
+    }
 }
 
-/// Continuous cascade gains.
-#[derive(Clone, Debug, Serialize)]
-pub struct GainsToml {
-    /// `K_PP`, 1/s.
-    pub k_pp_per_s: f64,
-    /// `K_P`, N m s/rad.
-    pub k_p_nm_s_per_rad: f64,
-    /// `K_I`, N m/rad.
-    pub k_i_nm_per_rad: f64,
-    /// `K_v` (4.17).
-    pub k_v: f64,
-}
-
-/// Prefilter parameters and its discrete section.
-#[derive(Clone, Debug, Serialize)]
-pub struct PrefilterToml {
-    /// "butterworth", "notch" or "none".
-    pub kind: String,
-    /// Butterworth cut-off, rad/s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub omega_bw_rad_s: Option<f64>,
-    /// Notch centre, rad/s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub omega_r_rad_s: Option<f64>,
-    /// Notch width `d_n`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub d_n: Option<f64>,
-    /// `H(z) = (b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2)`: `[b0, b1, b2, a1, a2]`.
-    pub sos: [f64; 5],
-}
-
-/// A first-order section `[b0, b1, a1]` with its time constant.
-#[derive(Clone, Debug, Serialize)]
-pub struct FirstOrderToml {
-    /// `T_R`, s.
-    pub t_r_s: f64,
-    /// `H(z) = (b0 + b1 z^-1) / (1 + a1 z^-1)`: `[b0, b1, a1]`.
-    pub coeffs: [f64; 3],
-}
-
-/// Feedforward parameters.
-#[derive(Clone, Debug, Serialize)]
-pub struct FeedforwardToml {
-    /// `m_e~` (4.15), kg m^2.
-    pub inertia_kg_m2: f64,
-    /// `d_v~` for nonlinear feedforward, N m s/rad.
-    pub viscous_nm_s_per_rad: f64,
-    /// `tau_c~`, N m.
-    pub coulomb_nm: f64,
-    /// Viscous-only coefficient for linear feedforward, N m s/rad.
-    pub linear_viscous_nm_s_per_rad: f64,
-    /// Feedforward preview (current-loop dead time), samples.
-    pub preview_samples: usize,
-    /// Belt-stretch compensation `m_c / c`, s^2.
-    pub belt_stretch_s2: f64,
-    /// Static belt stretch under the holding force, `tau_hold / (i_t c)`, m:
-    /// the motor setpoint leads the cart by this much.
-    pub static_stretch_m: f64,
-    /// Desired velocity through `G_R` before the velocity loop.
-    pub filter_desired_velocity: bool,
-}
-
-/// `controller.toml` for a design, friction and holding torque.
+/// `controller.toml` for a design, friction (with the holding torque) and torque
+/// limit, in `units`: [`ControllerFile::from_design`] as text.
 pub fn controller_toml(
     des: &ControllerDesign,
     friction: &FrictionResult,
     torque_max_nm: f64,
+    units: ModelUnits,
+    provenance: Provenance,
 ) -> Result<String> {
-    let cfg = cascade_from_design(des, torque_max_nm, friction.holding_torque_nm)?;
-    let s = des.discrete.prefilter;
-    let v = cfg.velocity_filter;
-    let (kind, omega_bw, omega_r, d_n) = match des.prefilter {
-        Prefilter::Butterworth { omega_bw_rad_s } => {
-            ("butterworth", Some(omega_bw_rad_s), None, None)
-        }
-        Prefilter::Notch { omega_r_rad_s, d_n } => ("notch", None, Some(omega_r_rad_s), Some(d_n)),
-        Prefilter::None => ("none", None, None, None),
-    };
-    let model = des.input.model;
-    let doc = ControllerToml {
-        ts_s: des.input.ts_s,
-        torque_max_nm,
-        torque_offset_nm: friction.holding_torque_nm,
-        gains: GainsToml {
-            k_pp_per_s: des.k_pp,
-            k_p_nm_s_per_rad: des.k_p,
-            k_i_nm_per_rad: des.k_i,
-            k_v: 1.0,
-        },
-        prefilter: PrefilterToml {
-            kind: kind.into(),
-            omega_bw_rad_s: omega_bw,
-            omega_r_rad_s: omega_r,
-            d_n,
-            sos: [s.b0, s.b1, s.b2, s.a1, s.a2],
-        },
-        velocity_filter: FirstOrderToml {
-            t_r_s: des.input.t_r_s,
-            coeffs: [v.b0, v.b1, v.a1],
-        },
-        feedforward: FeedforwardToml {
-            inertia_kg_m2: model.rigid_inertia(),
-            viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
-            coulomb_nm: friction.coulomb_nm,
-            linear_viscous_nm_s_per_rad: friction.linear_viscous_nm_s_per_rad,
-            preview_samples: (des.input.dead_time_s / des.input.ts_s).round() as usize,
-            belt_stretch_s2: model.m_c / model.c,
-            static_stretch_m: friction.holding_torque_nm / (model.i_t * model.c),
-            filter_desired_velocity: true,
-        },
-    };
-    toml::to_string_pretty(&doc).map_err(|e| Error::Report {
-        reason: format!("controller.toml: {e}"),
-    })
+    ControllerFile::from_design(des, friction, torque_max_nm, units, provenance)?.to_toml()
 }
 
 /// `commissioning.json` for a run.
@@ -181,12 +86,20 @@ pub fn commissioning_json(
     run: &Commissioning,
     plant: &str,
     truth: Option<Truth>,
+    provenance: Provenance,
 ) -> CommissioningJson {
+    let mut identified = run.identified.clone();
+    identified.ts_s = Some(run.design.input.ts_s);
+    identified.torque_max_nm = Some(run.datasheet.torque_max_nm);
+    identified.t_r_s = run.design.input.t_r_s;
     CommissioningJson {
+        schema_version: SCHEMA_VERSION,
+        provenance,
         plant: plant.to_string(),
-        identified: run.identified.clone(),
+        identified,
         friction: Some(run.friction.clone()),
         controller: run.design.summary(),
+        drive_form: DriveForm::of(&run.design),
         validation: Some(run.validation.clone()),
         experiment_time_s: run.experiment_time_s,
         computation_time_s: run.computation_time_s,
@@ -199,18 +112,110 @@ pub fn commissioning_json(
 
 pub use super::report_build::{build_report, data_files, recorded_data_files};
 
+fn sig(x: f64, sig: usize) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let e = x.abs().log10().floor() as i32;
+    if (-3..5).contains(&e) {
+        let d = (sig as i32 - 1 - e).max(0) as usize;
+        format!("{x:.d$}")
+    } else {
+        format!("{x:.*e}", sig - 1)
+    }
+}
+
+/// Model, friction and controller rows of a recorded commissioning, in the
+/// record's units (no scaled SI units: a current record has no kg).
+fn recorded_rows(run: &RecordedCommissioning) -> Vec<ParameterRow> {
+    let id = &run.identified;
+    let des = &run.design;
+    let l = crate::units::labels(id.units);
+    let r = |name: &str, unit: &str, v: f64| ParameterRow {
+        name: name.into(),
+        unit: unit.into(),
+        before: None,
+        after: sig(v, 5),
+        truth: None,
+        value: Some(v),
+    };
+    let form = DriveForm::of(des);
+    let mut rows = vec![
+        r("resonance f_r", "Hz", id.f_r_hz),
+        r("antiresonance f_z", "Hz", id.f_z_hz),
+        r("motor inertia Theta_e", l.inertia, id.theta_e),
+        r("moving mass m_c", l.mass, id.m_c),
+        r("belt stiffness c", l.stiffness, id.c),
+        r("motor damping d_m", l.damping, id.d_m),
+        r("cart damping d_c", l.damping, id.d_c),
+        r("transmission i_t", "m/rad", id.i_t),
+        r(
+            if id.dead_time_measured {
+                "dead time t_T"
+            } else {
+                "dead time t_T (assumed, not measured)"
+            },
+            "ms",
+            id.dead_time_s * 1e3,
+        ),
+    ];
+    if let Some(f) = &run.friction {
+        rows.extend([
+            r(
+                "viscous friction d_v",
+                l.torque_per_velocity,
+                f.viscous_nm_s_per_rad,
+            ),
+            r("Coulomb friction tau_c", l.torque, f.coulomb_nm),
+            r("constant offset", l.torque, f.holding_torque_nm),
+        ]);
+    }
+    if let Some(t) = id.torque_max_nm {
+        rows.push(r("torque limit", l.torque, t));
+    }
+    rows.extend([
+        r("K_P", l.torque_per_velocity, des.k_p),
+        r("K_I", l.torque_per_angle, des.k_i),
+        r("K_PP", "1/s", des.k_pp),
+    ]);
+    if let Some(tn) = form.integral_time_ms {
+        rows.push(r("integral time T_n = K_P/K_I", "ms", tn));
+    }
+    rows.extend([
+        r(
+            "velocity phase margin",
+            "deg",
+            des.velocity_margins.phase_margin_deg,
+        ),
+        r(
+            "position phase margin",
+            "deg",
+            des.position_margins.phase_margin_deg,
+        ),
+        r("gain at resonance", "dB", des.gain_at_resonance_db),
+    ]);
+    rows
+}
+
 /// `commissioning.json` and the report for a commissioning from recorded data
-/// (`source` names the record). The JSON's `experiment_time_s` is the record's duration.
+/// (`source` names the record, `torque_max_nm` is the drive's torque limit in
+/// the record's unit). The JSON's `experiment_time_s` is the record's duration.
 pub fn recorded_outputs(
     run: &RecordedCommissioning,
     source: &str,
-    provenance: Option<&crate::provenance::Provenance>,
+    torque_max_nm: f64,
+    provenance: Provenance,
 ) -> Result<(CommissioningJson, Report)> {
+    let mut identified = run.identified.clone();
+    identified.torque_max_nm = Some(torque_max_nm);
     let json = CommissioningJson {
+        schema_version: SCHEMA_VERSION,
+        provenance,
         plant: source.to_string(),
-        identified: run.identified.clone(),
+        identified,
         friction: run.friction.clone(),
         controller: run.design.summary(),
+        drive_form: DriveForm::of(&run.design),
         validation: None,
         experiment_time_s: run.record_time_s,
         computation_time_s: run.computation_time_s,
@@ -219,7 +224,25 @@ pub fn recorded_outputs(
         truth: None,
         log: run.log.clone(),
     };
-    let report = super::report_build::recorded_report(run, source, provenance)?;
+    let mut run_with_limit = run.clone();
+    run_with_limit.identified.torque_max_nm = Some(torque_max_nm);
+    let id = &run.identified;
+    let l = crate::units::labels(id.units);
+    let mut report = super::report_build::recorded_report(run, source, Some(&json.provenance))?;
+    report.parameters = recorded_rows(&run_with_limit);
+    report.summary = format!(
+        "From recorded data ({source}, {:.1} s): resonance {:.2} Hz, antiresonance {:.2} Hz, fit {:.2} dB rms. \
+         Controller: K_P {} {}, K_I {} {}, K_PP {:.3} 1/s. No validation move: the stages that need the axis were skipped.",
+        run.record_time_s,
+        id.f_r_hz,
+        id.f_z_hz,
+        id.fit_rms_db,
+        sig(run.design.k_p, 5),
+        l.torque_per_velocity,
+        sig(run.design.k_i, 5),
+        l.torque_per_angle,
+        run.design.k_pp
+    );
     Ok((json, report))
 }
 
@@ -290,9 +313,7 @@ pub fn write_outputs_with_data(
 }
 
 fn json_text(json: &CommissioningJson) -> Result<String> {
-    serde_json::to_string_pretty(json).map_err(|e| Error::Report {
-        reason: format!("commissioning.json: {e}"),
-    })
+    json.to_json_text()
 }
 
 fn write_texts(

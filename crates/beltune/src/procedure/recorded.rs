@@ -10,8 +10,7 @@ use crate::ident::{MotionFriction, RecordedIdentification};
 use crate::Result;
 use std::time::Instant;
 
-/// Dead time assumed when the record has no actual-torque column, s (thesis (3.30)).
-pub const DEFAULT_DEAD_TIME_S: f64 = 1e-3;
+pub use crate::design::model_file::DEFAULT_DEAD_TIME_S;
 
 /// What a recorded commissioning produced.
 #[derive(Clone, Debug)]
@@ -74,7 +73,10 @@ pub fn commission_recorded(
         }),
     };
     let des = design(&input, knobs)?;
-    let identified = IdentifiedModel::from_fit(fit, &identification.frf, dead_time_s, f64::NAN);
+    let mut identified = IdentifiedModel::from_fit(fit, &identification.frf, dead_time_s, f64::NAN);
+    identified.dead_time_measured = identification.dead_time.is_some();
+    identified.ts_s = Some(identification.ts_s);
+    identified.t_r_s = t_r_s;
     let mean_coherence = identified.mean_coherence;
     let skipped = "skipped (recorded data, no axis)";
     let mut log = vec![

@@ -312,17 +312,61 @@ fn model_and_controller_rows(id: &IdentifiedModel, des: &ControllerDesign) -> Ve
     ]
 }
 
+/// The controller as a drive menu shows it ([`crate::design::DriveForm`]):
+/// speed-loop gain, integral time in ms, position gain in 1/s and (m/min)/mm,
+/// filter, velocity filter, sampling time.
+pub fn drive_form_table(des: &ControllerDesign) -> crate::report::Table {
+    let f = crate::design::DriveForm::of(des);
+    let opt = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |x| format!("{x:.d$}"));
+    let row = |name: &str, unit: &str, v: String| vec![name.to_string(), unit.to_string(), v];
+    crate::report::Table {
+        title: "Drive settings (the gains as a drive menu shows them)".into(),
+        header: ["setting", "unit", "value"].map(String::from).to_vec(),
+        rows: vec![
+            row(
+                "speed controller gain K_P",
+                "N m s/rad",
+                format!("{:.4}", f.velocity_gain_nm_s_per_rad),
+            ),
+            row(
+                "speed controller integral time T_n",
+                "ms",
+                opt(f.integral_time_ms, 2),
+            ),
+            row(
+                "position controller gain K_v",
+                "1/s",
+                format!("{:.3}", f.position_gain_per_s),
+            ),
+            row(
+                "position controller gain K_v",
+                "(m/min)/mm",
+                format!("{:.4}", f.position_gain_m_per_min_per_mm),
+            ),
+            row("speed setpoint filter", "", f.filter_kind.clone()),
+            row("filter frequency", "Hz", opt(f.filter_frequency_hz, 2)),
+            row("filter damping", "", opt(f.filter_damping, 3)),
+            row(
+                "speed actual value filter T_R",
+                "ms",
+                format!("{:.2}", f.velocity_filter_time_ms),
+            ),
+            row("sampling time", "ms", format!("{:.3}", f.ts_ms)),
+        ],
+    }
+}
+
 /// The verdict input of a design with an optional validation summary.
 pub fn verdict_input(
-    id: &IdentifiedModel,
+    id: Option<&IdentifiedModel>,
     des: &ControllerDesign,
     nonlinear: Option<&MoveSummary>,
 ) -> VerdictInput {
     VerdictInput {
         max_tracking_error_m: nonlinear.map(|m| m.max_tracking_error_m),
         static_error_m: nonlinear.map(|m| m.static_error_m),
-        mean_coherence: Some(id.mean_coherence),
-        fit_rms_db: Some(id.fit_rms_db),
+        mean_coherence: id.map(|i| i.mean_coherence),
+        fit_rms_db: id.map(|i| i.fit_rms_db),
         velocity_phase_margin_deg: (
             des.knobs.pm_velocity_deg,
             des.velocity_margins.phase_margin_deg,
@@ -339,7 +383,7 @@ pub fn verdict_input(
 /// The verdict of a commissioning (judged on the move with nonlinear feedforward).
 pub fn verdict_of(run: &Commissioning) -> Verdict {
     verdict(&verdict_input(
-        &run.identified,
+        Some(&run.identified),
         &run.design,
         Some(&run.validation.nonlinear),
     ))
@@ -548,7 +592,7 @@ pub fn build_report(
         provenance: provenance.cloned(),
         excitation: Some(excitation),
         data_files: data_file_notes(true),
-        tables: Vec::new(),
+        tables: vec![drive_form_table(des)],
     })
 }
 
@@ -680,9 +724,10 @@ pub fn recorded_report(
         controller: Some(loops.controller),
         open_loops: loops.open_loops,
         closed_loops: loops.closed_loops,
-        verdict: Some(verdict(&verdict_input(id, &run.design, None))),
+        verdict: Some(verdict(&verdict_input(Some(id), &run.design, None))),
         provenance: provenance.cloned(),
         data_files: data_file_notes(false),
+        tables: vec![drive_form_table(&run.design)],
         ..Report::default()
     })
 }

@@ -380,11 +380,12 @@ mod tests {
             position_max: 0.6,
         };
         let mut progress = NoProgress;
-        let mut runner =
-            Runner::new(&mut axis, &mut progress, sup, i_t, start, ctrl, limits).unwrap();
-        let r = f(&mut runner);
-        let drift = (runner.position_m() - start).abs();
-        drop(runner);
+        let (r, drift) = {
+            let mut runner =
+                Runner::new(&mut axis, &mut progress, sup, i_t, start, ctrl, limits).unwrap();
+            let r = f(&mut runner);
+            (r, (runner.position_m() - start).abs())
+        };
         (r, axis.exchanges, drift)
     }
 

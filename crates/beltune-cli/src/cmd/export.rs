@@ -1,0 +1,48 @@
+//! `beltune export`: the controller of a `controller.toml` as firmware source,
+//! a Rust module of `beltune_rt` constants or a C header for `beltune_rt.h`
+//! (crate beltune-rt-ffi), with the same values to the last digit.
+
+use beltune::export::{export, Lang};
+use beltune::procedure::controller_file::ControllerFile;
+use std::path::PathBuf;
+
+/// Target language.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum LangArg {
+    /// A Rust module (`pub const CASCADE: beltune_rt::control::CascadeConfig<f64>`).
+    Rust,
+    /// A C header (`static const BtCascadeConfig BELTUNE_CASCADE`).
+    C,
+}
+
+/// Arguments of `beltune export`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The controller file written by `beltune commission` (or `beltune serve`).
+    #[arg(long)]
+    pub controller: PathBuf,
+    /// Target language.
+    #[arg(long, value_enum)]
+    pub lang: LangArg,
+    /// Write here instead of stdout.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// Run the subcommand.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let file = ControllerFile::load(&args.controller)?;
+    let lang = match args.lang {
+        LangArg::Rust => Lang::Rust,
+        LangArg::C => Lang::C,
+    };
+    let text = export(&file, lang);
+    match &args.out {
+        Some(path) => {
+            super::util::write_atomic(path, text.as_bytes())?;
+            println!("wrote {}", path.display());
+        }
+        None => print!("{text}"),
+    }
+    Ok(())
+}

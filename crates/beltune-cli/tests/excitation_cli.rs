@@ -1,0 +1,316 @@
+//! Issue 15, item 5: `beltune excitation` writes a signal another drive can
+//! play, with the metadata `commission --csv` needs; the README walk-through
+//! (export, record, commission from the CSV) closes on a simulated drive: the
+//! signal is played on a simulated drive (the `sim-a` set of Table A.11),
+//! recorded, and `commission --csv` with the metadata's arguments
+//! identifies the true resonance and antiresonance at the cart's position.
+
+use beltune::model::{rigs, TwoMassParams};
+use beltune::plant::Axis;
+use beltune::sim::{SimAxis, SimConfig};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn beltune() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_beltune"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("beltune-excitation-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn ok(o: &Output) -> String {
+    assert!(
+        o.status.success(),
+        "status {:?}: {}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// The excitation column of a written CSV.
+fn excitation(csv: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t_s,excitation"));
+    lines
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// Play `u` (N m) on the simulated drive `plant` and write what it records.
+/// Returns the sampling time and the true two-mass model where the cart started.
+fn record_on(plant: &str, u: &[f64], path: &Path) -> (f64, TwoMassParams) {
+    let plant = rigs::builtin(plant, None).unwrap();
+    let mut axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
+    let info = axis.info();
+    let mut truth = None;
+    let mut s = String::from("t_s,torque_nm,angle_rad,actual_nm\n");
+    for (k, &tau) in u.iter().enumerate() {
+        let m = axis.step(tau);
+        if truth.is_none() {
+            truth = Some(plant.linearize(m.cart_position_m.unwrap_or(0.0)).unwrap());
+        }
+        let _ = writeln!(
+            s,
+            "{:?},{tau:?},{:?},{:?}",
+            k as f64 * info.ts_s,
+            m.motor_counts as f64 * info.motor_rad_per_count,
+            m.torque_actual_nm
+        );
+    }
+    std::fs::write(path, s).unwrap();
+    (info.ts_s, truth.unwrap())
+}
+
+/// 3 %: the resonance tolerance of the identification tests (issue 4).
+const FREQUENCY_TOL: f64 = 0.03;
+
+fn walk_through(plant: &str, kind_args: &[&str], name: &str) {
+    let dir = temp_dir(name);
+    let csv = dir.join("excitation.csv");
+    ok(&beltune()
+        .args(["excitation", "--ts", "1e-4", "--periods", "4", "--out"])
+        .arg(&csv)
+        .args(kind_args)
+        .output()
+        .unwrap());
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("excitation.json")).unwrap())
+            .unwrap();
+    let n = meta["period_samples"].as_u64().unwrap() as usize;
+    let u = excitation(&csv);
+    assert_eq!(u.len(), 4 * n);
+    assert!(
+        (0..3 * n).all(|k| u[k] == u[k + n]),
+        "exactly periodic with the period of the metadata"
+    );
+    let peak = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert_eq!(meta["peak"].as_f64(), Some(peak));
+    let rec = dir.join("recorded.csv");
+    let (ts, truth) = record_on(plant, &u, &rec);
+    assert_eq!(meta["ts_s"].as_f64(), Some(ts));
+    let extra: Vec<String> = meta["commission_args"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap().to_string())
+        .collect();
+    let out = dir.join("commissioning");
+    let i_t = truth.i_t.to_string();
+    ok(&beltune()
+        .args(["commission", "--quiet", "--csv"])
+        .arg(&rec)
+        .args([
+            "--input",
+            "torque_nm",
+            "--output",
+            "angle_rad",
+            "--actual-torque",
+            "actual_nm",
+        ])
+        .args(&extra)
+        .args(["--transmission", &i_t, "--torque-limit", "3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap());
+    let cj: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("commissioning.json")).unwrap())
+            .unwrap();
+    let f_r = cj["identified"]["f_r_hz"].as_f64().unwrap();
+    let f_z = cj["identified"]["f_z_hz"].as_f64().unwrap();
+    assert!(
+        (f_r / truth.f_r_hz() - 1.0).abs() < FREQUENCY_TOL,
+        "{name}: f_r {f_r} vs {}",
+        truth.f_r_hz()
+    );
+    assert!(
+        (f_z / truth.f_z_hz() - 1.0).abs() < FREQUENCY_TOL,
+        "{name}: f_z {f_z} vs {}",
+        truth.f_z_hz()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn chirp_walk_through_identifies_sim_a() {
+    walk_through(
+        "sim-a",
+        &[
+            "--kind",
+            "chirp",
+            "--amplitude",
+            "0.5",
+            "--period-samples",
+            "8192",
+            "--f-start-hz",
+            "5",
+            "--f-end-hz",
+            "600",
+        ],
+        "chirp-walk",
+    );
+}
+
+/// The PRBS file: values `+-A/2`, period `(2^n - 1) P` (thesis 3.2), the
+/// metadata's arguments. (Its walk-through is left out: the free-inertia fit
+/// of `identify` diverges on a PRBS record although the FRF is clean; see the
+/// issue 15 report.)
+#[test]
+fn prbs_signal_and_metadata() {
+    let dir = temp_dir("prbs");
+    let csv = dir.join("p.csv");
+    ok(&beltune()
+        .args([
+            "excitation",
+            "--kind",
+            "prbs",
+            "--ts",
+            "1e-4",
+            "--amplitude",
+            "1.2",
+        ])
+        .args(["--order", "9", "--clock", "16", "--periods", "3", "--out"])
+        .arg(&csv)
+        .output()
+        .unwrap());
+    let u = excitation(&csv);
+    let n = 511 * 16;
+    assert_eq!(u.len(), 3 * n);
+    assert!(u.iter().all(|&x| x == 0.6 || x == -0.6));
+    assert!((0..2 * n).all(|k| u[k] == u[k + n]));
+    // 2^(n-1) values +A/2 and 2^(n-1) - 1 values -A/2 per period
+    let plus = u[..n].iter().filter(|&&x| x > 0.0).count();
+    assert_eq!(plus, 256 * 16);
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("p.json")).unwrap()).unwrap();
+    assert_eq!(meta["period_samples"].as_u64(), Some(n as u64));
+    let args: Vec<&str> = meta["commission_args"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap())
+        .collect();
+    assert_eq!(args, ["--period-samples", "8176", "--skip-periods", "1"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn multisine_walk_through_identifies_sim_a() {
+    walk_through(
+        "sim-a",
+        &[
+            "--kind",
+            "multisine",
+            "--amplitude",
+            "0.01",
+            "--period-samples",
+            "8192",
+            "--lines",
+            "512",
+            "--first-harmonic",
+            "2",
+        ],
+        "multisine",
+    );
+}
+
+#[test]
+fn chirp_signal_and_metadata() {
+    let dir = temp_dir("chirp");
+    let csv = dir.join("c.csv");
+    ok(&beltune()
+        .args([
+            "excitation",
+            "--kind",
+            "chirp",
+            "--ts",
+            "1e-4",
+            "--amplitude",
+            "0.2",
+        ])
+        .args([
+            "--period-samples",
+            "10000",
+            "--f-start-hz",
+            "2",
+            "--f-end-hz",
+            "400",
+            "--out",
+        ])
+        .arg(&csv)
+        .output()
+        .unwrap());
+    let u = excitation(&csv);
+    assert_eq!(u.len(), 6 * 10_000);
+    let peak = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(peak <= 0.2 && peak > 0.199, "{peak}");
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("c.json")).unwrap()).unwrap();
+    assert_eq!(meta["band_hz"][0].as_f64(), Some(2.0));
+    assert_eq!(meta["skip_periods"].as_u64(), Some(1));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_excitation_requests_are_one_line_errors() {
+    for args in [
+        vec!["--kind", "prbs", "--ts", "1e-4", "--amplitude", "-1"],
+        vec!["--kind", "prbs", "--ts", "0", "--amplitude", "1"],
+        vec![
+            "--kind",
+            "prbs",
+            "--ts",
+            "1e-4",
+            "--amplitude",
+            "1",
+            "--order",
+            "31",
+        ],
+        vec![
+            "--kind",
+            "multisine",
+            "--ts",
+            "1e-4",
+            "--amplitude",
+            "1",
+            "--lines",
+            "7",
+        ],
+        vec![
+            "--kind",
+            "chirp",
+            "--ts",
+            "1e-4",
+            "--amplitude",
+            "1",
+            "--f-end-hz",
+            "6000",
+        ],
+        vec![
+            "--kind",
+            "prbs",
+            "--ts",
+            "1e-4",
+            "--amplitude",
+            "1",
+            "--periods",
+            "1",
+        ],
+    ] {
+        let o = beltune()
+            .arg("excitation")
+            .args(&args)
+            .args(["--out", "/nonexistent-dir/x.csv"])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    }
+}

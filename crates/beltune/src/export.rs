@@ -1,0 +1,300 @@
+//! Firmware export of a `controller.toml`: a Rust module of `const`s that builds
+//! the `beltune_rt` [`CascadeConfig`](beltune_rt::control::CascadeConfig), and a C
+//! header with the same values for the C ABI of `beltune-rt-ffi`
+//! (`BtCascadeConfig`, `BtSetpointConfig`).
+//!
+//! Both list the same named scalars first (`pub const TS_S: f64 = ...;` and
+//! `#define BELTUNE_TS_S ...`), printed as the shortest text that reads back
+//! to the same `f64` (Rust's `{:?}`), and build the structs from those names,
+//! so the two exports agree to the last digit. In current units the names
+//! carry the current spelling of the unit (`TORQUE_MAX_A`, see [`crate::units`]).
+
+use crate::ident::ModelUnits;
+use crate::procedure::controller_file::{AntiWindupKind, ControllerFile};
+use std::fmt::Write as _;
+
+/// Target language of [`export`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lang {
+    /// A Rust module (`const`s of `beltune_rt` types).
+    Rust,
+    /// A C header for `beltune_rt.h`.
+    C,
+}
+
+/// One named value of the export.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Value {
+    /// A real number.
+    Real(f64),
+    /// A sample count.
+    Count(usize),
+    /// A switch.
+    Flag(bool),
+}
+
+/// The named values of `file`, in order; names are lower case with unit
+/// suffixes (current spelling in current units).
+pub fn values(file: &ControllerFile) -> Vec<(String, Value)> {
+    use Value::*;
+    let g = &file.gains;
+    let f = &file.feedforward;
+    let s = &file.setpoint;
+    let v = file.velocity_filter.coeffs;
+    let p = &file.prefilter.sections;
+    let d = &file.drive_form;
+    let mut out: Vec<(String, Value)> = vec![
+        ("ts_s".into(), Real(file.ts_s)),
+        ("torque_max_nm".into(), Real(file.torque_max_nm)),
+        ("torque_offset_nm".into(), Real(file.torque_offset_nm)),
+        ("k_pp_per_s".into(), Real(g.k_pp_per_s)),
+        ("k_p_nm_s_per_rad".into(), Real(g.k_p_nm_s_per_rad)),
+        ("k_i_nm_per_rad".into(), Real(g.k_i_nm_per_rad)),
+        ("k_v".into(), Real(g.k_v)),
+        ("velocity_filter_b0".into(), Real(v[0])),
+        ("velocity_filter_b1".into(), Real(v[1])),
+        ("velocity_filter_a1".into(), Real(v[2])),
+    ];
+    for (i, sec) in p.iter().enumerate() {
+        for (n, c) in ["b0", "b1", "b2", "a1", "a2"].iter().zip(sec) {
+            out.push((format!("prefilter{}_{n}", i + 1), Real(*c)));
+        }
+    }
+    out.extend([
+        ("ff_inertia".into(), Flag(f.inertia)),
+        ("ff_viscous".into(), Flag(f.viscous)),
+        ("ff_coulomb".into(), Flag(f.coulomb)),
+        ("ff_inertia_kg_m2".into(), Real(f.inertia_kg_m2)),
+        (
+            "ff_viscous_nm_s_per_rad".into(),
+            Real(f.viscous_nm_s_per_rad),
+        ),
+        ("ff_coulomb_nm".into(), Real(f.coulomb_nm)),
+        (
+            "ff_coulomb_deadband_rad_s".into(),
+            Real(f.coulomb_deadband_rad_s),
+        ),
+        (
+            "filter_desired_velocity".into(),
+            Flag(f.filter_desired_velocity),
+        ),
+        ("feedforward_preview".into(), Flag(f.preview)),
+        ("preview_samples".into(), Count(f.preview_samples)),
+        ("dead_time_s".into(), Real(f.dead_time_s)),
+        (
+            "anti_windup_conditional".into(),
+            Flag(file.anti_windup == AntiWindupKind::ConditionalIntegration),
+        ),
+        ("i_t_m_per_rad".into(), Real(s.i_t_m_per_rad)),
+        ("belt_stretch_on".into(), Flag(s.belt_stretch)),
+        ("m_c_kg".into(), Real(s.m_c_kg)),
+        ("c_n_per_m".into(), Real(s.c_n_per_m)),
+        ("static_stretch_m".into(), Real(s.static_stretch_m)),
+        ("t_r_s".into(), Real(file.velocity_filter.t_r_s)),
+        // drive-menu form (information)
+        (
+            "drive_velocity_gain_nm_s_per_rad".into(),
+            Real(d.velocity_gain_nm_s_per_rad),
+        ),
+        (
+            "drive_position_gain_per_s".into(),
+            Real(d.position_gain_per_s),
+        ),
+        (
+            "drive_velocity_filter_time_ms".into(),
+            Real(d.velocity_filter_time_ms),
+        ),
+    ]);
+    if let Some(tn) = d.integral_time_ms {
+        out.push(("drive_integral_time_ms".into(), Real(tn)));
+    }
+    if let Some(x) = d.filter_frequency_hz {
+        out.push(("drive_filter_frequency_hz".into(), Real(x)));
+    }
+    if let Some(x) = d.filter_damping {
+        out.push(("drive_filter_damping".into(), Real(x)));
+    }
+    if file.units == ModelUnits::Current {
+        for (n, _) in out.iter_mut() {
+            if let Some(c) = crate::units::current_key(n) {
+                *n = c;
+            }
+        }
+    }
+    out
+}
+
+/// `x` as the shortest literal that reads back to the same `f64` in Rust and C.
+fn real(x: f64) -> String {
+    format!("{x:?}")
+}
+
+fn header_lines(file: &ControllerFile, comment: &str) -> String {
+    let p = &file.provenance;
+    let l = crate::units::labels(file.units);
+    format!(
+        "{comment} beltune controller export (schema {}), generated by `beltune export`: do not edit.\n\
+         {comment} From a controller.toml written by beltune {} at {}: {}\n\
+         {comment} Torques in {}, gains K_P in {}, K_I in {}; angles in rad, times in s.\n",
+        file.schema_version,
+        p.beltune_version,
+        p.created_utc,
+        p.command_line_text(),
+        l.torque,
+        l.torque_per_velocity,
+        l.torque_per_angle
+    )
+}
+
+/// The export of `file` in `lang`.
+pub fn export(file: &ControllerFile, lang: Lang) -> String {
+    match lang {
+        Lang::Rust => rust_module(file),
+        Lang::C => c_header(file),
+    }
+}
+
+/// The Rust module: named `const`s, `CASCADE` (`CascadeConfig<f64>`) and
+/// `BELT_STRETCH` (`BeltStretch<f64>`) for `SetpointConversion::new(I_T_M_PER_RAD, BELT_STRETCH)`.
+pub fn rust_module(file: &ControllerFile) -> String {
+    let vals = values(file);
+    let name = |n: &str| -> String {
+        let n = if file.units == ModelUnits::Current {
+            crate::units::current_key(n).unwrap_or_else(|| n.to_string())
+        } else {
+            n.to_string()
+        };
+        n.to_ascii_uppercase()
+    };
+    let mut s = header_lines(file, "//");
+    s.push_str(
+        "\nuse beltune_rt::control::{\n    AntiWindup, BeltStretch, CascadeConfig, CascadeGains, Feedforward, FeedforwardParams,\n    FeedforwardTerms,\n};\nuse beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};\n\n",
+    );
+    for (n, v) in &vals {
+        let (ty, lit) = match v {
+            Value::Real(x) => ("f64", real(*x)),
+            Value::Count(c) => ("usize", c.to_string()),
+            Value::Flag(b) => ("bool", b.to_string()),
+        };
+        let _ = writeln!(s, "pub const {}: {ty} = {lit};", n.to_ascii_uppercase());
+    }
+    let sos = |i: usize| {
+        format!(
+            "SosCoeffs {{\n            b0: {},\n            b1: {},\n            b2: {},\n            a1: {},\n            a2: {},\n        }}",
+            name(&format!("prefilter{i}_b0")),
+            name(&format!("prefilter{i}_b1")),
+            name(&format!("prefilter{i}_b2")),
+            name(&format!("prefilter{i}_a1")),
+            name(&format!("prefilter{i}_a2")),
+        )
+    };
+    let aw = match file.anti_windup {
+        AntiWindupKind::ConditionalIntegration => "AntiWindup::ConditionalIntegration",
+        AntiWindupKind::Off => "AntiWindup::Off",
+    };
+    let _ = write!(
+        s,
+        "\n/// The commissioned controller.\npub const CASCADE: CascadeConfig<f64> = CascadeConfig {{\n    ts_s: TS_S,\n    gains: CascadeGains {{\n        k_pp_per_s: K_PP_PER_S,\n        k_p_nm_s_per_rad: {kp},\n        k_i_nm_per_rad: {ki},\n        k_v: K_V,\n    }},\n    velocity_filter: FirstOrderCoeffs {{\n        b0: VELOCITY_FILTER_B0,\n        b1: VELOCITY_FILTER_B1,\n        a1: VELOCITY_FILTER_A1,\n    }},\n    prefilter: [\n        {s1},\n        {s2},\n    ],\n    torque_max_nm: {tmax},\n    anti_windup: {aw},\n    feedforward: Feedforward {{\n        params: FeedforwardParams {{\n            inertia_kg_m2: {ffi},\n            viscous_nm_s_per_rad: {ffv},\n            coulomb_nm: {ffc},\n            coulomb_deadband_rad_s: FF_COULOMB_DEADBAND_RAD_S,\n        }},\n        terms: FeedforwardTerms {{\n            inertia: FF_INERTIA,\n            viscous: FF_VISCOUS,\n            coulomb: FF_COULOMB,\n        }},\n    }},\n    torque_offset_nm: {toff},\n    filter_desired_velocity: FILTER_DESIRED_VELOCITY,\n    feedforward_preview: FEEDFORWARD_PREVIEW,\n}};\n",
+        kp = name("k_p_nm_s_per_rad"),
+        ki = name("k_i_nm_per_rad"),
+        s1 = sos(1),
+        s2 = sos(2),
+        tmax = name("torque_max_nm"),
+        ffi = name("ff_inertia_kg_m2"),
+        ffv = name("ff_viscous_nm_s_per_rad"),
+        ffc = name("ff_coulomb_nm"),
+        toff = name("torque_offset_nm"),
+    );
+    let belt = if file.setpoint.belt_stretch {
+        format!(
+            "BeltStretch::On {{\n    m_c_kg: {},\n    c_n_per_m: {},\n}}",
+            name("m_c_kg"),
+            name("c_n_per_m")
+        )
+    } else {
+        "BeltStretch::Off".to_string()
+    };
+    let _ = write!(
+        s,
+        "\n/// Belt-stretch compensation of the setpoint conversion.\npub const BELT_STRETCH: BeltStretch<f64> = {belt};\n"
+    );
+    s
+}
+
+/// The C header: `#define BELTUNE_...` values, `BELTUNE_CASCADE`
+/// (`BtCascadeConfig`) and `BELTUNE_SETPOINT` (`BtSetpointConfig`) of `beltune_rt.h`.
+pub fn c_header(file: &ControllerFile) -> String {
+    let vals = values(file);
+    let name = |n: &str| -> String {
+        let n = if file.units == ModelUnits::Current {
+            crate::units::current_key(n).unwrap_or_else(|| n.to_string())
+        } else {
+            n.to_string()
+        };
+        format!("BELTUNE_{}", n.to_ascii_uppercase())
+    };
+    let mut s = header_lines(file, "//");
+    s.push_str("#ifndef BELTUNE_CONTROLLER_H\n#define BELTUNE_CONTROLLER_H\n\n#include \"beltune_rt.h\"\n\n");
+    for (n, v) in &vals {
+        let lit = match v {
+            Value::Real(x) => real(*x),
+            Value::Count(c) => format!("{c}u"),
+            Value::Flag(b) => b.to_string(),
+        };
+        let _ = writeln!(s, "#define BELTUNE_{} {lit}", n.to_ascii_uppercase());
+    }
+    let sec = |i: usize| {
+        format!(
+            "{{{}, {}, {}, {}, {}}}",
+            name(&format!("prefilter{i}_b0")),
+            name(&format!("prefilter{i}_b1")),
+            name(&format!("prefilter{i}_b2")),
+            name(&format!("prefilter{i}_a1")),
+            name(&format!("prefilter{i}_a2"))
+        )
+    };
+    let aw = match file.anti_windup {
+        AntiWindupKind::ConditionalIntegration => "BT_ANTI_WINDUP_CONDITIONAL",
+        AntiWindupKind::Off => "BT_ANTI_WINDUP_OFF",
+    };
+    let _ = write!(
+        s,
+        "\n/* The commissioned controller. */\nstatic const BtCascadeConfig BELTUNE_CASCADE = {{\n    .ts_s = BELTUNE_TS_S,\n    .k_pp_per_s = BELTUNE_K_PP_PER_S,\n    .k_p_nm_s_per_rad = {kp},\n    .k_i_nm_per_rad = {ki},\n    .k_v = BELTUNE_K_V,\n    .velocity_filter = {{BELTUNE_VELOCITY_FILTER_B0, BELTUNE_VELOCITY_FILTER_B1, BELTUNE_VELOCITY_FILTER_A1}},\n    .prefilter = {{\n        {s1},\n        {s2},\n    }},\n    .torque_max_nm = {tmax},\n    .anti_windup = {aw},\n    .ff_inertia = BELTUNE_FF_INERTIA,\n    .ff_viscous = BELTUNE_FF_VISCOUS,\n    .ff_coulomb = BELTUNE_FF_COULOMB,\n    .inertia_kg_m2 = {ffi},\n    .viscous_nm_s_per_rad = {ffv},\n    .coulomb_nm = {ffc},\n    .coulomb_deadband_rad_s = BELTUNE_FF_COULOMB_DEADBAND_RAD_S,\n    .torque_offset_nm = {toff},\n    .filter_desired_velocity = BELTUNE_FILTER_DESIRED_VELOCITY,\n    .feedforward_preview = BELTUNE_FEEDFORWARD_PREVIEW,\n}};\n\n/* The cart -> motor setpoint conversion. */\nstatic const BtSetpointConfig BELTUNE_SETPOINT = {{\n    .i_t_m_per_rad = BELTUNE_I_T_M_PER_RAD,\n    .belt_stretch = BELTUNE_BELT_STRETCH_ON,\n    .m_c_kg = {mc},\n    .c_n_per_m = {c},\n}};\n\n#endif /* BELTUNE_CONTROLLER_H */\n",
+        kp = name("k_p_nm_s_per_rad"),
+        ki = name("k_i_nm_per_rad"),
+        s1 = sec(1),
+        s2 = sec(2),
+        tmax = name("torque_max_nm"),
+        ffi = name("ff_inertia_kg_m2"),
+        ffv = name("ff_viscous_nm_s_per_rad"),
+        ffc = name("ff_coulomb_nm"),
+        toff = name("torque_offset_nm"),
+        mc = name("m_c_kg"),
+        c = name("c_n_per_m"),
+    );
+    s
+}
+
+/// The named values of an export (`pub const NAME: T = LIT;` or
+/// `#define BELTUNE_NAME LIT`), as `(name in lower case, literal)`.
+pub fn parse_values(text: &str) -> Vec<(String, String)> {
+    text.lines()
+        .filter_map(|l| {
+            if let Some(rest) = l.strip_prefix("pub const ") {
+                let (name, rest) = rest.split_once(':')?;
+                let (ty, lit) = rest.split_once('=')?;
+                if ty.trim().contains('<') {
+                    return None;
+                }
+                let lit = lit.trim().strip_suffix(';')?;
+                return Some((name.trim().to_ascii_lowercase(), lit.to_string()));
+            }
+            let rest = l.strip_prefix("#define BELTUNE_")?;
+            let (name, lit) = rest.split_once(' ')?;
+            let lit = lit.trim();
+            let lit = lit.strip_suffix('u').unwrap_or(lit);
+            Some((name.to_ascii_lowercase(), lit.to_string()))
+        })
+        .filter(|(n, _)| n != "controller_h")
+        .collect()
+}

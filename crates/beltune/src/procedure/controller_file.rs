@@ -1,0 +1,532 @@
+//! `controller.toml` (schema [`SCHEMA_VERSION`], docs/schema.md): everything a
+//! drive needs to run the commissioned controller with `beltune_rt`, and the
+//! loader that builds the [`CascadeConfig`] from it.
+//!
+//! Filters are written twice: as the design parameters (cut-off, notch centre
+//! and width, `T_R`) and as the discrete coefficients the controller runs
+//! (`[b0, b1, b2, a1, a2]` of `H(z) = (b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2)`,
+//! `[b0, b1, a1]` of `(b0 + b1 z^-1) / (1 + a1 z^-1)`). The loader uses the
+//! coefficients. In current units (`units = "current"`) the unit suffixes of the
+//! keys are the current spelling (`torque_max_a`, `k_p_a_s_per_rad`, see
+//! [`crate::units`]).
+
+use crate::design::{ControllerDesign, DriveForm, Prefilter, SCHEMA_VERSION};
+use crate::ident::ModelUnits;
+use crate::procedure::result::FrictionResult;
+use crate::provenance::Provenance;
+use crate::units::{current_key, relabel_keys, torque_key};
+use crate::{Error, Result};
+use beltune_rt::control::{
+    AntiWindup, BeltStretch, CascadeConfig, CascadeGains, Feedforward, FeedforwardParams,
+    FeedforwardTerms, SetpointConversion,
+};
+use beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};
+use serde::{Deserialize, Serialize};
+
+/// `controller.toml`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerFile {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// `torque` (N m) or `current` (A): the unit of every torque below.
+    pub units: ModelUnits,
+    /// Sampling time `T_s`, s.
+    pub ts_s: f64,
+    /// Torque limit `tau_m,max` (symmetric), N m.
+    pub torque_max_nm: f64,
+    /// Constant torque offset (holding torque), N m.
+    pub torque_offset_nm: f64,
+    /// `"conditional_integration"` (6.26) or `"off"` (6.25).
+    pub anti_windup: AntiWindupKind,
+    /// Who wrote the file.
+    pub provenance: Provenance,
+    /// Continuous gains (Figure 4.1).
+    pub gains: GainsSection,
+    /// Prefilter `G_pre` in the velocity loop (Figure 6.9).
+    pub prefilter: PrefilterSection,
+    /// Velocity filter `G_R = s / (T_R s + 1)` (6.1), Tustin.
+    pub velocity_filter: VelocityFilterSection,
+    /// Torque feedforward (4.16) and the refinements of the cascade.
+    pub feedforward: FeedforwardSection,
+    /// Cart trajectory -> motor setpoint (transmission, belt stretch).
+    pub setpoint: SetpointSection,
+    /// The same controller in drive-menu form (information; not read back).
+    pub drive_form: DriveForm,
+}
+
+/// Anti-windup of the velocity integrator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AntiWindupKind {
+    /// Conditional integration (6.26).
+    ConditionalIntegration,
+    /// Plain integration (6.25).
+    Off,
+}
+
+/// Cascade gains.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GainsSection {
+    /// `K_PP`, 1/s.
+    pub k_pp_per_s: f64,
+    /// `K_P`, N m s/rad.
+    pub k_p_nm_s_per_rad: f64,
+    /// `K_I`, N m/rad.
+    pub k_i_nm_per_rad: f64,
+    /// `K_v` (4.17), dimensionless.
+    pub k_v: f64,
+}
+
+/// Prefilter parameters and its two discrete sections (the second is the identity
+/// for a single filter).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrefilterSection {
+    /// "butterworth", "notch" or "none".
+    pub kind: String,
+    /// Butterworth cut-off `w_bw`, rad/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub omega_bw_rad_s: Option<f64>,
+    /// Notch centre `w_r`, rad/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub omega_r_rad_s: Option<f64>,
+    /// Notch width `d_n` (4.1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub d_n: Option<f64>,
+    /// `[[b0, b1, b2, a1, a2], [b0, b1, b2, a1, a2]]`, run in series.
+    pub sections: [[f64; 5]; 2],
+}
+
+/// Velocity filter.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VelocityFilterSection {
+    /// `T_R`, s.
+    pub t_r_s: f64,
+    /// `[b0, b1, a1]`.
+    pub coeffs: [f64; 3],
+}
+
+/// Feedforward (4.16) and the refinements (a), (b) of the cascade.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeedforwardSection {
+    /// Term `m_e alpha_d` on.
+    pub inertia: bool,
+    /// Term `d_v omega_d` on.
+    pub viscous: bool,
+    /// Term `tau_c sign(omega_d)` on.
+    pub coulomb: bool,
+    /// `m_e~ = Theta_e + i_t^2 m_c` (4.15), kg m^2.
+    pub inertia_kg_m2: f64,
+    /// `d_v~`, N m s/rad.
+    pub viscous_nm_s_per_rad: f64,
+    /// `tau_c~`, N m.
+    pub coulomb_nm: f64,
+    /// Dead band of `sign(omega_d)`, rad/s.
+    pub coulomb_deadband_rad_s: f64,
+    /// Viscous-only coefficient of the "linear" feedforward (information), N m s/rad.
+    pub linear_viscous_nm_s_per_rad: f64,
+    /// Refinement (b): the feedforward uses the trajectory `preview_samples` ahead.
+    pub preview: bool,
+    /// Dead-time preview `n_T = round(t_T / T_s)`, samples.
+    pub preview_samples: usize,
+    /// Current-loop dead time `t_T` the preview stands for, s.
+    pub dead_time_s: f64,
+    /// Refinement (a): the desired velocity passes the low-pass part of `G_R`.
+    pub filter_desired_velocity: bool,
+}
+
+/// Cart trajectory -> motor setpoint ([`SetpointConversion`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SetpointSection {
+    /// `i_t = r / i_g`, m/rad.
+    pub i_t_m_per_rad: f64,
+    /// Belt-stretch compensation `phi_d = (xi_d + m_c xi_d'' / c) / i_t` on.
+    pub belt_stretch: bool,
+    /// Moving mass `m_c`, kg.
+    pub m_c_kg: f64,
+    /// Belt stiffness `c`, N/m.
+    pub c_n_per_m: f64,
+    /// Static belt stretch under the holding torque `tau_hold / (i_t c)`, m: the
+    /// motor setpoint leads the cart by this much.
+    pub static_stretch_m: f64,
+}
+
+impl ControllerFile {
+    /// The controller commissioning validated: the design's gains and filters,
+    /// conditional integration, nonlinear feedforward (4.16) with dead-time
+    /// preview, filtered desired velocity, belt-stretch compensation.
+    pub fn from_design(
+        des: &ControllerDesign,
+        friction: &FrictionResult,
+        torque_max_nm: f64,
+        units: ModelUnits,
+        provenance: Provenance,
+    ) -> Result<Self> {
+        let cfg = des.cascade_config(torque_max_nm)?;
+        let (kind, omega_bw, omega_r, d_n) = match des.prefilter {
+            Prefilter::Butterworth { omega_bw_rad_s } => {
+                ("butterworth", Some(omega_bw_rad_s), None, None)
+            }
+            Prefilter::Notch { omega_r_rad_s, d_n } => {
+                ("notch", None, Some(omega_r_rad_s), Some(d_n))
+            }
+            Prefilter::None => ("none", None, None, None),
+        };
+        let sos = |s: &SosCoeffs<f64>| [s.b0, s.b1, s.b2, s.a1, s.a2];
+        let v = cfg.velocity_filter;
+        let model = des.input.model;
+        let file = ControllerFile {
+            schema_version: SCHEMA_VERSION,
+            units,
+            ts_s: des.input.ts_s,
+            torque_max_nm,
+            torque_offset_nm: friction.holding_torque_nm,
+            anti_windup: AntiWindupKind::ConditionalIntegration,
+            provenance,
+            gains: GainsSection {
+                k_pp_per_s: des.k_pp,
+                k_p_nm_s_per_rad: des.k_p,
+                k_i_nm_per_rad: des.k_i,
+                k_v: cfg.gains.k_v,
+            },
+            prefilter: PrefilterSection {
+                kind: kind.into(),
+                omega_bw_rad_s: omega_bw,
+                omega_r_rad_s: omega_r,
+                d_n,
+                sections: [sos(&cfg.prefilter[0]), sos(&cfg.prefilter[1])],
+            },
+            velocity_filter: VelocityFilterSection {
+                t_r_s: des.input.t_r_s,
+                coeffs: [v.b0, v.b1, v.a1],
+            },
+            feedforward: FeedforwardSection {
+                inertia: true,
+                viscous: true,
+                coulomb: true,
+                inertia_kg_m2: model.rigid_inertia(),
+                viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
+                coulomb_nm: friction.coulomb_nm,
+                coulomb_deadband_rad_s: beltune_rt::control::DEFAULT_COULOMB_DEADBAND_RAD_S,
+                linear_viscous_nm_s_per_rad: friction.linear_viscous_nm_s_per_rad,
+                preview: true,
+                preview_samples: (des.input.dead_time_s / des.input.ts_s).round() as usize,
+                dead_time_s: des.input.dead_time_s,
+                filter_desired_velocity: true,
+            },
+            setpoint: SetpointSection {
+                i_t_m_per_rad: model.i_t,
+                belt_stretch: true,
+                m_c_kg: model.m_c,
+                c_n_per_m: model.c,
+                static_stretch_m: friction.holding_torque_nm / (model.i_t * model.c),
+            },
+            drive_form: DriveForm::of(des),
+        };
+        file.cascade_config()?;
+        Ok(file)
+    }
+
+    /// The real-time controller configuration (validated).
+    pub fn cascade_config(&self) -> Result<CascadeConfig<f64>> {
+        let s = |c: &[f64; 5]| SosCoeffs {
+            b0: c[0],
+            b1: c[1],
+            b2: c[2],
+            a1: c[3],
+            a2: c[4],
+        };
+        let g = &self.gains;
+        let f = &self.feedforward;
+        let [b0, b1, a1] = self.velocity_filter.coeffs;
+        let cfg = CascadeConfig {
+            ts_s: self.ts_s,
+            gains: CascadeGains {
+                k_pp_per_s: g.k_pp_per_s,
+                k_p_nm_s_per_rad: g.k_p_nm_s_per_rad,
+                k_i_nm_per_rad: g.k_i_nm_per_rad,
+                k_v: g.k_v,
+            },
+            velocity_filter: FirstOrderCoeffs { b0, b1, a1 },
+            prefilter: [
+                s(&self.prefilter.sections[0]),
+                s(&self.prefilter.sections[1]),
+            ],
+            torque_max_nm: self.torque_max_nm,
+            anti_windup: match self.anti_windup {
+                AntiWindupKind::ConditionalIntegration => AntiWindup::ConditionalIntegration,
+                AntiWindupKind::Off => AntiWindup::Off,
+            },
+            feedforward: Feedforward {
+                params: FeedforwardParams {
+                    inertia_kg_m2: f.inertia_kg_m2,
+                    viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+                    coulomb_nm: f.coulomb_nm,
+                    coulomb_deadband_rad_s: f.coulomb_deadband_rad_s,
+                },
+                terms: FeedforwardTerms {
+                    inertia: f.inertia,
+                    viscous: f.viscous,
+                    coulomb: f.coulomb,
+                },
+            },
+            torque_offset_nm: self.torque_offset_nm,
+            filter_desired_velocity: f.filter_desired_velocity,
+            feedforward_preview: f.preview,
+        };
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    /// The setpoint conversion for cart trajectories (validated).
+    pub fn setpoint_conversion(&self) -> Result<SetpointConversion<f64>> {
+        let s = &self.setpoint;
+        let belt = if s.belt_stretch {
+            BeltStretch::On {
+                m_c_kg: s.m_c_kg,
+                c_n_per_m: s.c_n_per_m,
+            }
+        } else {
+            BeltStretch::Off
+        };
+        Ok(SetpointConversion::new(s.i_t_m_per_rad, belt)?)
+    }
+
+    /// The TOML text (keys relabelled in current units).
+    pub fn to_toml(&self) -> Result<String> {
+        let err = |e: String| Error::Report {
+            reason: format!("controller.toml: {e}"),
+        };
+        let mut v = serde_json::to_value(self).map_err(|e| err(e.to_string()))?;
+        if self.units == ModelUnits::Current {
+            relabel_keys(&mut v, &current_key);
+        }
+        strip_nulls(&mut v);
+        let body = toml::to_string_pretty(&v).map_err(|e| err(e.to_string()))?;
+        let l = crate::units::labels(self.units);
+        Ok(format!(
+            "# beltune controller.toml, schema {SCHEMA_VERSION} (docs/schema.md).\n\
+             # Torques in {}, K_P in {}, K_I in {}; angles in rad, times in s.\n\n{body}",
+            l.torque, l.torque_per_velocity, l.torque_per_angle
+        ))
+    }
+
+    /// Parse and check a `controller.toml`; `origin` names it in errors.
+    pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        let perr = |message: String| Error::Parse {
+            path: origin.to_string(),
+            message,
+        };
+        let t: toml::Value =
+            toml::from_str(text).map_err(|e| perr(e.to_string().replace('\n', " ")))?;
+        let mut v = serde_json::to_value(t).map_err(|e| perr(e.to_string()))?;
+        match v.get("schema_version").and_then(|s| s.as_u64()) {
+            Some(s) if s == u64::from(SCHEMA_VERSION) => {}
+            Some(s) => {
+                return Err(perr(format!(
+                    "schema_version {s} is not the one this beltune reads ({SCHEMA_VERSION})"
+                )))
+            }
+            None => {
+                return Err(perr(
+                    "no schema_version: a controller.toml from before schema 1 cannot drive beltune_rt (it lacks i_t, anti-windup and the second filter section); commission again".into(),
+                ))
+            }
+        }
+        if v.get("units").and_then(|u| u.as_str()) == Some("current") {
+            relabel_keys(&mut v, &torque_key);
+        }
+        let file: ControllerFile = serde_json::from_value(v).map_err(|e| perr(e.to_string()))?;
+        file.cascade_config()
+            .map_err(|e| perr(format!("not a valid controller: {e}")))?;
+        file.setpoint_conversion()
+            .map_err(|e| perr(format!("not a valid setpoint conversion: {e}")))?;
+        Ok(file)
+    }
+
+    /// Read and parse a file.
+    pub fn load(path: &std::path::Path) -> Result<Self> {
+        let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
+        ControllerFile::parse(&text, &path.display().to_string())
+    }
+}
+
+/// TOML has no null: an absent key is `None`.
+fn strip_nulls(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|_, x| !x.is_null());
+            m.values_mut().for_each(strip_nulls);
+        }
+        serde_json::Value::Array(xs) => xs.iter_mut().for_each(strip_nulls),
+        _ => {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::design::{design, DesignInput, DesignKnobs, FrictionParams, PrefilterKind};
+    use crate::model::TwoMassParams;
+    use beltune_rt::control::{CascadeController, MotionSample, Setpoint};
+
+    fn table_a4() -> TwoMassParams {
+        TwoMassParams {
+            theta_e: 71.73e-6,
+            m_c: 13.44,
+            c: 203.74e3,
+            d: 0.0,
+            d_m: 33.17,
+            d_c: 226.42,
+            i_t: 0.0124141,
+        }
+    }
+
+    fn friction() -> FrictionResult {
+        FrictionResult {
+            viscous_nm_s_per_rad: 2.53e-3,
+            coulomb_nm: 0.125,
+            linear_viscous_nm_s_per_rad: 4.1e-3,
+            relative_residual: 0.02,
+            holding_torque_nm: 0.31,
+        }
+    }
+
+    fn designed(kind: PrefilterKind) -> ControllerDesign {
+        let mut inp = DesignInput::new(table_a4(), 1e-3);
+        inp.friction = Some(FrictionParams {
+            viscous_nm_s_per_rad: 2.53e-3,
+            coulomb_nm: 0.125,
+        });
+        design(
+            &inp,
+            &DesignKnobs {
+                prefilter: kind,
+                ..DesignKnobs::default()
+            },
+        )
+        .unwrap()
+    }
+
+    /// The configuration commissioning validates, built the way
+    /// `procedure::commission` builds it (independently of this module).
+    fn reference(des: &ControllerDesign, f: &FrictionResult, tmax: f64) -> CascadeConfig<f64> {
+        let mut c =
+            crate::procedure::commission::cascade_from_design(des, tmax, f.holding_torque_nm)
+                .unwrap();
+        c.feedforward = Feedforward::nonlinear(
+            des.input.model.rigid_inertia(),
+            f.viscous_nm_s_per_rad,
+            f.coulomb_nm,
+        );
+        c.filter_desired_velocity = true;
+        c.feedforward_preview = true;
+        c
+    }
+
+    /// Torques of `cfg` over 4000 samples of a moving setpoint against a
+    /// measured angle that lags and rings (saturating now and then).
+    fn torques(cfg: CascadeConfig<f64>) -> Vec<f64> {
+        let mut c = CascadeController::new(cfg).unwrap();
+        (0..4000)
+            .map(|k| {
+                let t = k as f64 * 1e-4;
+                let s = |t: f64| MotionSample {
+                    angle_rad: 20.0 * (1.0 - (3.0 * t).cos()),
+                    velocity_rad_s: 60.0 * (3.0 * t).sin(),
+                    acceleration_rad_s2: 180.0 * (3.0 * t).cos(),
+                };
+                let measured = s(t - 0.05).angle_rad + 0.01 * (700.0 * t).sin();
+                c.step(&Setpoint::with_preview(s(t), s(t + 1e-3)), measured)
+                    .torque_nm
+            })
+            .collect()
+    }
+
+    #[test]
+    fn toml_gives_the_same_controller_sample_by_sample() {
+        for kind in [PrefilterKind::Butterworth, PrefilterKind::Notch] {
+            let des = designed(kind);
+            let f = friction();
+            let file = ControllerFile::from_design(
+                &des,
+                &f,
+                3.1,
+                ModelUnits::Torque,
+                Provenance::now(vec!["beltune".into()], Some(1)),
+            )
+            .unwrap();
+            let text = file.to_toml().unwrap();
+            let back = ControllerFile::parse(&text, "controller.toml").unwrap();
+            assert_eq!(back, file);
+            let loaded = back.cascade_config().unwrap();
+            let want = reference(&des, &f, 3.1);
+            assert_eq!(loaded, want, "{kind:?}");
+            let (a, b) = (torques(loaded), torques(want));
+            assert_eq!(a, b);
+            assert!(a.iter().any(|t| t.abs() == 3.1), "the test saturates");
+            assert_eq!(back.feedforward.preview_samples, 10);
+            let sc = back.setpoint_conversion().unwrap();
+            let want_sc = SetpointConversion::new(
+                0.0124141,
+                BeltStretch::On {
+                    m_c_kg: 13.44,
+                    c_n_per_m: 203.74e3,
+                },
+            )
+            .unwrap();
+            assert_eq!(sc, want_sc);
+        }
+    }
+
+    #[test]
+    fn current_units_relabel_every_torque_key() {
+        let des = designed(PrefilterKind::Butterworth);
+        let file = ControllerFile::from_design(
+            &des,
+            &friction(),
+            15.0,
+            ModelUnits::Current,
+            Provenance::now(vec![], None),
+        )
+        .unwrap();
+        let text = file.to_toml().unwrap();
+        for bad in ["_nm", "kg", "N m"] {
+            assert!(!text.contains(bad), "`{bad}` in\n{text}");
+        }
+        assert!(text.contains("torque_max_a = 15.0"), "{text}");
+        assert!(text.contains("k_p_a_s_per_rad"), "{text}");
+        let back = ControllerFile::parse(&text, "c.toml").unwrap();
+        assert_eq!(back, file);
+    }
+
+    #[test]
+    fn old_or_broken_files_are_errors() {
+        let des = designed(PrefilterKind::Butterworth);
+        let file = ControllerFile::from_design(
+            &des,
+            &friction(),
+            3.1,
+            ModelUnits::Torque,
+            Provenance::now(vec![], None),
+        )
+        .unwrap();
+        let text = file.to_toml().unwrap();
+        let old = text.replace("schema_version = 1\n", "");
+        let e = ControllerFile::parse(&old, "c.toml").unwrap_err();
+        assert!(e.to_string().contains("schema_version"), "{e}");
+        let neg = text.replace("torque_max_nm = 3.1", "torque_max_nm = -3.1");
+        assert!(ControllerFile::parse(&neg, "c.toml").is_err());
+        let extra = text.replace("ts_s =", "bogus = 1\nts_s =");
+        assert!(ControllerFile::parse(&extra, "c.toml").is_err());
+        let mut unstable = file.clone();
+        unstable.prefilter.sections[0][4] = 1.5;
+        let e = ControllerFile::parse(&unstable.to_toml().unwrap(), "c.toml").unwrap_err();
+        assert!(e.to_string().contains("prefilter"), "{e}");
+    }
+}
