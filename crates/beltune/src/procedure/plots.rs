@@ -511,7 +511,7 @@ mod tests {
             freq_hz,
             response,
             line_status,
-            sample_time_s: 1e-4,
+            ts_s: 1e-4,
             n_periods: 2,
         };
         let lines = frf_lines(&frf, &tf, t).unwrap();
