@@ -727,7 +727,7 @@ pub fn recorded_report(
         verdict: Some(verdict(&verdict_input(Some(id), &run.design, None))),
         provenance: provenance.cloned(),
         data_files: data_file_notes(false),
-        tables: vec![drive_form_table(&run.design)],
+        // (no drive table: a record in current units has other gain units)
         ..Report::default()
     })
 }

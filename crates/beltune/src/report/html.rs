@@ -80,10 +80,10 @@ pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; overflow-x: auto; 
 
 {% if provenance %}<h2>Traceability</h2>
 <table id="provenance" class="trace">
-<tr><td>beltune version</td><td>{{ provenance.beltune_version }}</td></tr>
-<tr><td>created (UTC)</td><td>{{ provenance.created_utc }}</td></tr>
-<tr><td>command</td><td><code>{{ command_line }}</code></td></tr>
-<tr><td>seed</td><td>{{ provenance.seed if provenance.seed is not none else "none" }}</td></tr>
+<tr><th>beltune version</th><td>{{ provenance.beltune_version }}</td></tr>
+<tr><th>created (UTC)</th><td>{{ provenance.created_utc }}</td></tr>
+<tr><th>command</th><td><code>{{ command_line }}</code></td></tr>
+<tr><th>seed</th><td>{{ provenance.seed if provenance.seed is not none else "none" }}</td></tr>
 </table>{% endif %}
 
 <h2>Log</h2>
