@@ -95,7 +95,10 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
     let toml_text = std::fs::read_to_string(out.join("controller.toml")).unwrap();
     let toml: toml::Table = toml::from_str(&toml_text).unwrap();
     assert!(toml["gains"]["k_p_nm_s_per_rad"].as_float().unwrap() > 0.0);
-    assert_eq!(toml["prefilter"]["sos"].as_array().unwrap().len(), 5);
+    let sections = toml["prefilter"]["sections"].as_array().unwrap();
+    assert_eq!(sections.len(), 2);
+    assert!(sections.iter().all(|s| s.as_array().unwrap().len() == 5));
+    assert_eq!(toml["schema_version"].as_integer(), Some(1));
 
     // The report in a real browser.
     let html = out.join("report.html");
@@ -203,6 +206,9 @@ fn commission_from_recorded_data_skips_the_axis_stages() {
             "iq_meas_A",
             "--period-samples",
             "2500",
+            "--current-units",
+            "--torque-limit",
+            "20",
             "--out",
         ])
         .arg(&out)

@@ -223,24 +223,49 @@ impl IdentifiedModel {
 
 /// Friction seen at the motor (3.36), N m based (A in current units).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(from = "RawFriction")]
 pub struct FrictionResult {
     /// Viscous coefficient `d_v~`, N m s/rad (key `viscous` before schema 1).
-    #[serde(alias = "viscous")]
     pub viscous_nm_s_per_rad: f64,
     /// Coulomb torque `tau_c~`, N m (key `coulomb` before schema 1).
-    #[serde(alias = "coulomb")]
     pub coulomb_nm: f64,
     /// Viscous-only fit (the "linear" feedforward), N m s/rad (key
-    /// `linear_viscous` before schema 1).
-    #[serde(alias = "linear_viscous")]
+    /// `linear_viscous` before schema 1; `viscous_nm_s_per_rad` when absent).
     pub linear_viscous_nm_s_per_rad: f64,
     /// Relative residual of the (3.36) fit (0 when not given).
-    #[serde(default)]
     pub relative_residual: f64,
     /// Holding torque (gravity on a tilted axis, or the record's constant
     /// offset), N m (0 when not given).
-    #[serde(default)]
     pub holding_torque_nm: f64,
+}
+
+/// What a file's `friction` may hold (old spellings, optional parts).
+#[derive(Deserialize)]
+struct RawFriction {
+    #[serde(alias = "viscous")]
+    viscous_nm_s_per_rad: f64,
+    #[serde(alias = "coulomb")]
+    coulomb_nm: f64,
+    #[serde(default, alias = "linear_viscous")]
+    linear_viscous_nm_s_per_rad: Option<f64>,
+    #[serde(default)]
+    relative_residual: f64,
+    #[serde(default)]
+    holding_torque_nm: f64,
+}
+
+impl From<RawFriction> for FrictionResult {
+    fn from(r: RawFriction) -> Self {
+        FrictionResult {
+            viscous_nm_s_per_rad: r.viscous_nm_s_per_rad,
+            coulomb_nm: r.coulomb_nm,
+            linear_viscous_nm_s_per_rad: r
+                .linear_viscous_nm_s_per_rad
+                .unwrap_or(r.viscous_nm_s_per_rad),
+            relative_residual: r.relative_residual,
+            holding_torque_nm: r.holding_torque_nm,
+        }
+    }
 }
 
 impl FrictionResult {
@@ -463,6 +488,33 @@ mod tests {
         let back = ModelFile::parse(&toml_text, "m.toml").unwrap();
         assert_eq!(back.params(), doc.params());
         assert_eq!(back.identified.ts_s, Some(1e-4));
+    }
+
+    /// A commissioning.json from before schema 1 (old friction keys, NaN
+    /// uncertainties written as null) is read; a recorded one without friction too.
+    #[test]
+    fn commissioning_json_before_schema_1_is_read() {
+        let old = r#"{"plant": "egc70", "identified": {"f_r_hz": 110.8, "f_z_hz": 21.1,
+            "theta_e": 7.173e-5, "m_c": 12.38, "c": 217452.6, "d_m": 40.7, "d_c": 185.7,
+            "i_t": 0.012414, "dead_time_s": 0.001, "fit_rms_db": 1.37, "m_c_sigma": null,
+            "c_sigma": null, "mean_coherence": 0.99, "lines_used": 300, "position_m": null},
+            "friction": {"viscous": 0.00406, "coulomb": 0.1097, "linear_viscous": 0.00847,
+            "relative_residual": 0.02, "holding_torque_nm": 0.0001},
+            "controller": {"k_p": 0.1139}, "validation": null, "log": []}"#;
+        let m = ModelFile::parse(old, "commissioning.json").unwrap();
+        assert_eq!(m.schema_version, 0);
+        let f = m.friction.as_ref().unwrap();
+        assert_eq!(f.linear_viscous_nm_s_per_rad, 0.00847);
+        assert_eq!(f.coulomb_nm, 0.1097);
+        assert!(m.identified.m_c_sigma.is_nan() && m.identified.position_m.is_nan());
+        assert!(m.identified.dead_time_measured);
+        let inp = m.design_input(None).unwrap();
+        assert_eq!(inp.ts_s, DEFAULT_TS_S);
+        assert_eq!(inp.friction.unwrap().viscous_nm_s_per_rad, 0.00406);
+        // linear_viscous absent: the viscous coefficient
+        let short = old.replace(r#", "linear_viscous": 0.00847"#, "");
+        let m = ModelFile::parse(&short, "c.json").unwrap();
+        assert_eq!(m.friction.unwrap().linear_viscous_nm_s_per_rad, 0.00406);
     }
 
     #[test]
