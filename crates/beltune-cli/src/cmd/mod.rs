@@ -1,6 +1,7 @@
 //! One file per subcommand.
 
 pub mod commission;
+pub mod compare;
 pub mod design;
 pub mod excitation;
 pub mod export;
