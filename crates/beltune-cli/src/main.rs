@@ -46,6 +46,8 @@ enum Command {
     Commission(cmd::commission::Args),
     /// Serve the interactive tuning page.
     Serve(cmd::serve::Args),
+    /// Compare two commissioning folders: FRFs, fits, loops, moves, parameter changes.
+    Compare(cmd::compare::Args),
     /// Export a controller.toml as firmware source (Rust module or C header).
     Export(cmd::export::Args),
     /// Write an excitation signal (PRBS, chirp, multisine) to play on another drive.
@@ -90,6 +92,7 @@ fn main() {
         Command::Design(a) => cmd::design::run(a),
         Command::Commission(a) => cmd::commission::run(a),
         Command::Serve(a) => cmd::serve::run(a),
+        Command::Compare(a) => cmd::compare::run(a),
         Command::Export(a) => cmd::export::run(a),
         Command::Excitation(a) => cmd::excitation::run(a),
         Command::VirtualDrive(a) => cmd::virtual_drive::run(a),

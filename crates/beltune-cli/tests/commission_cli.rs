@@ -49,9 +49,17 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mut names = files_in(&out);
     names.sort();
+    // issue 16: the report's data files beside it
     assert_eq!(
         names,
-        ["commissioning.json", "controller.toml", "report.html"]
+        [
+            "commissioning.json",
+            "controller.toml",
+            "frf.csv",
+            "loops.csv",
+            "moves.csv",
+            "report.html"
+        ]
     );
 
     let json: serde_json::Value =
@@ -236,7 +244,13 @@ fn commission_from_recorded_data_skips_the_axis_stages() {
     names.sort();
     assert_eq!(
         names,
-        ["commissioning.json", "controller.toml", "report.html"]
+        [
+            "commissioning.json",
+            "controller.toml",
+            "frf.csv",
+            "loops.csv",
+            "report.html"
+        ]
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -24,9 +24,10 @@ use beltune::ident::{
 use beltune::model::rigs::Plant;
 use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::procedure::outputs::{
-    build_report, commissioning_json, controller_toml, recorded_outputs,
+    build_report, commissioning_json, controller_toml, data_files, recorded_data_files,
+    recorded_outputs,
 };
-use beltune::procedure::outputs::{write_outputs_to, OutputTarget};
+use beltune::procedure::outputs::{write_outputs_with_data, OutputTarget};
 use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
 use beltune::provenance::Provenance;
@@ -417,7 +418,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     let run = commission_recorded(id, friction, knobs, 2e-3)?;
     let source = csv.display().to_string();
     let provenance = Provenance::of_this_process(None);
-    let (json, report) = recorded_outputs(&run, &source, torque_limit, provenance.clone());
+    let (json, report) = recorded_outputs(&run, &source, torque_limit, provenance.clone())?;
     let friction = run.friction.clone().unwrap_or_default();
     for (name, v) in [
         ("Coulomb friction", friction.coulomb_nm),
@@ -435,7 +436,8 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     }
     let toml = controller_toml(&run.design, &friction, torque_limit, units, provenance)?;
     let html = render_html(&report)?;
-    let files = write_outputs_to(&target(args), &json, &toml, &html)?;
+    let data = recorded_data_files(&run)?;
+    let files = write_outputs_with_data(&target(args), &json, &toml, &html, &data)?;
     super::diagnostic::remove_stale(&target(args))?;
     if !args.quiet {
         for line in &run.log {
@@ -655,9 +657,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Plant::Physical(p) => Some(p.linearize(run.identification_position_m)?),
         Plant::Linear(_) => None,
     };
-    let report = build_report(&run, &name, before.as_ref(), Some(&truth));
+    let report = build_report(
+        &run,
+        &name,
+        before.as_ref(),
+        Some(&truth),
+        Some(&json.provenance),
+    )?;
     let html = render_html(&report)?;
-    let files = write_outputs_to(&target(&args), &json, &toml, &html)?;
+    let data = data_files(&run, &report)?;
+    let files = write_outputs_with_data(&target(&args), &json, &toml, &html, &data)?;
     super::diagnostic::remove_stale(&target(&args))?;
     finish_axis_run(
         AxisRun {
@@ -746,9 +755,10 @@ fn run_ethercat(
         ModelUnits::Torque,
         provenance,
     )?;
-    let report = build_report(&run, &name, None, None);
+    let report = build_report(&run, &name, None, None, Some(&json.provenance))?;
     let html = render_html(&report)?;
-    let files = write_outputs_to(&target(args), &json, &toml, &html)?;
+    let data = data_files(&run, &report)?;
+    let files = write_outputs_with_data(&target(args), &json, &toml, &html, &data)?;
     super::diagnostic::remove_stale(&target(args))?;
     if !args.quiet {
         let note = if sc.load_m_per_inc.is_some() {

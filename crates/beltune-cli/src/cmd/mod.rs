@@ -1,6 +1,7 @@
 //! One file per subcommand.
 
 pub mod commission;
+pub mod compare;
 pub mod completions;
 pub mod config;
 pub mod design;

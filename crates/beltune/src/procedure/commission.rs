@@ -286,6 +286,24 @@ pub(super) fn positioning_limits(ds: &DataSheet) -> Limits {
     }
 }
 
+/// The identification experiment as recorded (stage 5): the PRBS torque
+/// command and the motor-side position, with the limits it ran under.
+#[derive(Clone, Debug, Default)]
+pub struct ExcitationTrace {
+    /// Time since the axis was taken, s.
+    pub time_s: Vec<f64>,
+    /// Torque command (holding torque plus PRBS), N m.
+    pub torque_command_nm: Vec<f64>,
+    /// Motor-side position `i_t phi_m`, m.
+    pub position_m: Vec<f64>,
+    /// Torque limit of the commissioning, N m.
+    pub torque_max_nm: f64,
+    /// Allowed travel, m.
+    pub travel_min_m: f64,
+    /// Allowed travel, m.
+    pub travel_max_m: f64,
+}
+
 /// Everything a commissioning run produced.
 #[derive(Clone, Debug)]
 pub struct Commissioning {
@@ -317,6 +335,8 @@ pub struct Commissioning {
     pub moves: [MoveResult; 3],
     /// Summaries of the moves.
     pub validation: Validation,
+    /// The open-loop excitation of stage 5 and the axis' response.
+    pub excitation: ExcitationTrace,
     /// Time the axis was busy, s.
     pub experiment_time_s: f64,
     /// Wall-clock time spent computing (FFT, fit, design), s.
@@ -379,7 +399,7 @@ pub fn commission(
     )?;
 
     // ---- 5. identification ----
-    let ident = stages::identification::identification(
+    let mut ident = stages::identification::identification(
         &mut st,
         &boot_hold,
         id_pos,
@@ -390,6 +410,14 @@ pub fn commission(
         datasheet,
     )?;
     let p = ident.fit.params;
+    let excitation = ExcitationTrace {
+        time_s: std::mem::take(&mut ident.excitation_time_s),
+        torque_command_nm: std::mem::take(&mut ident.excitation_torque_nm),
+        position_m: std::mem::take(&mut ident.excitation_position_m),
+        torque_max_nm: torque_max,
+        travel_min_m: datasheet.travel_min_m,
+        travel_max_m: datasheet.travel_max_m,
+    };
 
     // ---- 6. design ----
     let designed = stages::design::design_stage(
@@ -450,6 +478,7 @@ pub fn commission(
         friction: fr.result,
         moves: val.moves,
         validation: val.validation,
+        excitation,
         experiment_time_s,
         computation_time_s,
         log,
