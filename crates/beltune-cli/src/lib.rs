@@ -5,5 +5,7 @@
 
 pub mod cmd;
 pub mod exit;
+pub mod help;
 pub mod progress;
 pub mod serve;
+pub mod term;

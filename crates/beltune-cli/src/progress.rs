@@ -1,13 +1,30 @@
-//! Progress bars on stderr for the commissioning stages (indicatif).
+//! Progress bars on stderr for the commissioning stages (indicatif), the stage
+//! log lines wrapped to [`term::WIDTH`] columns, and the capture of a safety
+//! stop's record for the diagnostic file.
 
+use crate::term;
+use beltune::procedure::runner::SafetyStopRecord;
 use beltune::procedure::Progress;
 use indicatif::{ProgressBar, ProgressStyle};
+
+/// Columns of the stage name in front of a stage line.
+pub const STAGE_WIDTH: usize = 28;
+
+/// What the supervisor reported when it stopped the axis, and in which stage.
+#[derive(Clone, Debug)]
+pub struct StopCapture {
+    /// The stage that was running.
+    pub stage: String,
+    /// The violation, the limits and the last second of samples.
+    pub record: SafetyStopRecord,
+}
 
 /// Draws one progress bar per stage and prints the stage's log line when it ends.
 pub struct BarProgress {
     bar: Option<ProgressBar>,
     stage: String,
     quiet: bool,
+    stop: Option<StopCapture>,
 }
 
 impl BarProgress {
@@ -17,8 +34,25 @@ impl BarProgress {
             bar: None,
             stage: String::new(),
             quiet,
+            stop: None,
         }
     }
+
+    /// The safety stop the procedure reported, if any (taken once).
+    pub fn take_safety_stop(&mut self) -> Option<StopCapture> {
+        self.stop.take()
+    }
+}
+
+/// A finished stage as the lines printed for it: the stage name right-aligned,
+/// the summary wrapped to [`term::WIDTH`] columns, numbers tidied.
+pub fn stage_lines(stage: &str, summary: &str) -> Vec<String> {
+    term::wrap(
+        stage,
+        STAGE_WIDTH,
+        &term::tidy_numbers(summary),
+        term::WIDTH,
+    )
 }
 
 impl Progress for BarProgress {
@@ -47,7 +81,35 @@ impl Progress for BarProgress {
             b.finish_and_clear();
         }
         if !self.quiet {
-            eprintln!("{:>28}: {}", self.stage, summary);
+            for line in stage_lines(&self.stage, summary) {
+                eprintln!("{line}");
+            }
         }
+    }
+
+    fn safety_stopped(&mut self, record: &SafetyStopRecord) {
+        if let Some(b) = self.bar.take() {
+            b.abandon();
+        }
+        self.stop = Some(StopCapture {
+            stage: self.stage.clone(),
+            record: record.clone(),
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 16: the identification line of a commissioning was 190 columns.
+    #[test]
+    fn issue_16_stage_lines_fit_100_columns() {
+        let summary = "f_r 110.81 Hz, f_z 21.10 Hz, m_c 12.38 kg, c 217.5 kN/m, d_m 40.73 N s/m, d_c 185.75 N s/m, dead time 1.00 ms, fit 1.37 dB rms, coherence 0.992 [axis busy 7.3 s]";
+        let lines = stage_lines("identification (open loop)", summary);
+        assert!(lines.len() >= 2);
+        assert!(lines.iter().all(|l| l.chars().count() <= term::WIDTH));
+        let lines = stage_lines("limits", "window 0.049999999999999996 m");
+        assert_eq!(lines, vec![format!("{:>28}: window 0.05 m", "limits")]);
     }
 }

@@ -1,6 +1,6 @@
 //! Issue 6 through the command line: outputs are complete and atomic, a safety
-//! stop leaves nothing behind, and the report renders in headless Chromium
-//! with every plot present and non-empty.
+//! stop leaves no results behind (only its diagnostic, issue 16), and the
+//! report renders in headless Chromium with every plot present and non-empty.
 
 mod common;
 
@@ -49,9 +49,17 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mut names = files_in(&out);
     names.sort();
+    // issue 16: the report's data files beside it
     assert_eq!(
         names,
-        ["commissioning.json", "controller.toml", "report.html"]
+        [
+            "commissioning.json",
+            "controller.toml",
+            "frf.csv",
+            "loops.csv",
+            "moves.csv",
+            "report.html"
+        ]
     );
 
     let json: serde_json::Value =
@@ -132,7 +140,7 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
 }
 
 #[test]
-fn safety_stop_exits_non_zero_and_writes_nothing() {
+fn safety_stop_exits_non_zero_and_writes_only_its_diagnostic() {
     let dir = temp_dir("safety");
     let out = dir.join("out");
     let o = beltune()
@@ -168,6 +176,10 @@ fn safety_stop_exits_non_zero_and_writes_nothing() {
         "left behind: {:?}",
         files_in(&out)
     );
+    // Only the diagnostic, beside the output folder (issue 16; tests/cli_output.rs reads it).
+    let mut left = files_in(&dir.join("out-safety-stop"));
+    left.sort();
+    assert_eq!(left, ["safety-stop.csv", "safety-stop.json"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -232,7 +244,13 @@ fn commission_from_recorded_data_skips_the_axis_stages() {
     names.sort();
     assert_eq!(
         names,
-        ["commissioning.json", "controller.toml", "report.html"]
+        [
+            "commissioning.json",
+            "controller.toml",
+            "frf.csv",
+            "loops.csv",
+            "report.html"
+        ]
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

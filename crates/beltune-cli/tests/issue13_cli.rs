@@ -108,14 +108,16 @@ fn motion_csv(dir: &Path, bad_cell: Option<(usize, &str)>) -> PathBuf {
     p
 }
 
-/// The recorded-data commissioning of the bench file into `out` (fast: no axis),
-/// with the drive's torque limit 3.1 (the former default; issue 15 made it required).
+/// The recorded-data commissioning of the bench file into `out` (fast: no
+/// axis), with the drive's current limit of 3.1 A.
 fn commission_recorded(out: Option<&Path>) -> Command {
-    commission_recorded_with(out, "3.1")
+    let mut c = commission_recorded_without_limit(out);
+    c.args(["--torque-limit", "3.1"]);
+    c
 }
 
-/// As [`commission_recorded`] with the torque limit `limit`.
-fn commission_recorded_with(out: Option<&Path>, limit: &str) -> Command {
+/// [`commission_recorded`] without `--torque-limit`.
+fn commission_recorded_without_limit(out: Option<&Path>) -> Command {
     let mut c = bin();
     c.args(["commission", "--quiet", "--csv"])
         .arg(measured())
@@ -126,8 +128,6 @@ fn commission_recorded_with(out: Option<&Path>, limit: &str) -> Command {
             "theta_motor_rad",
             "--period-samples",
             "2500",
-            "--torque-limit",
-            limit,
         ]);
     if let Some(out) = out {
         c.arg("--out").arg(out);
@@ -566,8 +566,8 @@ fn values_that_would_be_ignored_are_errors_issue_13_10() {
         &["--torque-limit", "--inertia", "recorded data"],
     );
     expect_bad_input(
-        &mut commission_recorded_with(Some(&dir.join("out")), "1e300"),
-        &["--torque-limit", "out of range"],
+        commission_recorded_without_limit(Some(&dir.join("out"))).args(["--torque-limit", "1e300"]),
+        &["--torque-limit"],
     );
     expect_bad_input(
         commission_recorded(Some(&dir.join("out"))).args(["--seed", "3"]),
@@ -707,6 +707,7 @@ fn inputs_are_never_overwritten_or_confused_issue_13_15() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("holds the input"));
     assert!(inside.join("m.csv.gz").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -33,6 +33,8 @@ impl Tuner for CountingTuner {
             f_r_hz: 107.0,
             f_z_hz: 19.6,
             nominal_payload_kg: 11.2,
+            measured_frf: None,
+            commissioned: None,
         }
     }
     fn defaults(&self) -> EffectiveKnobs {
@@ -241,7 +243,7 @@ fn out_of_range_and_contradictory_knobs_are_400_naming_the_knob() {
     }
     assert_eq!(tuner.calls.load(Ordering::SeqCst), 0);
     assert!(
-        !s.dir.join(serve::CONTROLLER_FILE).exists(),
+        std::fs::read_dir(&s.dir).map_or(true, |mut d| d.next().is_none()),
         "a refused save wrote a file"
     );
 }
@@ -278,7 +280,7 @@ fn oversized_body_is_413_and_wrong_content_type_is_415() {
         assert!(error_message(status, &resp).contains("application/json"));
     }
     assert_eq!(tuner.calls.load(Ordering::SeqCst), 1);
-    assert!(!s.dir.join(serve::CONTROLLER_FILE).exists());
+    assert!(std::fs::read_dir(&s.dir).map_or(true, |mut d| d.next().is_none()));
 }
 
 #[test]
@@ -341,17 +343,12 @@ const JSON_REL_TOL: f64 = 1e-12;
 /// Design tolerance on achieved margins (the design library's own guarantee).
 const MARGIN_TOL_DEG: f64 = 0.01;
 
-/// The design input built independently of the server: egc70 at its worst-case
-/// position with the default payload, the plant's dead time and friction.
+/// The design input built without the server: the built-in commissioning's.
 fn egc70_input() -> DesignInput {
-    let plant = beltune::model::rigs::builtin("egc70", None).unwrap();
-    let mut input = DesignInput::new(plant.worst_case_two_mass().unwrap(), plant.dead_time_s());
-    let f = plant.friction_totals();
-    input.friction = Some(FrictionParams {
-        viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
-        coulomb_nm: f.coulomb_nm,
-    });
-    input
+    // The page's default model (issue 16): what the commissioning of the built-in
+    // axis with the defaults of `beltune commission` identifies.
+    let (_, run) = serve::library::builtin_commissioning().unwrap();
+    run.design.input
 }
 
 fn close(a: f64, b: f64) -> bool {
@@ -481,7 +478,11 @@ fn check_move(m: &serve::api::MoveData) {
 fn payload_changes_the_move_but_not_the_design() {
     let s = start(library(), "payload");
     let mut runs = Vec::new();
-    for payload in [0.0, 11.2] {
+    // (the design is the commissioned one for 11.2 kg; an empty cart has a
+    // tenth of that inertia, where its loop gain makes the velocity loop
+    // unstable and the supervisor stops the move, which is the right answer
+    // but not a move to compare: 8 kg still moves)
+    for payload in [8.0, 11.2] {
         let (status, body) = post_json(
             s.addr,
             "/api/design",
@@ -598,7 +599,15 @@ fn save_writes_controller_toml_with_the_design() {
     assert_eq!(status, 200, "{body}");
     let saved: serve::api::SaveResponse = serde_json::from_str(&body).unwrap();
     let path = PathBuf::from(&saved.path);
-    assert_eq!(path, s.dir.join(serve::CONTROLLER_FILE));
+    // issue 16: a new folder per save, never the save folder itself
+    let folder = PathBuf::from(&saved.dir);
+    assert_eq!(path, folder.join(serve::CONTROLLER_FILE));
+    assert_eq!(folder.parent().unwrap(), s.dir);
+    assert!(folder
+        .file_name()
+        .unwrap()
+        .to_string_lossy()
+        .starts_with("tuned-"));
     let text = std::fs::read_to_string(&path).unwrap();
     assert_eq!(text.len(), saved.bytes);
     let toml: toml::Value = toml::from_str(&text).unwrap();
@@ -616,12 +625,50 @@ fn save_writes_controller_toml_with_the_design() {
         let got = gains[key].as_float().unwrap();
         assert!(close(got, want), "{key}: file {got} vs library {want}");
     }
-    // atomic write: no temporary file is left next to it
+    // atomic set: the new folder and nothing else in the save folder (no
+    // temporary folder left), and the set is complete and consistent
     let names: Vec<String> = std::fs::read_dir(&s.dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert_eq!(names, vec![serve::CONTROLLER_FILE.to_string()]);
+    assert_eq!(names.len(), 1, "{names:?}");
+    for f in [
+        "controller.toml",
+        "commissioning.json",
+        "report.html",
+        "frf.csv",
+        "loops.csv",
+    ] {
+        assert!(
+            saved.files.iter().any(|n| n == f),
+            "{f} missing: {:?}",
+            saved.files
+        );
+        assert!(folder.join(f).is_file(), "{f}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("commissioning.json")).unwrap())
+            .unwrap();
+    assert!(
+        close(json["controller"]["k_p"].as_f64().unwrap(), d.k_p),
+        "json holds the saved design"
+    );
+    assert!(
+        json["validation"].is_null(),
+        "the old controller's validation is not carried over"
+    );
+    let html = std::fs::read_to_string(folder.join("report.html")).unwrap();
+    assert!(
+        html.contains(&format!("{:.4}", d.k_p)),
+        "report shows the saved K_P"
+    );
+    // a second save makes a second folder and leaves the first alone
+    let before = std::fs::read(&path).unwrap();
+    let (status, body) = post_json(s.addr, "/api/save", r#"{"pm_position_deg": 70}"#);
+    assert_eq!(status, 200, "{body}");
+    let second: serve::api::SaveResponse = serde_json::from_str(&body).unwrap();
+    assert_ne!(second.dir, saved.dir);
+    assert_eq!(std::fs::read(&path).unwrap(), before);
 }
 
 // ---------- a commissioning folder and the command line ----------
@@ -774,7 +821,7 @@ fn foreign_host_names_are_refused_dns_rebinding() {
         assert_eq!(status, 200, "{host}: {body}");
     }
     assert_eq!(tuner.calls.load(Ordering::SeqCst), 0);
-    assert!(!s.dir.join(serve::CONTROLLER_FILE).exists());
+    assert!(std::fs::read_dir(&s.dir).map_or(true, |mut d| d.next().is_none()));
 }
 
 #[test]
@@ -816,7 +863,18 @@ fn save_reproduces_the_controller_toml_of_beltune_commission() {
     let addr = rx.recv().unwrap();
     let (status, body) = post_json(addr, "/api/save", "{}");
     assert_eq!(status, 200, "{body}");
-    let saved = std::fs::read_to_string(dir.join(serve::CONTROLLER_FILE)).unwrap();
+    let resp: serve::api::SaveResponse = serde_json::from_str(&body).unwrap();
+    assert_ne!(
+        PathBuf::from(&resp.path),
+        dir.join(serve::CONTROLLER_FILE),
+        "never overwritten"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join(serve::CONTROLLER_FILE)).unwrap(),
+        original,
+        "the commissioning's own controller.toml is untouched"
+    );
+    let saved = std::fs::read_to_string(&resp.path).unwrap();
     // the page adds comment lines (model, knobs, margins) and a blank line
     // before the file's own header comment
     let strip = |t: &str| -> String {

@@ -12,7 +12,7 @@
 
 use beltune_cli::serve;
 
-use beltune::design::{self as bdesign, DesignInput, DesignKnobs, FrictionParams};
+use beltune::design::{self as bdesign, DesignInput, DesignKnobs};
 use fantoccini::{Client, ClientBuilder, Locator};
 use serde_json::{json, Value};
 use serve::library::LibraryTuner;
@@ -62,14 +62,10 @@ fn free_port() -> u16 {
 }
 
 fn egc70_input() -> DesignInput {
-    let plant = beltune::model::rigs::builtin("egc70", None).unwrap();
-    let mut input = DesignInput::new(plant.worst_case_two_mass().unwrap(), plant.dead_time_s());
-    let f = plant.friction_totals();
-    input.friction = Some(FrictionParams {
-        viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
-        coulomb_nm: f.coulomb_nm,
-    });
-    input
+    // The page's default model (issue 16): what the commissioning of the built-in
+    // axis with the defaults of `beltune commission` identifies.
+    let (_, run) = serve::library::builtin_commissioning().unwrap();
+    run.design.input
 }
 
 /// `input` as a `beltune design --model` TOML file (`{:?}` prints the shortest
@@ -279,7 +275,8 @@ async fn check_against(c: &Client, d: &bdesign::ControllerDesign) {
         .await
         .parse()
         .unwrap();
-        assert_close(name, x, w);
+        // the page's frequency axis is in Hz (issue 16)
+        assert_close(name, x, w / (2.0 * std::f64::consts::PI));
     }
     // K_P is shown rounded to 4 significant digits
     let text = js(c, "document.getElementById('k_p').textContent").await;
@@ -429,11 +426,12 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         assert_eq!(js(&c, "document.getElementById('error').hidden").await, Value::Bool(true));
         check_against(&c, &d0).await;
 
-        // Save: controller.toml in the save folder with the displayed gains.
+        // Save: a new folder in the save folder with the displayed gains.
         c.find(Locator::Id("save")).await.unwrap().click().await.unwrap();
         let path = wait_js(&c, "document.getElementById('save-result').dataset.path", "the save").await;
         let path = PathBuf::from(path.as_str().unwrap());
-        assert_eq!(path, save_dir.join(serve::CONTROLLER_FILE));
+        assert_eq!(path.file_name().unwrap(), serve::CONTROLLER_FILE);
+        assert_eq!(path.parent().unwrap().parent().unwrap(), save_dir, "a new folder per save");
         let saved: toml::Value = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
         let gains = &saved["gains"];
         assert_close("saved K_P", gains["k_p_nm_s_per_rad"].as_float().unwrap(), d0.k_p);

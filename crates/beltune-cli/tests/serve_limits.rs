@@ -25,6 +25,8 @@ impl Tuner for TextTuner {
             f_r_hz: 107.0,
             f_z_hz: 19.6,
             nominal_payload_kg: 11.2,
+            measured_frf: None,
+            commissioned: None,
         }
     }
     fn defaults(&self) -> EffectiveKnobs {
@@ -137,40 +139,48 @@ fn json_error(status: u16, body: &str) -> String {
 
 #[test]
 fn concurrent_saves_never_expose_a_partial_file_issue_13_1() {
+    // Issue 16: every save makes its own folder `tuned-<time>[-n]` in the save
+    // folder (renamed into place whole); a reader must never see a folder
+    // without its complete controller.toml, and no save may replace another.
     let s = start("saves");
-    let path = s.dir.join(serve::CONTROLLER_FILE);
+    let dir = s.dir.clone();
     let stop = Arc::new(AtomicBool::new(false));
     let looks = Arc::new(AtomicUsize::new(0));
-    // A reader parses the file as fast as it can, the whole time.
+    // A reader parses every visible set as fast as it can, the whole time.
     let reader = {
-        let (path, stop, looks) = (path.clone(), stop.clone(), looks.clone());
+        let (dir, stop, looks) = (dir.clone(), stop.clone(), looks.clone());
         std::thread::spawn(move || {
             while !stop.load(Ordering::Relaxed) {
-                let Ok(text) = std::fs::read_to_string(&path) else {
-                    // Not written yet.
-                    assert_eq!(looks.load(Ordering::Relaxed), 0, "file vanished");
-                    continue;
-                };
-                let v: toml::Value = toml::from_str(&text)
-                    .unwrap_or_else(|e| panic!("invalid TOML ({e}): {text:?}"));
-                let pm = v["pm_velocity_deg"].as_float().unwrap();
-                assert_eq!(v["line_199"].as_float(), Some(pm), "mixed file");
-                looks.fetch_add(1, Ordering::Relaxed);
+                for e in std::fs::read_dir(&dir).unwrap().flatten() {
+                    let name = e.file_name().to_string_lossy().into_owned();
+                    if !name.starts_with("tuned-") {
+                        continue;
+                    }
+                    let text = std::fs::read_to_string(e.path().join(serve::CONTROLLER_FILE))
+                        .unwrap_or_else(|err| panic!("{name} without its controller.toml: {err}"));
+                    let v: toml::Value = toml::from_str(&text)
+                        .unwrap_or_else(|e| panic!("invalid TOML ({e}): {text:?}"));
+                    let pm = v["pm_velocity_deg"].as_float().unwrap();
+                    assert_eq!(v["line_199"].as_float(), Some(pm), "mixed file");
+                    looks.fetch_add(1, Ordering::Relaxed);
+                }
             }
         })
     };
     // 600 saves, 40 in parallel.
     let next = Arc::new(AtomicUsize::new(0));
+    let answers = Arc::new(std::sync::Mutex::new(Vec::new()));
     let clients: Vec<_> = (0..40)
         .map(|_| {
-            let next = next.clone();
+            let (next, answers) = (next.clone(), answers.clone());
             let addr = s.addr;
             std::thread::spawn(move || loop {
                 let k = next.fetch_add(1, Ordering::Relaxed);
                 if k >= 600 {
                     break;
                 }
-                let body = format!("{{\"pm_velocity_deg\": {}}}", 20.0 + (k % 69) as f64);
+                let pm = 20.0 + (k % 69) as f64;
+                let body = format!("{{\"pm_velocity_deg\": {pm}}}");
                 let (status, answer) = request(
                     addr,
                     "POST",
@@ -179,6 +189,8 @@ fn concurrent_saves_never_expose_a_partial_file_issue_13_1() {
                     &body,
                 );
                 assert_eq!(status, 200, "save {k}: {answer}");
+                let saved: serve::api::SaveResponse = serde_json::from_str(&answer).unwrap();
+                answers.lock().unwrap().push((saved.path, pm));
             })
         })
         .collect();
@@ -188,9 +200,29 @@ fn concurrent_saves_never_expose_a_partial_file_issue_13_1() {
     stop.store(true, Ordering::Relaxed);
     reader.join().unwrap();
     assert!(looks.load(Ordering::Relaxed) > 0);
-    // Only the file: no temporaries left.
-    let names: Vec<_> = std::fs::read_dir(&s.dir).unwrap().collect();
-    assert_eq!(names.len(), 1);
+    // One folder per save, each holding what its save answered; no temporaries left.
+    let answers = answers.lock().unwrap();
+    let mut paths: Vec<&String> = answers.iter().map(|a| &a.0).collect();
+    paths.sort();
+    paths.dedup();
+    assert_eq!(paths.len(), 600, "two saves shared a folder");
+    for (path, pm) in answers.iter() {
+        let v: toml::Value = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        assert_eq!(
+            v["pm_velocity_deg"].as_float(),
+            Some(*pm),
+            "{path} was overwritten"
+        );
+    }
+    let names: Vec<String> = std::fs::read_dir(&s.dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names.len(), 600);
+    assert!(
+        names.iter().all(|n| n.starts_with("tuned-")),
+        "temporaries left"
+    );
 }
 
 #[test]

@@ -2,7 +2,17 @@
 //! simulated axis (or a plant file), with progress bars, safety supervision,
 //! validation and the report; or, with `--csv`, from data recorded on a real
 //! drive (the stages that need the axis are skipped).
+//!
+//! Output: progress bars and stage lines on stderr (not with `--quiet`), the
+//! summary on stdout (text, or JSON with `--json`: `summary.rs`), and after a
+//! safety stop a diagnostic (`diagnostic.rs`). The flags are grouped under
+//! the headings of `help::COMMISSION_HEADINGS`; `--config FILE.toml`
+//! supplies them from a file (`config.rs`).
 
+use super::summary::{
+    ControllerSummary, IdentifiedSummary, Summary, TruthSummary, ValidationSummary,
+};
+use super::verdict::Verdict;
 use crate::exit::{ExitStatus, Failure};
 use crate::progress::BarProgress;
 use anyhow::Context;
@@ -14,9 +24,10 @@ use beltune::ident::{
 use beltune::model::rigs::Plant;
 use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::procedure::outputs::{
-    build_report, commissioning_json, controller_toml, recorded_outputs,
+    build_report, commissioning_json, controller_toml, data_files, recorded_data_files,
+    recorded_outputs,
 };
-use beltune::procedure::outputs::{write_outputs_to, OutputTarget};
+use beltune::procedure::outputs::{write_outputs_with_data, OutputTarget};
 use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
 use beltune::provenance::Provenance;
@@ -27,6 +38,11 @@ use std::time::Instant;
 
 /// Arguments of `beltune commission`.
 #[derive(clap::Args)]
+#[command(
+    after_help = crate::help::commission_after_help(),
+    args_override_self = true,
+    mut_args = crate::help::with_commission_heading
+)]
 pub struct Args {
     /// Built-in plant name (egc70, sim-a, sim-b, sim-c) or a plant TOML file
     /// (a built-in name always means the built-in plant; write `./egc70` for a file).
@@ -129,9 +145,20 @@ pub struct Args {
     /// end the commissioning with a quick stop).
     #[arg(long, default_value_t = 10.0, requires = "ethercat")]
     pub frame_timeout_ms: f64,
-    /// No progress bars or log lines.
+    /// No progress bars or stage lines (the summary is still printed).
     #[arg(long)]
     pub quiet: bool,
+    /// Print the summary as JSON on stdout (keys: see the README).
+    #[arg(long)]
+    pub json: bool,
+    /// Largest following error allowed in the closed-loop stages before the
+    /// supervisor stops the axis, m (default 0.05).
+    #[arg(long, value_name = "M")]
+    pub following_error_max: Option<f64>,
+    #[command(flatten)]
+    pub limits: super::verdict::LimitArgs,
+    #[command(flatten)]
+    pub config: super::config::ConfigArgs,
 }
 
 /// Largest `--prbs-order`: 2^18 - 1 bits.
@@ -208,7 +235,7 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
             args.friction_torque.is_some() || args.friction_position.is_some(),
         ),
     ];
-    let simulated_only: [(&str, bool); 9] = [
+    let simulated_only: [(&str, bool); 12] = [
         ("--plant", args.plant.is_some()),
         ("--payload", args.payload.is_some()),
         ("--tilt", args.tilt.is_some()),
@@ -221,6 +248,12 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
         ),
         ("--prbs-order", args.prbs_order.is_some()),
         ("--prbs-clock-ms", args.prbs_clock_ms.is_some()),
+        ("--following-error-max", args.following_error_max.is_some()),
+        (
+            "--max-tracking-error",
+            args.limits.max_tracking_error.is_some(),
+        ),
+        ("--max-static-error", args.limits.max_static_error.is_some()),
     ];
     let (given, mode, hint): (Vec<&str>, _, _) = if args.csv.is_some() {
         (
@@ -381,10 +414,11 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
         }
         _ => None,
     };
+    let started = Instant::now();
     let run = commission_recorded(id, friction, knobs, 2e-3)?;
     let source = csv.display().to_string();
     let provenance = Provenance::of_this_process(None);
-    let (json, report) = recorded_outputs(&run, &source, torque_limit, provenance.clone());
+    let (json, report) = recorded_outputs(&run, &source, torque_limit, provenance.clone())?;
     let friction = run.friction.clone().unwrap_or_default();
     for (name, v) in [
         ("Coulomb friction", friction.coulomb_nm),
@@ -402,14 +436,128 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
     }
     let toml = controller_toml(&run.design, &friction, torque_limit, units, provenance)?;
     let html = render_html(&report)?;
-    let files = write_outputs_to(&target(args), &json, &toml, &html)?;
+    let data = recorded_data_files(&run)?;
+    let files = write_outputs_with_data(&target(args), &json, &toml, &html, &data)?;
+    super::diagnostic::remove_stale(&target(args))?;
     if !args.quiet {
         for line in &run.log {
-            eprintln!("{line}");
+            // "stage: summary", as the stage lines of a run on the axis
+            let (stage, summary) = line.split_once(": ").unwrap_or(("", line));
+            for l in crate::progress::stage_lines(stage, summary) {
+                eprintln!("{l}");
+            }
         }
-        for f in files {
-            println!("wrote {}", f.display());
+    }
+    let summary = Summary {
+        schema: super::summary::SCHEMA,
+        source,
+        status: "ok",
+        exit_code: ExitStatus::Success.code(),
+        identified: IdentifiedSummary::of(&run.identified),
+        truth: None,
+        controller: ControllerSummary::of(&run.design),
+        validation: None,
+        verdict: None,
+        axis_busy_s: None,
+        computation_s: run.computation_time_s,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        files,
+        record_units: true,
+    };
+    print_summary(&summary, args.json)
+}
+
+/// Print the summary on stdout: text lines, or JSON.
+fn print_summary(summary: &Summary, json: bool) -> anyhow::Result<()> {
+    if json {
+        println!("{}", summary.json()?);
+    } else {
+        for line in summary.lines() {
+            println!("{line}");
         }
+    }
+    Ok(())
+}
+
+/// The error that ends a commissioning: after a safety stop, with the
+/// diagnostic written next to where the results would have gone (the status
+/// stays that of the library error: 3).
+fn stopped(e: beltune::Error, progress: &mut BarProgress, args: &Args) -> anyhow::Error {
+    let stop = progress.take_safety_stop();
+    let e = anyhow::Error::new(e);
+    let Some(stop) = stop else {
+        return e.context("commissioning stopped");
+    };
+    let reason = crate::exit::one_line(&e);
+    let seed = args.ethercat.is_none().then(|| args.seed.unwrap_or(1));
+    match super::diagnostic::write(&target(args), &stop, &reason, seed) {
+        Ok(files) => e.context(format!(
+            "commissioning stopped in stage `{}` (diagnostic: {})",
+            stop.stage,
+            files[0].display()
+        )),
+        Err(w) => e.context(format!(
+            "commissioning stopped in stage `{}` (the diagnostic could not be written: {})",
+            stop.stage,
+            crate::exit::one_line(&w)
+        )),
+    }
+}
+
+/// The summary of a run on an axis, its verdict against `limits` decides
+/// the status (0, or 5 when the validation misses a limit).
+struct AxisRun<'a> {
+    source: String,
+    run: &'a beltune::procedure::commission::Commissioning,
+    truth: Option<&'a Truth>,
+    validation_start_m: f64,
+    validation_target_m: f64,
+    started: Instant,
+    files: Vec<PathBuf>,
+}
+
+/// Print the summary of a run on an axis and return its status as the result.
+fn finish_axis_run(r: AxisRun, limits: &super::verdict::Limits, json: bool) -> anyhow::Result<()> {
+    let verdict: Verdict = super::verdict::judge(&r.run.validation.nonlinear, limits);
+    let status = if verdict.passed {
+        ExitStatus::Success
+    } else {
+        ExitStatus::LimitsNotMet
+    };
+    let failures = verdict.failures();
+    let summary = Summary {
+        schema: super::summary::SCHEMA,
+        source: r.source,
+        status: if verdict.passed {
+            "ok"
+        } else {
+            "limits_not_met"
+        },
+        exit_code: status.code(),
+        identified: IdentifiedSummary::of(&r.run.identified),
+        truth: r.truth.map(TruthSummary::of),
+        controller: ControllerSummary::of(&r.run.design),
+        validation: Some(ValidationSummary::of(
+            &r.run.validation,
+            r.validation_start_m,
+            r.validation_target_m,
+        )),
+        verdict: Some(verdict),
+        axis_busy_s: Some(r.run.experiment_time_s),
+        computation_s: r.run.computation_time_s,
+        wall_time_s: r.started.elapsed().as_secs_f64(),
+        files: r.files,
+        record_units: false,
+    };
+    print_summary(&summary, json)?;
+    if status != ExitStatus::Success {
+        return Err(anyhow::Error::new(Failure::new(
+            status,
+            format!(
+                "the commissioning finished, but the validation misses its limits: {}",
+                failures.join(", ")
+            ),
+        )));
     }
     Ok(())
 }
@@ -418,6 +566,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
 pub fn run(args: Args) -> anyhow::Result<()> {
     check_mode_flags(&args)?;
     check_inputs_outside_output(&args)?;
+    let limits = args.limits.limits()?;
     if let Some(csv) = args.csv.clone() {
         let knobs = args.knobs.knobs()?;
         return run_recorded(&args, &csv, &knobs);
@@ -466,8 +615,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = args.prbs_clock_ms {
         cfg.excitation.clock_period_s = p * 1e-3;
     }
+    if let Some(e) = args.following_error_max {
+        cfg.following_error_max_m = e;
+    }
     if let Some(interface) = args.ethercat.clone() {
-        return run_ethercat(&args, &interface, &ds, &cfg);
+        return run_ethercat(&args, &interface, &ds, &cfg, &limits);
     }
     let sim_cfg = SimConfig {
         seed: args.seed.unwrap_or(1),
@@ -477,7 +629,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut axis = SimAxis::new(&plant, sim_cfg)?;
     let mut progress = BarProgress::new(args.quiet);
     let started = Instant::now();
-    let run = commission(&mut axis, &ds, &cfg, &mut progress).context("commissioning stopped")?;
+    let run = commission(&mut axis, &ds, &cfg, &mut progress)
+        .map_err(|e| stopped(e, &mut progress, &args))?;
     let truth_params = plant.linearize(run.identification_position_m)?;
     let friction = plant.friction_totals();
     let truth = Truth {
@@ -504,58 +657,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Plant::Physical(p) => Some(p.linearize(run.identification_position_m)?),
         Plant::Linear(_) => None,
     };
-    let report = build_report(&run, &name, before.as_ref(), Some(&truth));
+    let report = build_report(
+        &run,
+        &name,
+        before.as_ref(),
+        Some(&truth),
+        Some(&json.provenance),
+    )?;
     let html = render_html(&report)?;
-    let files = write_outputs_to(&target(&args), &json, &toml, &html)?;
-    if !args.quiet {
-        let v = &run.validation;
-        println!(
-            "identified: f_r {:.2} Hz (truth {:.2}), f_z {:.2} Hz (truth {:.2}), m_c {:.2} kg, c {:.1} kN/m, dead time {:.2} ms",
-            run.identified.f_r_hz,
-            truth.f_r_hz,
-            run.identified.f_z_hz,
-            truth.f_z_hz,
-            run.identified.m_c,
-            run.identified.c / 1e3,
-            run.identified.dead_time_s * 1e3
-        );
-        println!(
-            "controller: K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s",
-            run.design.k_p, run.design.k_i, run.design.k_pp
-        );
-        println!(
-            "validation 0 -> 500 mm, max cart error: none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm (static {:.1} um)",
-            v.none.max_tracking_error_m * 1e3,
-            v.linear.max_tracking_error_m * 1e3,
-            v.nonlinear.max_tracking_error_m * 1e3,
-            v.nonlinear.static_error_m * 1e6
-        );
-        println!(
-            "axis busy {:.1} s, computation {:.2} s, wall time {:.1} s",
-            run.experiment_time_s,
-            run.computation_time_s,
-            started.elapsed().as_secs_f64()
-        );
-        for f in files {
-            println!("wrote {}", f.display());
-        }
-    }
-    limits_verdict(&run.verdict)
-}
-
-/// A commissioning that does not meet its own limits ends with exit status 5
-/// (issue 12), after its results were written.
-fn limits_verdict(verdict: &beltune::procedure::verdict::Verdict) -> anyhow::Result<()> {
-    if verdict.meets_limits {
-        return Ok(());
-    }
-    Err(anyhow::Error::new(crate::exit::Failure::new(
-        crate::exit::ExitStatus::LimitsNotMet,
-        format!(
-            "the commissioning does not meet its limits: {}",
-            verdict.failures.join("; ")
-        ),
-    )))
+    let data = data_files(&run, &report)?;
+    let files = write_outputs_with_data(&target(&args), &json, &toml, &html, &data)?;
+    super::diagnostic::remove_stale(&target(&args))?;
+    finish_axis_run(
+        AxisRun {
+            source: name,
+            run: &run,
+            truth: Some(&truth),
+            validation_start_m: cfg.validation.start_m,
+            validation_target_m: cfg.validation.target_m,
+            started,
+            files,
+        },
+        &limits,
+        args.json,
+    )
 }
 
 /// Commission the drive on an EtherCAT bus (`--ethercat IFACE`).
@@ -564,6 +689,7 @@ fn run_ethercat(
     interface: &str,
     ds: &DataSheet,
     cfg: &CommissioningConfig,
+    limits: &super::verdict::Limits,
 ) -> anyhow::Result<()> {
     use beltune_ethercat::master::wire::RawSocket;
     use beltune_ethercat::master::{EthercatAxis, MasterConfig, Storage};
@@ -590,8 +716,8 @@ fn run_ethercat(
     let id = axis.identity().clone();
     let sc = axis.scaling();
     if !args.quiet {
-        eprintln!(
-            "EtherCAT {interface}: SubDevice {} of {}: {} (vendor {:#010x}, product {:#010x}, rev {:#010x}, serial {}), {}; rated torque {:.3} N m, limit {:.3} N m, {} increments per {} rev{}",
+        let line = format!(
+            "SubDevice {} of {}: {} (vendor {:#010x}, product {:#010x}, rev {:#010x}, serial {}), {}; rated torque {:.3} N m, limit {:.3} N m, {} increments per {} rev{}",
             args.subdevice,
             id.subdevices,
             id.name,
@@ -606,12 +732,16 @@ fn run_ethercat(
             sc.motor_revolutions,
             if sc.load_m_per_inc.is_some() { ", load-side encoder" } else { "" }
         );
+        for l in crate::progress::stage_lines(&format!("EtherCAT {interface}"), &line) {
+            eprintln!("{l}");
+        }
     }
     let mut progress = BarProgress::new(args.quiet);
     let started = Instant::now();
-    let run = commission(&mut axis, ds, cfg, &mut progress).context("commissioning stopped")?;
-    // leave the drive switched off and at rest
+    let run = commission(&mut axis, ds, cfg, &mut progress);
+    // leave the drive switched off and at rest, also after a stop
     let _ = axis.quick_stop();
+    let run = run.map_err(|e| stopped(e, &mut progress, args))?;
     let name = format!(
         "EtherCAT {interface} SubDevice {} ({})",
         args.subdevice, id.name
@@ -625,40 +755,32 @@ fn run_ethercat(
         ModelUnits::Torque,
         provenance,
     )?;
-    let report = build_report(&run, &name, None, None);
+    let report = build_report(&run, &name, None, None, Some(&json.provenance))?;
     let html = render_html(&report)?;
-    let files = write_outputs_to(&target(args), &json, &toml, &html)?;
+    let data = data_files(&run, &report)?;
+    let files = write_outputs_with_data(&target(args), &json, &toml, &html, &data)?;
+    super::diagnostic::remove_stale(&target(args))?;
     if !args.quiet {
-        let v = &run.validation;
-        println!(
-            "identified: f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.2} kg, c {:.1} kN/m, dead time {:.2} ms (drive and bus)",
-            run.identified.f_r_hz,
-            run.identified.f_z_hz,
-            run.identified.m_c,
-            run.identified.c / 1e3,
-            run.identified.dead_time_s * 1e3
-        );
-        println!(
-            "controller (host side, CST): K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s",
-            run.design.k_p, run.design.k_i, run.design.k_pp
-        );
-        println!(
-            "validation, max cart error ({}): none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm (static {:.1} um)",
-            if sc.load_m_per_inc.is_some() { "load-side encoder" } else { "motor side: the drive has no load-side encoder" },
-            v.none.max_tracking_error_m * 1e3,
-            v.linear.max_tracking_error_m * 1e3,
-            v.nonlinear.max_tracking_error_m * 1e3,
-            v.nonlinear.static_error_m * 1e6
-        );
-        println!(
-            "axis busy {:.1} s, computation {:.2} s (axis held meanwhile), wall time {:.1} s",
-            run.experiment_time_s,
-            run.computation_time_s,
-            started.elapsed().as_secs_f64()
-        );
-        for f in files {
-            println!("wrote {}", f.display());
+        let note = if sc.load_m_per_inc.is_some() {
+            "the cart errors are measured by the load-side encoder"
+        } else {
+            "the drive has no load-side encoder: the cart errors are motor-side"
+        };
+        for l in crate::progress::stage_lines("EtherCAT", note) {
+            eprintln!("{l}");
         }
     }
-    Ok(())
+    finish_axis_run(
+        AxisRun {
+            source: name,
+            run: &run,
+            truth: None,
+            validation_start_m: cfg.validation.start_m,
+            validation_target_m: cfg.validation.target_m,
+            started,
+            files,
+        },
+        limits,
+        args.json,
+    )
 }

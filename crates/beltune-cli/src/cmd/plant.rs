@@ -1,4 +1,5 @@
-//! `beltune plant show`: a plant's parameters and derived quantities.
+//! `beltune plant show`: a plant's parameters and derived quantities;
+//! `beltune plant template`: an annotated plant file (`plant_template.rs`).
 
 use anyhow::Context;
 use beltune::model::rigs::{PlantSummary, BUILTIN_NAMES};
@@ -10,6 +11,8 @@ use std::path::Path;
 pub enum PlantCommand {
     /// Print the parameters and derived quantities of a plant.
     Show(ShowArgs),
+    /// Write an annotated plant TOML (every key with its meaning and unit) to edit for your axis.
+    Template(super::plant_template::TemplateArgs),
 }
 
 /// Arguments of `beltune plant show`.
@@ -30,6 +33,7 @@ pub struct ShowArgs {
 pub fn run(cmd: PlantCommand) -> anyhow::Result<()> {
     match cmd {
         PlantCommand::Show(args) => show(args),
+        PlantCommand::Template(args) => super::plant_template::run(args),
     }
 }
 

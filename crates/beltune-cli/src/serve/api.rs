@@ -284,11 +284,24 @@ pub struct Curve {
     pub phase_deg: Vec<f64>,
 }
 
-/// Frequency responses for the plots.
+/// Frequency responses for the plots, from `beltune::procedure::plots::loop_data`
+/// (the same numbers the report draws).
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct BodeData {
     /// Log-spaced frequency grid, rad/s.
     pub omega_rad_s: Vec<f64>,
+    /// The same grid, Hz (the page shows Hz).
+    #[serde(default)]
+    pub freq_hz: Vec<f64>,
+    /// Closed velocity loop.
+    #[serde(default)]
+    pub closed_loop_velocity: Curve,
+    /// Sensitivity `1/(1+L)` of the velocity loop.
+    #[serde(default)]
+    pub sensitivity_velocity: Curve,
+    /// Sensitivity of the position loop.
+    #[serde(default)]
+    pub sensitivity_position: Curve,
     /// Open velocity loop.
     pub open_loop_velocity: Curve,
     /// Open position loop.
@@ -300,6 +313,9 @@ pub struct BodeData {
 /// Result of the simulated validation move (decimated traces).
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct MoveData {
+    /// Which plant and feedforward the move was simulated with.
+    #[serde(default)]
+    pub plant: String,
     /// Payload the simulated plant carried, kg.
     pub payload_kg: f64,
     /// Maximum absolute cart tracking error, m.
@@ -350,8 +366,43 @@ pub struct DesignResponse {
 pub struct SaveResponse {
     /// Absolute path of the written `controller.toml`.
     pub path: String,
-    /// Bytes written.
+    /// Bytes of `controller.toml`.
     pub bytes: usize,
+    /// The new folder holding the consistent set (controller, json, report, data).
+    #[serde(default)]
+    pub dir: String,
+    /// Names of the files written there.
+    #[serde(default)]
+    pub files: Vec<String>,
+}
+
+/// The measured FRF of a loaded commissioning and its fitted model, decimated
+/// for display (`beltune::procedure::plots::frf_display`, as in the report).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct FrfOverlay {
+    /// Measured points, Hz.
+    pub freq_hz: Vec<f64>,
+    /// Measured magnitude, dB.
+    pub magnitude_db: Vec<f64>,
+    /// Measured phase, deg.
+    pub phase_deg: Vec<f64>,
+    /// `true` where the fit used the point.
+    pub used_by_fit: Vec<bool>,
+    /// Fitted model with dead time, Hz.
+    pub model_freq_hz: Vec<f64>,
+    /// Fitted model, dB.
+    pub model_magnitude_db: Vec<f64>,
+    /// Fitted model, deg.
+    pub model_phase_deg: Vec<f64>,
+}
+
+/// What the commissioning measured with its own controller (the report's verdict numbers).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct CommissionedNumbers {
+    /// Max cart tracking error of the move with nonlinear feedforward, m.
+    pub max_error_m: f64,
+    /// Static error after that move, m.
+    pub static_error_m: f64,
 }
 
 /// Answer of `GET /api/info`: what the page needs to build its controls.
@@ -373,6 +424,10 @@ pub struct InfoResponse {
     pub ranges: Vec<KnobRange>,
     /// Folder `controller.toml` is saved into.
     pub save_dir: String,
+    /// The measured FRF and its fit, when a commissioning is loaded.
+    pub measured_frf: Option<FrfOverlay>,
+    /// The commissioning's own validation, when known.
+    pub commissioned: Option<CommissionedNumbers>,
 }
 
 /// Default prefilter attenuation per prefilter kind, dB.

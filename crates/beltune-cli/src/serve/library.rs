@@ -1,36 +1,54 @@
 //! Where the tuning page's design model comes from: a commissioning folder
-//! (`commissioning.json`, written by `beltune commission`) or the built-in axis.
+//! (`commissioning.json` and `frf.csv`, written by `beltune commission`) or the
+//! built-in axis, commissioned once at start-up exactly as `beltune commission`
+//! does with its defaults (egc70, 11.2 kg, seed 1): the page then shows the
+//! model, the design and the numbers of the report. Plot data and the simulated
+//! validation move come from the library (`beltune::procedure::plots`,
+//! `beltune::procedure::validation::simulate_validation_move`), the same code
+//! the report and the commissioning use.
 
 use anyhow::Context;
 use beltune::model::TwoMassParams;
 use serde::Deserialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::api::{
-    BodeData, Curve, DefaultAttenuation, DesignResponse, EffectiveKnobs, Gains, Knobs, LoopMargins,
-    MoveData, PrefilterInfo, PrefilterKind,
+    BodeData, CommissionedNumbers, Curve, DefaultAttenuation, DesignResponse, EffectiveKnobs,
+    FrfOverlay, Gains, Knobs, LoopMargins, MoveData, PrefilterInfo, PrefilterKind,
 };
-use super::tuner::{ModelSummary, TuneError, Tuner};
+use super::tuner::{ModelSummary, SavedFile, TuneError, Tuner};
 use beltune::design::{
     self, ControllerDesign, DesignInput, DesignKnobs, Dynamics, FrictionParams, Prefilter,
     PrefilterKind as DesignPrefilterKind,
 };
-use beltune::lti::{BodePoint, StabilityMargins};
+use beltune::ident::FitModel;
+use beltune::lti::StabilityMargins;
 use beltune::model::rigs::{self, LinearPlant, Plant};
-use beltune::procedure::commission::cascade_from_design;
-use beltune::procedure::motion::TrackOptions;
+use beltune::procedure::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
 use beltune::procedure::outputs;
-use beltune::procedure::result::FrictionResult;
-use beltune::procedure::runner::Runner;
-use beltune::procedure::validation::{run_move, MoveResult, MoveSpec};
-use beltune::procedure::{NoProgress, SafetyLimits, SafetySupervisor};
+use beltune::procedure::plots::{self, FrfLines};
+use beltune::procedure::report_build;
+use beltune::procedure::result::{FrictionResult, MoveSummary};
+use beltune::procedure::validation::{
+    simulate_validation_move, FeedforwardVariant, MoveResult, MoveSpec,
+};
+use beltune::procedure::NoProgress;
+use beltune::provenance::Provenance;
+use beltune::report::{render_html, BodeCurve, ParameterRow, Report};
 use beltune::sim::{SimAxis, SimConfig};
-use beltune_rt::control::{BeltStretch, Feedforward as RtFeedforward};
-use beltune_rt::trajectory::Limits;
 use std::time::Instant;
 
 /// File read from `--commissioning DIR`.
 pub const COMMISSIONING_FILE: &str = "commissioning.json";
+/// Points of the loop plots (the library's grid, shared with the report).
+pub const PLOT_POINTS: usize = plots::LOOP_PLOT_POINTS;
+/// Seed of the built-in commissioning (the default of `beltune commission`).
+pub const BUILTIN_SEED: u64 = 1;
+/// Cart position at the start of the built-in commissioning (the default of
+/// `beltune commission --start-position`), m.
+pub const BUILTIN_START_POSITION_M: f64 = 0.05;
+/// Seed of the page's simulated moves.
+pub const MOVE_SEED: u64 = 1;
 
 /// Friction identified from constant-velocity runs (thesis 3.6), as seen at the motor.
 #[derive(Debug, Clone, Copy, Deserialize)]
@@ -49,6 +67,13 @@ pub struct FrictionTotals {
     pub holding_torque_nm: Option<f64>,
 }
 
+/// The validation summary of `commissioning.json` (nonlinear move only).
+#[derive(Debug, Clone, Deserialize)]
+pub struct ValidationFile {
+    /// The move with nonlinear feedforward.
+    pub nonlinear: MoveSummary,
+}
+
 /// The parts of `commissioning.json` the tuning page needs.
 #[derive(Debug, Clone, Deserialize)]
 pub struct CommissioningFile {
@@ -57,6 +82,9 @@ pub struct CommissioningFile {
     /// Identified friction (optional).
     #[serde(default)]
     pub friction: Option<FrictionTotals>,
+    /// The commissioning's validation (optional: recorded data has none).
+    #[serde(default)]
+    pub validation: Option<ValidationFile>,
 }
 
 /// The model the page designs for.
@@ -70,16 +98,32 @@ pub struct DesignModel {
     pub dead_time_s: f64,
     /// Friction for the feedforward, if known.
     pub friction: Option<FrictionTotals>,
+    /// The measured FRF (`frf.csv`), if known.
+    pub frf: Option<FrfLines>,
+    /// The commissioning's own validation move (nonlinear feedforward), if known.
+    pub commissioned: Option<MoveSummary>,
+    /// `commissioning.json` as read (saved sets patch its controller).
+    pub json: Option<serde_json::Value>,
+    /// The exact design input of an in-process commissioning (sampling time,
+    /// velocity filter), if known.
+    pub input: Option<DesignInput>,
     /// Torque limit of the drive from the record, N m (`None`: egc70's).
     pub torque_max_nm: Option<f64>,
 }
 
-/// Read `dir/commissioning.json`; every failure names the file.
+/// Read `dir/commissioning.json` (and `dir/frf.csv` when present); every
+/// failure names the file.
 pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     let path = dir.join(COMMISSIONING_FILE);
     let text = beltune::io::read_to_string_capped(&path, beltune::io::MAX_TEXT_BYTES)?;
     let file = beltune::design::ModelFile::parse(&text, &path.display().to_string())
         .with_context(|| format!("parsing {}", path.display()))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let commissioned = json
+        .get("validation")
+        .and_then(|v| v.get("nonlinear"))
+        .and_then(|n| serde_json::from_value::<MoveSummary>(n.clone()).ok());
     let id = file.identified;
     let params = id.params();
     params
@@ -101,22 +145,44 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         .and_then(|_| beltune::error::require_non_negative("friction.coulomb [N m]", f.coulomb_nm))
         .with_context(|| format!("{}: friction", path.display()))?;
     }
+    let frf_path = dir.join(plots::FRF_CSV);
+    let frf = if frf_path.exists() {
+        Some(
+            plots::read_frf_csv(&frf_path)
+                .with_context(|| format!("reading {}", frf_path.display()))?,
+        )
+    } else {
+        None
+    };
     Ok(DesignModel {
         source: format!("commissioning {}", dir.display()),
         params,
         dead_time_s: id.dead_time_s,
         friction,
+        frf,
+        commissioned,
+        json: Some(json),
+        input: None,
         torque_max_nm: id.torque_max_nm,
     })
 }
 
-/// Frequency grid of the plots: from [`PLOT_DECADES_BELOW`] decades below the lowest
-/// of antiresonance and the two crossovers up to the Nyquist frequency,
-/// [`PLOT_POINTS`] log-spaced points (enough to draw the resonance; the margins
-/// come from the design's own fine grid).
-pub const PLOT_POINTS: usize = 300;
-/// Decades of the plot grid below the lowest characteristic frequency.
-pub const PLOT_DECADES_BELOW: f64 = 2.0;
+/// The commissioning `beltune commission` runs with its defaults: the
+/// built-in egc70 with 11.2 kg, seed [`BUILTIN_SEED`], start at
+/// [`BUILTIN_START_POSITION_M`], default knobs. Deterministic.
+pub fn builtin_commissioning() -> beltune::Result<(Plant, Commissioning)> {
+    let plant = rigs::builtin("egc70", None)?;
+    let ds = DataSheet::for_plant(&plant, BUILTIN_START_POSITION_M, None);
+    let cfg = CommissioningConfig::default();
+    let sim = SimConfig {
+        seed: BUILTIN_SEED,
+        initial_cart_position_m: Some(BUILTIN_START_POSITION_M),
+        ..SimConfig::default()
+    };
+    let mut axis = SimAxis::new(&plant, sim)?;
+    let run = commission(&mut axis, &ds, &cfg, &mut NoProgress)?;
+    Ok((plant, run))
+}
 
 /// Which plant the simulated move runs on.
 #[derive(Debug, Clone)]
@@ -128,11 +194,13 @@ enum MovePlant {
 }
 
 /// The [`Tuner`] backed by the beltune library: [`beltune::design::design`] for
-/// the controller (the same function `beltune design` runs). The design always
-/// uses the nominal model; only the simulated move sees the payload slider.
+/// the controller (the same function `beltune design` and the commissioning
+/// run). The design always uses the nominal model; only the simulated move
+/// sees the payload slider.
 pub struct LibraryTuner {
     model: DesignModel,
     input: DesignInput,
+    friction: FrictionResult,
     nominal_payload_kg: f64,
     move_plant: MovePlant,
     /// Torque limit written to controller.toml and used in the move: the
@@ -144,7 +212,9 @@ impl LibraryTuner {
     /// Tuner for an identified model (commissioning folder). The payload slider
     /// adds mass to the identified `m_c` (default 0 kg).
     pub fn new(model: DesignModel) -> anyhow::Result<Self> {
-        let mut input = DesignInput::new(model.params, model.dead_time_s);
+        let mut input = model
+            .input
+            .unwrap_or_else(|| DesignInput::new(model.params, model.dead_time_s));
         input.friction = model.friction.map(|f| FrictionParams {
             viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
             coulomb_nm: f.coulomb_nm,
@@ -156,38 +226,75 @@ impl LibraryTuner {
             Some(t) => t,
             None => rigs::builtin("egc70", None)?.info().torque_max_nm,
         };
+        let f = model.friction.unwrap_or(FrictionTotals {
+            viscous_nm_s_per_rad: 0.0,
+            coulomb_nm: 0.0,
+            linear_viscous_nm_s_per_rad: None,
+            holding_torque_nm: None,
+        });
+        let friction = FrictionResult {
+            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
+            coulomb_nm: f.coulomb_nm,
+            linear_viscous_nm_s_per_rad: f
+                .linear_viscous_nm_s_per_rad
+                .unwrap_or(f.viscous_nm_s_per_rad),
+            relative_residual: 0.0,
+            holding_torque_nm: f.holding_torque_nm.unwrap_or(0.0),
+        };
         Ok(LibraryTuner {
             model,
             input,
+            friction,
             nominal_payload_kg: 0.0,
             move_plant: MovePlant::Identified,
             torque_max_nm,
         })
     }
 
-    /// Tuner for the built-in egc70 axis: its two-mass linearization at the
-    /// worst-case (lowest-resonance) cart position with the default payload.
+    /// Tuner for the built-in egc70 axis: the model [`builtin_commissioning`]
+    /// identifies, its friction and measured FRF; the simulated move runs on
+    /// the egc70 itself with the slider's payload (default 11.2 kg).
     pub fn builtin() -> anyhow::Result<Self> {
-        let plant = rigs::builtin("egc70", None)?;
-        let params = plant.worst_case_two_mass()?;
-        let friction = plant.friction_totals();
+        let (plant, run) = builtin_commissioning().context("built-in commissioning of egc70")?;
+        Self::from_commissioning(&plant, &run, "egc70")
+    }
+
+    /// Tuner for an in-process commissioning `run` of the built-in `plant`.
+    pub fn from_commissioning(
+        plant: &Plant,
+        run: &Commissioning,
+        name: &str,
+    ) -> anyhow::Result<Self> {
+        let fit = &run.fit;
+        let lines = plots::frf_lines(&run.frf, &fit.model.tf(&fit.params), run.dead_time.seconds)?;
+        let json = serde_json::to_value(outputs::commissioning_json(
+            run,
+            name,
+            None,
+            Provenance::of_this_process(Some(BUILTIN_SEED)),
+        ))
+        .context("commissioning.json of the built-in run")?;
         let model = DesignModel {
             source: format!(
-                "built-in egc70 ({} kg payload, cart at {:.3} m)",
-                rigs::EGC70_DEFAULT_PAYLOAD_KG,
-                plant.worst_case_position_m()
+                "built-in {name} commissioned at start-up ({} kg payload, seed {BUILTIN_SEED})",
+                rigs::EGC70_DEFAULT_PAYLOAD_KG
             ),
-            params,
-            dead_time_s: plant.dead_time_s(),
+            params: run.design.input.model,
+            dead_time_s: run.design.input.dead_time_s,
             friction: Some(FrictionTotals {
-                viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
-                coulomb_nm: friction.coulomb_nm,
-                linear_viscous_nm_s_per_rad: None,
-                holding_torque_nm: None,
+                viscous_nm_s_per_rad: run.friction.viscous_nm_s_per_rad,
+                coulomb_nm: run.friction.coulomb_nm,
+                linear_viscous_nm_s_per_rad: Some(run.friction.linear_viscous_nm_s_per_rad),
+                holding_torque_nm: Some(run.friction.holding_torque_nm),
             }),
+            frf: Some(lines),
+            commissioned: Some(run.validation.nonlinear.clone()),
+            json: Some(json),
+            input: Some(run.design.input),
             torque_max_nm: None,
         };
         let mut tuner = LibraryTuner::new(model)?;
+        tuner.torque_max_nm = plant.info().torque_max_nm;
         tuner.nominal_payload_kg = rigs::EGC70_DEFAULT_PAYLOAD_KG;
         tuner.move_plant = MovePlant::Egc70;
         Ok(tuner)
@@ -256,6 +363,68 @@ impl LibraryTuner {
             }
         }
     }
+
+    /// The feedforward variant and friction of the simulated move: the
+    /// commissioning's nonlinear feedforward on the egc70; on the linear
+    /// identified plant (no Coulomb friction) inertia and viscous friction.
+    fn move_variant(&self) -> (FeedforwardVariant, FrictionResult) {
+        match self.move_plant {
+            MovePlant::Egc70 => (FeedforwardVariant::Nonlinear, self.friction.clone()),
+            MovePlant::Identified => (
+                FeedforwardVariant::Linear,
+                FrictionResult {
+                    linear_viscous_nm_s_per_rad: self.friction.viscous_nm_s_per_rad,
+                    ..self.friction.clone()
+                },
+            ),
+        }
+    }
+
+    /// Label of the simulated move.
+    fn move_label(&self) -> String {
+        match self.move_plant {
+            MovePlant::Egc70 => "simulated on egc70, nonlinear feedforward".into(),
+            MovePlant::Identified => {
+                "simulated on the identified linear model, linear feedforward".into()
+            }
+        }
+    }
+
+    /// The thesis validation move (0 -> 0.5 m, Table A.8 limits) of design `d`
+    /// on the simulated plant with `payload_kg`, through
+    /// [`simulate_validation_move`] (controller and options of stage 8).
+    pub fn validation_move(
+        &self,
+        d: &ControllerDesign,
+        payload_kg: f64,
+    ) -> beltune::Result<MoveResult> {
+        let plant = self.move_plant(payload_kg)?;
+        let (variant, friction) = self.move_variant();
+        simulate_validation_move(
+            &plant,
+            d,
+            &friction,
+            variant,
+            &MoveSpec::default(),
+            MOVE_SEED,
+            MOVE_FOLLOWING_ERROR_MAX_M,
+        )
+    }
+
+    fn frf_overlay(&self) -> Option<FrfOverlay> {
+        let lines = self.model.frf.as_ref()?;
+        let tf = FitModel::default().tf(&self.model.params);
+        let p = plots::frf_display(lines, &tf, self.model.dead_time_s, vec![]).ok()?;
+        Some(FrfOverlay {
+            freq_hz: p.measured.freq_hz,
+            magnitude_db: p.measured.magnitude_db,
+            phase_deg: p.measured.phase_deg,
+            used_by_fit: p.usable,
+            model_freq_hz: p.model.freq_hz,
+            model_magnitude_db: p.model.magnitude_db,
+            model_phase_deg: p.model.phase_deg,
+        })
+    }
 }
 
 fn to_design_kind(p: PrefilterKind) -> DesignPrefilterKind {
@@ -287,10 +456,10 @@ fn loop_margins(m: &StabilityMargins) -> LoopMargins {
     }
 }
 
-fn curve(points: &[BodePoint]) -> Curve {
+fn curve(c: &BodeCurve) -> Curve {
     Curve {
-        magnitude_db: points.iter().map(|p| p.magnitude_db).collect(),
-        phase_deg: points.iter().map(|p| p.phase_deg).collect(),
+        magnitude_db: c.magnitude_db.clone(),
+        phase_deg: c.phase_deg.clone(),
     }
 }
 
@@ -301,6 +470,15 @@ impl Tuner for LibraryTuner {
             f_r_hz: self.model.params.f_r_hz(),
             f_z_hz: self.model.params.f_z_hz(),
             nominal_payload_kg: self.nominal_payload_kg,
+            measured_frf: self.frf_overlay(),
+            commissioned: self
+                .model
+                .commissioned
+                .as_ref()
+                .map(|m| CommissionedNumbers {
+                    max_error_m: m.max_tracking_error_m,
+                    static_error_m: m.static_error_m,
+                }),
         }
     }
 
@@ -327,20 +505,8 @@ impl Tuner for LibraryTuner {
     fn tune(&self, knobs: &Knobs) -> Result<DesignResponse, TuneError> {
         let started = Instant::now();
         let d = self.design(knobs)?;
-        let lowest = d
-            .omega_z_rad_s
-            .min(d.velocity_margins.crossover_rad_s)
-            .min(d.position_margins.crossover_rad_s);
-        let w_max = std::f64::consts::PI / d.input.ts_s;
-        let w_min = lowest * 10f64.powf(-PLOT_DECADES_BELOW);
-        let plot = d
-            .plot_data(w_min, w_max, PLOT_POINTS)
-            .map_err(|e| TuneError::Internal(format!("plot data: {e}")))?;
-        let omega_rad_s = plot
-            .velocity_open_loop
-            .iter()
-            .map(|p| p.omega_rad_s)
-            .collect();
+        let loops =
+            plots::loop_data(&d).map_err(|e| TuneError::Internal(format!("plot data: {e}")))?;
         let prefilter = match d.prefilter {
             Prefilter::Butterworth { omega_bw_rad_s } => PrefilterInfo {
                 kind: PrefilterKind::Butterworth,
@@ -362,9 +528,12 @@ impl Tuner for LibraryTuner {
             },
         };
         let payload_kg = self.payload_kg(knobs);
-        let (validation_move, move_error) = match self.simulate_move(&d, payload_kg) {
-            Ok(m) => (Some(m), None),
-            Err(e) => (None, Some(e)),
+        let (validation_move, move_error) = match self.validation_move(&d, payload_kg) {
+            Ok(m) => (Some(move_data(&m, payload_kg, self.move_label())), None),
+            Err(e) => (
+                None,
+                Some(format!("simulated move with {payload_kg} kg payload: {e}")),
+            ),
         };
         Ok(DesignResponse {
             knobs: EffectiveKnobs {
@@ -386,10 +555,18 @@ impl Tuner for LibraryTuner {
             position_loop: loop_margins(&d.position_margins),
             gain_at_resonance_db: d.gain_at_resonance_db,
             bode: BodeData {
-                omega_rad_s,
-                open_loop_velocity: curve(&plot.velocity_open_loop),
-                open_loop_position: curve(&plot.position_open_loop),
-                closed_loop_position: curve(&plot.position_closed_loop),
+                omega_rad_s: loops
+                    .freq_hz
+                    .iter()
+                    .map(|f| 2.0 * std::f64::consts::PI * f)
+                    .collect(),
+                freq_hz: loops.freq_hz.clone(),
+                open_loop_velocity: curve(&loops.velocity_open_loop),
+                open_loop_position: curve(&loops.position_open_loop),
+                closed_loop_position: curve(&loops.position_closed_loop),
+                closed_loop_velocity: curve(&loops.velocity_closed_loop),
+                sensitivity_velocity: curve(&loops.velocity_sensitivity),
+                sensitivity_position: curve(&loops.position_sensitivity),
             },
             validation_move,
             move_error,
@@ -399,36 +576,75 @@ impl Tuner for LibraryTuner {
 
     fn controller_toml(&self, knobs: &Knobs) -> Result<String, TuneError> {
         let d = self.design(knobs)?;
-        let friction = self.model.friction.unwrap_or(FrictionTotals {
-            viscous_nm_s_per_rad: 0.0,
-            coulomb_nm: 0.0,
-            linear_viscous_nm_s_per_rad: None,
-            holding_torque_nm: None,
+        self.controller_toml_of(&d)
+    }
+
+    fn save_set(&self, knobs: &Knobs) -> Result<Vec<SavedFile>, TuneError> {
+        let d = self.design(knobs)?;
+        let toml = self.controller_toml_of(&d)?;
+        let payload_kg = self.payload_kg(knobs);
+        let sim = self.validation_move(&d, payload_kg).ok();
+        let report = self
+            .tuned_report(&d, sim.as_ref(), payload_kg)
+            .map_err(|e| TuneError::Internal(format!("report: {e}")))?;
+        let html = render_html(&report).map_err(|e| TuneError::Internal(e.to_string()))?;
+        let json = self.tuned_json(&d, sim.as_ref());
+        let json = serde_json::to_string_pretty(&json)
+            .map_err(|e| TuneError::Internal(format!("commissioning.json: {e}")))?;
+        let mut files = vec![
+            SavedFile {
+                name: super::CONTROLLER_FILE.into(),
+                bytes: toml.into_bytes(),
+            },
+            SavedFile {
+                name: COMMISSIONING_FILE.into(),
+                bytes: json.into_bytes(),
+            },
+            SavedFile {
+                name: "report.html".into(),
+                bytes: html.into_bytes(),
+            },
+        ];
+        if let Some(lines) = &self.model.frf {
+            files.push(SavedFile {
+                name: plots::FRF_CSV.into(),
+                bytes: plots::frf_csv(lines).into_bytes(),
+            });
+        }
+        let loops = plots::loop_data(&d).map_err(|e| TuneError::Internal(e.to_string()))?;
+        files.push(SavedFile {
+            name: plots::LOOPS_CSV.into(),
+            bytes: plots::loops_csv(&loops).into_bytes(),
         });
-        let friction = FrictionResult {
-            viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
-            coulomb_nm: friction.coulomb_nm,
-            linear_viscous_nm_s_per_rad: friction
-                .linear_viscous_nm_s_per_rad
-                .unwrap_or(friction.viscous_nm_s_per_rad),
-            relative_residual: 0.0,
-            holding_torque_nm: friction.holding_torque_nm.unwrap_or(0.0),
-        };
+        if !report.moves.is_empty() {
+            files.push(SavedFile {
+                name: plots::MOVES_CSV.into(),
+                bytes: report_build::moves_csv(&report.moves).into_bytes(),
+            });
+        }
+        Ok(files)
+    }
+}
+
+impl LibraryTuner {
+    fn controller_toml_of(&self, d: &ControllerDesign) -> Result<String, TuneError> {
         let body = outputs::controller_toml(
-            &d,
-            &friction,
+            d,
+            &self.friction,
             self.torque_max_nm,
             beltune::ident::ModelUnits::Torque,
-            beltune::provenance::Provenance::of_this_process(None),
+            Provenance::of_this_process(None),
         )
         .map_err(|e| TuneError::Internal(e.to_string()))?;
+
         let k = &d.knobs;
+        let hz = |w: f64| w / (2.0 * std::f64::consts::PI);
         Ok(format!(
             "# beltune controller, saved by `beltune serve` (same layout as `beltune commission`)\n\
              # model: {}\n\
              # knobs: prefilter {:?}, velocity PM {} deg, position PM {} deg, \
              A_sup {} dB, filter attenuation {} dB\n\
-             # achieved: velocity PM {:.2} deg at {:.2} rad/s, position PM {:.2} deg at {:.2} rad/s\n\n{body}",
+             # achieved: velocity PM {:.2} deg at {:.3} Hz, position PM {:.2} deg at {:.3} Hz\n\n{body}",
             self.model.source,
             k.prefilter,
             k.pm_velocity_deg,
@@ -436,11 +652,217 @@ impl Tuner for LibraryTuner {
             k.resonance_suppression_db,
             k.attenuation_db(),
             d.velocity_margins.phase_margin_deg,
-            d.velocity_margins.crossover_rad_s,
+            hz(d.velocity_margins.crossover_rad_s),
             d.position_margins.phase_margin_deg,
-            d.position_margins.crossover_rad_s,
+            hz(d.position_margins.crossover_rad_s),
         ))
     }
+
+    /// `commissioning.json` of a saved set: the loaded one with the new
+    /// controller; its measured validation belonged to the old controller and
+    /// is replaced by `null`; the simulated move and the knobs are recorded.
+    fn tuned_json(&self, d: &ControllerDesign, sim: Option<&MoveResult>) -> serde_json::Value {
+        let mut v = self
+            .model
+            .json
+            .clone()
+            .unwrap_or_else(|| serde_json::json!({}));
+        if let Some(obj) = v.as_object_mut() {
+            obj.insert(
+                "controller".into(),
+                serde_json::to_value(d.summary()).unwrap_or_default(),
+            );
+            obj.insert("validation".into(), serde_json::Value::Null);
+            obj.insert(
+                "tuning".into(),
+                serde_json::json!({
+                    "saved_by": "beltune serve",
+                    "model_source": self.model.source,
+                    "knobs": {
+                        "prefilter": format!("{:?}", d.knobs.prefilter).to_lowercase(),
+                        "pm_velocity_deg": d.knobs.pm_velocity_deg,
+                        "pm_position_deg": d.knobs.pm_position_deg,
+                        "resonance_suppression_db": d.knobs.resonance_suppression_db,
+                        "filter_attenuation_db": d.knobs.attenuation_db(),
+                    },
+                    "simulated_validation": sim.map(|m| serde_json::to_value(&m.summary).unwrap_or_default()),
+                    "provenance": serde_json::to_value(Provenance::of_this_process(None)).unwrap_or_default(),
+                }),
+            );
+        }
+        v
+    }
+
+    /// The report of a saved set: the measured FRF (when known), the loops of
+    /// the new design, its simulated move and a verdict judged on that move.
+    fn tuned_report(
+        &self,
+        d: &ControllerDesign,
+        sim: Option<&MoveResult>,
+        payload_kg: f64,
+    ) -> beltune::Result<Report> {
+        let p = &self.model.params;
+        let (f_z, f_r) = (p.f_z_hz(), p.f_r_hz());
+        let loops = report_build::loop_plots(d, f_z, f_r)?;
+        let tf = FitModel::default().tf(p);
+        let frf = match &self.model.frf {
+            Some(lines) => Some(plots::frf_display(
+                lines,
+                &tf,
+                self.model.dead_time_s,
+                plots::resonance_markers(f_z, f_r),
+            )?),
+            None => None,
+        };
+        let id = self.model.json.as_ref().and_then(|j| j.get("identified"));
+        let number = |k: &str| id.and_then(|i| i.get(k)).and_then(|v| v.as_f64());
+        let label = self.move_label();
+        let mut input = report_build::verdict_input(None, d, sim.map(|m| &m.summary));
+        input.mean_coherence = number("mean_coherence");
+        input.fit_rms_db = number("fit_rms_db");
+        let verdict = beltune::procedure::verdict::verdict(&input);
+        let row = |name: &str, unit: &str, v: f64, digits: usize| ParameterRow {
+            name: name.into(),
+            unit: unit.into(),
+            before: None,
+            after: format!("{v:.digits$}"),
+            truth: None,
+            value: Some(v),
+        };
+        let hz = |w: f64| w / (2.0 * std::f64::consts::PI);
+        let parameters = vec![
+            row("resonance f_r", "Hz", f_r, 2),
+            row("antiresonance f_z", "Hz", f_z, 2),
+            row("moving mass m_c", "kg", p.m_c, 2),
+            row("belt stiffness c", "kN/m", p.c / 1e3, 1),
+            row("K_P", "N m s/rad", d.k_p, 4),
+            row("K_I", "N m/rad", d.k_i, 3),
+            row("K_PP", "1/s", d.k_pp, 3),
+            row(
+                "velocity crossover f_c",
+                "Hz",
+                hz(d.velocity_margins.crossover_rad_s),
+                2,
+            ),
+            row(
+                "velocity phase margin",
+                "deg",
+                d.velocity_margins.phase_margin_deg,
+                2,
+            ),
+            row(
+                "position crossover f_c",
+                "Hz",
+                hz(d.position_margins.crossover_rad_s),
+                3,
+            ),
+            row(
+                "position phase margin",
+                "deg",
+                d.position_margins.phase_margin_deg,
+                2,
+            ),
+        ];
+        let moves = sim
+            .map(|m| vec![report_build::move_plot(m, &label)])
+            .unwrap_or_default();
+        let validation_rows = sim
+            .map(|m| vec![report_build::validation_row(&label, &m.summary)])
+            .unwrap_or_default();
+        Ok(Report {
+            title: format!("beltune tuning report: {}", self.model.source),
+            summary: format!(
+                "Saved by the tuning page. The design model is the one of {}; the verdict is judged on a \
+                 simulated validation move with {payload_kg} kg payload ({label}), not on the axis. \
+                 Run `beltune commission` again to validate on the axis.",
+                self.model.source
+            ),
+            frf,
+            controller: Some(loops.controller),
+            open_loops: loops.open_loops,
+            closed_loops: loops.closed_loops,
+            moves,
+            parameters,
+            validation_rows,
+            verdict: Some(verdict),
+            provenance: Some(Provenance::of_this_process(None)),
+            ..Report::default()
+        })
+    }
+}
+
+/// A saved set on disk.
+#[derive(Debug, Clone)]
+pub struct SavedSet {
+    /// The new folder.
+    pub dir: PathBuf,
+    /// File names written.
+    pub files: Vec<String>,
+    /// Bytes of `controller.toml`.
+    pub controller_bytes: usize,
+}
+
+/// Write `files` into a new folder `tuned-<UTC time>` (`-2`, `-3`, ... if
+/// taken) under `dir`: first into a hidden temporary folder unique to this
+/// save, then renamed, so the set appears whole or not at all and nothing
+/// earlier is overwritten (a rename onto a folder another save created in
+/// the meantime fails, and the next name is tried).
+pub fn write_saved_set(dir: &Path, files: &[SavedFile]) -> anyhow::Result<SavedSet> {
+    static SAVES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let stamp: String = Provenance::now(Vec::new(), None)
+        .created_utc
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric())
+        .collect();
+    let unique = SAVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = dir.join(format!(
+        ".tuned-{stamp}-{}-{unique}.partial",
+        std::process::id()
+    ));
+    std::fs::create_dir(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+    let result = (|| -> anyhow::Result<SavedSet> {
+        for f in files {
+            beltune::io::write_atomic(&tmp.join(&f.name), &f.bytes)?;
+        }
+        for n in 1.. {
+            let name = if n == 1 {
+                format!("tuned-{stamp}")
+            } else {
+                format!("tuned-{stamp}-{n}")
+            };
+            let target = dir.join(name);
+            if std::fs::symlink_metadata(&target).is_ok() {
+                continue;
+            }
+            match std::fs::rename(&tmp, &target) {
+                Ok(()) => {
+                    return Ok(SavedSet {
+                        dir: target,
+                        files: files.iter().map(|f| f.name.clone()).collect(),
+                        controller_bytes: files
+                            .iter()
+                            .find(|f| f.name == super::CONTROLLER_FILE)
+                            .map_or(0, |f| f.bytes.len()),
+                    })
+                }
+                // another save took the name between the check and the rename
+                Err(_) if std::fs::symlink_metadata(&target).is_ok() => continue,
+                Err(e) => {
+                    return Err(anyhow::Error::new(e).context(format!(
+                        "renaming {} to {}",
+                        tmp.display(),
+                        target.display()
+                    )))
+                }
+            }
+        }
+        unreachable!("the name search ends with a free name or an error")
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_dir_all(&tmp);
+    }
+    result
 }
 
 /// Largest number of points of each move trace sent to the page.
@@ -448,102 +870,9 @@ pub const MOVE_TRACE_POINTS: usize = 400;
 /// Following error at which the simulated move is aborted (a badly damped or
 /// unstable design under a payload the design did not assume), m.
 pub const MOVE_FOLLOWING_ERROR_MAX_M: f64 = 0.1;
-/// Deceleration of the supervisor's jerk-limited stop, m/s^2.
-pub const MOVE_STOP_DECELERATION_M_S2: f64 = 20.0;
-
-impl LibraryTuner {
-    /// The thesis validation move (0 -> 0.5 m, Table A.8 limits,
-    /// [`MoveSpec::default`]) on the simulated plant with `payload_kg`, with the
-    /// nonlinear feedforward (egc70; linear inertia + viscous for the linear
-    /// identified plant, which has no Coulomb friction) and the refinements
-    /// `beltune commission` validates with (filtered desired velocity, dead-time preview, belt-stretch
-    /// compensation from the design model). Composed from the library's
-    /// [`SimAxis`], [`Runner`] and [`run_move`]; a safety stop is reported as text.
-    fn simulate_move(&self, d: &ControllerDesign, payload_kg: f64) -> Result<MoveData, String> {
-        self.run_validation_move(d, payload_kg)
-            .map_err(|e| format!("simulated move with {payload_kg} kg payload: {e}"))
-    }
-
-    fn run_validation_move(
-        &self,
-        d: &ControllerDesign,
-        payload_kg: f64,
-    ) -> beltune::Result<MoveData> {
-        let plant = self.move_plant(payload_kg)?;
-        let info = plant.info();
-        let spec = MoveSpec::default();
-        let config = SimConfig {
-            initial_cart_position_m: Some(spec.start_m),
-            ..SimConfig::default()
-        };
-        let mut axis = SimAxis::new(&plant, config)?;
-        let torque_max = info.torque_max_nm;
-        let feedback = cascade_from_design(d, torque_max, 0.0)?;
-        let a_stop = MOVE_STOP_DECELERATION_M_S2;
-        let supervisor = SafetySupervisor::new(
-            SafetyLimits {
-                travel_min_m: spec.limits.position_min,
-                travel_max_m: spec.limits.position_max,
-                torque_max_nm: torque_max,
-                velocity_max_m_s: spec.limits.v_max,
-                following_error_max_m: MOVE_FOLLOWING_ERROR_MAX_M,
-            },
-            a_stop,
-        )?;
-        let stop_limits = Limits {
-            a_max: a_stop,
-            a_min: -a_stop,
-            j_max: 20.0 * a_stop,
-            j_min: -20.0 * a_stop,
-            ..spec.limits
-        };
-        let mut progress = NoProgress;
-        let mut runner = Runner::new(
-            &mut axis,
-            &mut progress,
-            supervisor,
-            d.input.model.i_t,
-            spec.start_m,
-            feedback,
-            stop_limits,
-        )?;
-        let ff = &d.feedforward;
-        let mut controller = feedback;
-        controller.feedforward = match self.move_plant {
-            MovePlant::Egc70 => {
-                RtFeedforward::nonlinear(ff.inertia_kg_m2, ff.viscous_nm_s_per_rad, ff.coulomb_nm)
-            }
-            // the linear move plant has no Coulomb friction to compensate
-            MovePlant::Identified => {
-                RtFeedforward::linear(ff.inertia_kg_m2, ff.viscous_nm_s_per_rad)
-            }
-        };
-        controller.filter_desired_velocity = true;
-        controller.feedforward_preview = true;
-        let opts = TrackOptions {
-            preview_samples: (d.input.dead_time_s / d.input.ts_s).round() as usize,
-            belt_stretch: BeltStretch::On {
-                m_c_kg: d.input.model.m_c,
-                c_n_per_m: d.input.model.c,
-            },
-            check_following_error: true,
-            // The simulated plants are horizontal: no holding force, no static stretch.
-            static_stretch_m: 0.0,
-        };
-        let result = run_move(
-            &mut runner,
-            &feedback,
-            &spec.limits,
-            &controller,
-            opts,
-            &spec,
-        )?;
-        Ok(move_data(&result, payload_kg))
-    }
-}
 
 /// Summary and traces (every k-th sample, at most [`MOVE_TRACE_POINTS`]) of a move.
-fn move_data(r: &MoveResult, payload_kg: f64) -> MoveData {
+fn move_data(r: &MoveResult, payload_kg: f64, plant: String) -> MoveData {
     let rec = &r.record;
     let n = rec.samples.len();
     let stride = n.div_ceil(MOVE_TRACE_POINTS).max(1);
@@ -555,6 +884,7 @@ fn move_data(r: &MoveResult, payload_kg: f64) -> MoveData {
     let pick = |f: &dyn Fn(usize) -> f64| (0..n).step_by(stride).map(f).collect::<Vec<f64>>();
     let s = &r.summary;
     MoveData {
+        plant,
         payload_kg,
         max_error_m: s.max_tracking_error_m,
         static_error_m: s.static_error_m,

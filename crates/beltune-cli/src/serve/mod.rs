@@ -4,7 +4,9 @@
 //!   network); the plots are drawn client-side as inline SVG from the API's data.
 //! - `GET /api/info`: model summary, knob defaults and ranges.
 //! - `POST /api/design`: knobs -> gains, margins, Bode data, simulated move ([`api`]).
-//! - `POST /api/save`: writes `controller.toml` atomically into the save folder.
+//! - `POST /api/save`: writes a new folder `tuned-<UTC time>` in the save folder
+//!   with a consistent set (`controller.toml`, `commissioning.json`, `report.html`,
+//!   data files), never overwriting an earlier result.
 //!
 //! POST bodies must be `application/json` (a cross-site form cannot post them
 //! without a CORS preflight, which this server never grants) and at most
@@ -379,6 +381,8 @@ async fn info(State(state): State<AppState>) -> Json<InfoResponse> {
         default_attenuation_db: state.tuner.default_attenuation(),
         ranges: api::RANGES.to_vec(),
         save_dir: state.save_dir.display().to_string(),
+        measured_frf: model.measured_frf,
+        commissioned: model.commissioned,
     })
 }
 
@@ -452,24 +456,19 @@ async fn save(
         Err(e) => return error_response(e),
     };
     let tuner = state.tuner.clone();
-    let text = match blocking(move || tuner.controller_toml(&knobs)).await {
+    let set = match blocking(move || tuner.save_set(&knobs)).await {
         Ok(t) => t,
         Err(e) => return error_response(e),
     };
+    // Never overwrite: a new folder per save, written whole or not at all.
     let dir = std::path::absolute(&state.save_dir).unwrap_or_else(|_| state.save_dir.clone());
-    let path = dir.join(CONTROLLER_FILE);
-    let written = {
-        let path = path.clone();
-        let bytes = text.into_bytes();
-        tokio::task::spawn_blocking(move || {
-            beltune::io::write_atomic(&path, &bytes).map(|()| bytes.len())
-        })
-        .await
-    };
+    let written = tokio::task::spawn_blocking(move || library::write_saved_set(&dir, &set)).await;
     match written {
-        Ok(Ok(bytes)) => Json(SaveResponse {
-            path: path.display().to_string(),
-            bytes,
+        Ok(Ok(saved)) => Json(SaveResponse {
+            path: saved.dir.join(CONTROLLER_FILE).display().to_string(),
+            bytes: saved.controller_bytes,
+            dir: saved.dir.display().to_string(),
+            files: saved.files,
         })
         .into_response(),
         Ok(Err(e)) => error_response(ApiError {

@@ -2,7 +2,9 @@
 //! knobs and returns everything the page shows. The server knows nothing about
 //! the controller design or the simulator beyond this trait.
 
-use super::api::{DefaultAttenuation, DesignResponse, EffectiveKnobs, Knobs};
+use super::api::{
+    CommissionedNumbers, DefaultAttenuation, DesignResponse, EffectiveKnobs, FrfOverlay, Knobs,
+};
 
 /// Why a tuning request produced no design.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,6 +35,19 @@ pub struct ModelSummary {
     pub f_z_hz: f64,
     /// Payload the design model assumes, kg.
     pub nominal_payload_kg: f64,
+    /// The measured FRF and its fit, when known.
+    pub measured_frf: Option<FrfOverlay>,
+    /// The commissioning's own validation numbers, when known.
+    pub commissioned: Option<CommissionedNumbers>,
+}
+
+/// One file of a saved set: name and contents.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedFile {
+    /// File name (no directory).
+    pub name: String,
+    /// Contents.
+    pub bytes: Vec<u8>,
 }
 
 /// Runs the controller design and the simulated move for a set of knobs.
@@ -47,4 +62,13 @@ pub trait Tuner: Send + Sync + 'static {
     fn tune(&self, knobs: &Knobs) -> Result<DesignResponse, TuneError>;
     /// The design for `knobs` as the text of `controller.toml`.
     fn controller_toml(&self, knobs: &Knobs) -> Result<String, TuneError>;
+    /// Everything Save writes, as one consistent set: `controller.toml` first,
+    /// then (when the tuner can make them) `commissioning.json`, `report.html`
+    /// and the data files, all for the same design. Default: `controller.toml` only.
+    fn save_set(&self, knobs: &Knobs) -> Result<Vec<SavedFile>, TuneError> {
+        Ok(vec![SavedFile {
+            name: super::CONTROLLER_FILE.to_string(),
+            bytes: self.controller_toml(knobs)?.into_bytes(),
+        }])
+    }
 }

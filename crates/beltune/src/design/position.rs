@@ -99,8 +99,9 @@ pub fn design_p(
     if m.gain_crossover_count != 1 || (m.crossover_rad_s / w_c - 1.0).abs() > 1e-6 {
         return Err(Error::Infeasible {
             reason: format!(
-                "K_PP = {k_pp:.4} 1/s from (4.14) gives {} gain crossovers of the position loop (expected one at {w_c:.2} rad/s)",
-                m.gain_crossover_count
+                "the position gain K_PP = {k_pp:.4} 1/s (chosen for the requested position phase margin, thesis eq. 4.14) gives {} gain crossovers of the position loop, expected one at {:.2} Hz: lower the position phase margin or the velocity loop dynamics",
+                m.gain_crossover_count,
+                w_c / (2.0 * std::f64::consts::PI)
             ),
         });
     }

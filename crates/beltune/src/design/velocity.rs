@@ -152,7 +152,8 @@ pub fn design_pi(
     if !(g_r.norm().is_finite() && g_r.norm() > 0.0) {
         return Err(Error::Infeasible {
             reason: format!(
-                "the model's gain at the resonance {omega_r_rad_s:.2} rad/s is not finite (no damping): (4.7) cannot be evaluated"
+                "the model's gain at the resonance ({:.2} Hz) is not finite because the model has no damping: the resonance suppression (the open-loop gain at the resonance, thesis eq. 4.7) cannot be set; identify the axis again or give it damping",
+                omega_r_rad_s / (2.0 * std::f64::consts::PI)
             ),
         });
     }

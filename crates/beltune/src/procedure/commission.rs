@@ -293,6 +293,24 @@ pub(super) fn positioning_limits(ds: &DataSheet) -> Limits {
     }
 }
 
+/// The identification experiment as recorded (stage 5): the PRBS torque
+/// command and the motor-side position, with the limits it ran under.
+#[derive(Clone, Debug, Default)]
+pub struct ExcitationTrace {
+    /// Time since the axis was taken, s.
+    pub time_s: Vec<f64>,
+    /// Torque command (holding torque plus PRBS), N m.
+    pub torque_command_nm: Vec<f64>,
+    /// Motor-side position `i_t phi_m`, m.
+    pub position_m: Vec<f64>,
+    /// Torque limit of the commissioning, N m.
+    pub torque_max_nm: f64,
+    /// Allowed travel, m.
+    pub travel_min_m: f64,
+    /// Allowed travel, m.
+    pub travel_max_m: f64,
+}
+
 /// Everything a commissioning run produced.
 #[derive(Clone, Debug)]
 pub struct Commissioning {
@@ -328,7 +346,9 @@ pub struct Commissioning {
     pub validation_move: stages::validation_moves::PlannedMove,
     /// Whether the commissioning met its own limits, and the margins it
     /// guarantees over the identification's uncertainty (issue 12).
-    pub verdict: super::verdict::Verdict,
+    pub verdict: super::acceptance::Verdict,
+    /// The open-loop excitation of stage 5 and the axis' response.
+    pub excitation: ExcitationTrace,
     /// Time the axis was busy, s.
     pub experiment_time_s: f64,
     /// Wall-clock time spent computing (FFT, fit, design), s.
@@ -394,7 +414,7 @@ pub fn commission(
     )?;
 
     // ---- 5. identification ----
-    let ident = stages::identification::identification(
+    let mut ident = stages::identification::identification(
         &mut st,
         &boot_hold,
         id_pos,
@@ -413,6 +433,14 @@ pub fn commission(
         holding,
         held.friction_nm,
     )?)?;
+    let excitation = ExcitationTrace {
+        time_s: std::mem::take(&mut ident.excitation_time_s),
+        torque_command_nm: std::mem::take(&mut ident.excitation_torque_nm),
+        position_m: std::mem::take(&mut ident.excitation_position_m),
+        torque_max_nm: torque_max,
+        travel_min_m: datasheet.travel_min_m,
+        travel_max_m: datasheet.travel_max_m,
+    };
 
     // ---- 6. design ----
     let designed = stages::design::design_stage(
@@ -464,7 +492,7 @@ pub fn commission(
         })?
     } else {
         let g = st.compute(|| {
-            super::verdict::guaranteed_margins(
+            super::acceptance::guaranteed_margins(
                 &designed.design,
                 &bounded,
                 ident.identified.m_c_sigma,
@@ -511,7 +539,7 @@ pub fn commission(
     let val = stages::validation_moves::validation_moves(
         &mut st, &feedback, &ident.fit, &fr.result, n_t, holding, datasheet, cfg,
     )?;
-    let verdict = super::verdict::judge(
+    let verdict = super::acceptance::judge(
         &val.validation.nonlinear,
         torque_max,
         guaranteed,
@@ -550,6 +578,7 @@ pub fn commission(
         validation: val.validation,
         validation_move: val.planned,
         verdict,
+        excitation,
         experiment_time_s,
         computation_time_s,
         log,

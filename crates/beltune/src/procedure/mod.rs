@@ -7,12 +7,16 @@ pub mod safety;
 pub use progress::{LogProgress, NoProgress, Progress};
 pub use safety::{SafetyLimits, SafetySupervisor, Violation};
 
+pub mod acceptance;
 pub mod bootstrap;
 pub mod commission;
+pub mod compare;
 pub mod controller_file;
 pub mod motion;
 pub mod outputs;
+pub mod plots;
 pub mod recorded;
+pub mod report_build;
 pub mod result;
 pub mod runner;
 pub mod stages;

@@ -1,6 +1,8 @@
 //! Progress reporting of the commissioning stages. The library only calls this
 //! trait; the command-line program draws progress bars (indicatif) from it.
 
+use super::runner::SafetyStopRecord;
+
 /// Receives the progress of the commissioning procedure.
 pub trait Progress {
     /// A stage starts; it will run about `total_samples` axis samples (0 if it runs none).
@@ -9,6 +11,11 @@ pub trait Progress {
     fn advance(&mut self, samples: u64);
     /// The stage is done; `summary` is one log line of what it found.
     fn stage_finished(&mut self, summary: &str);
+    /// The safety supervisor stopped the axis in the current stage; `record`
+    /// holds the violation, the limits and the last second of samples (for a
+    /// diagnostic file). Called once, after the stop and before the procedure
+    /// returns [`crate::Error::SafetyStop`]. The default ignores it.
+    fn safety_stopped(&mut self, _record: &SafetyStopRecord) {}
 }
 
 /// Discards all progress (for tests and `--quiet`).

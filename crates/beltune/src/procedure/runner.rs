@@ -3,14 +3,21 @@
 //! time, reports progress, asks the [`SafetySupervisor`] about every sample and,
 //! on a violation, stops the excitation at once and brings the axis to rest
 //! with a jerk-limited stop before returning [`Error::SafetyStop`].
+//!
+//! It keeps the last [`STOP_HISTORY_S`] of samples in a ring buffer; on a
+//! safety stop it hands them, with the violation and the limits, to
+//! [`Progress::safety_stopped`] (a [`SafetyStopRecord`]) so that the caller
+//! can write a diagnostic file. Cost: one copy of a [`HistorySample`] per
+//! sample, no allocation after [`Runner::new`].
 
 use super::progress::Progress;
-use super::safety::{SafetySupervisor, Violation};
+use super::safety::{SafetyLimits, SafetySupervisor, Violation};
 use crate::plant::{Axis, AxisInfo, Measurement};
 use crate::{Error, Result};
 use beltune_rt::control::{CascadeConfig, CascadeController, MotionSample, Setpoint};
 use beltune_rt::filter::{velocity_filter, FirstOrder};
 use beltune_rt::trajectory::{Limits, State, Trajectory};
+use std::collections::VecDeque;
 
 /// Velocity filter time constant used for supervision, s (as `T_R` of Table A.4).
 const SUPERVISION_T_R_S: f64 = 2e-3;
@@ -71,9 +78,12 @@ impl RigidVelocity {
         self.sum / n as f64
     }
 }
+/// How much history a [`SafetyStopRecord`] holds: the samples of the last
+/// second before the violation, s.
+pub const STOP_HISTORY_S: f64 = 1.0;
 
 /// One recorded sample of a stage.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Sample {
     /// Torque command sent to the drive, N m.
     pub torque_command_nm: f64,
@@ -85,6 +95,47 @@ pub struct Sample {
     pub position_m: f64,
     /// Cart position from the evaluation encoder (simulation truth), m.
     pub cart_position_m: Option<f64>,
+}
+
+/// One sample of the history kept for a safety stop's diagnostic.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct HistorySample {
+    /// Busy time of the axis at this sample (since the runner started), s.
+    pub time_s: f64,
+    /// The sample.
+    #[serde(flatten)]
+    pub sample: Sample,
+    /// Filtered motor-side cart velocity the supervisor judged, m/s.
+    pub velocity_m_s: f64,
+    /// Following error the supervisor judged, m (`None` in open-loop stages
+    /// and during a stop).
+    pub following_error_m: Option<f64>,
+}
+
+/// What the runner knew when the supervisor stopped the axis, handed to
+/// [`Progress::safety_stopped`] before [`Error::SafetyStop`] is returned.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct SafetyStopRecord {
+    /// Which limit was violated, with the values.
+    pub violation: Violation,
+    /// The limits the supervisor enforced.
+    pub limits: SafetyLimits,
+    /// Busy time of the axis at the violation, s.
+    pub time_s: f64,
+    /// Position the supervisor judged, m.
+    pub position_m: f64,
+    /// Velocity the supervisor judged, m/s.
+    pub velocity_m_s: f64,
+    /// Torque command that was refused (after saturation), N m.
+    pub torque_command_nm: f64,
+    /// Following error that was judged, m (`None` in open-loop stages).
+    pub following_error_m: Option<f64>,
+    /// Where the stop brought the axis to rest, m (`None` if the stop failed).
+    pub stop_position_m: Option<f64>,
+    /// Why the stop itself failed, if it did.
+    pub stop_error: Option<String>,
+    /// The samples of the last [`STOP_HISTORY_S`] before the violation, oldest first.
+    pub history: Vec<HistorySample>,
 }
 
 /// Drives the axis for the whole procedure.
@@ -106,6 +157,9 @@ pub struct Runner<'a> {
     /// Controller used to stop the axis (the bootstrap controller until a design exists).
     stop_controller: CascadeConfig<f64>,
     stop_limits: Limits,
+    /// Ring buffer of the last [`STOP_HISTORY_S`] of samples.
+    history: VecDeque<HistorySample>,
+    history_len: usize,
 }
 
 impl<'a> Runner<'a> {
@@ -129,6 +183,7 @@ impl<'a> Runner<'a> {
         let mut velocity = FirstOrder::new(coeffs);
         velocity.reset_to(origin_m, 0.0);
         let rigid = RigidVelocity::new(info.ts_s, origin_m);
+        let history_len = ((STOP_HISTORY_S / info.ts_s).ceil() as usize).max(1);
         Ok(Runner {
             axis,
             progress,
@@ -145,6 +200,8 @@ impl<'a> Runner<'a> {
             open_loop: false,
             stop_controller,
             stop_limits,
+            history: VecDeque::with_capacity(history_len),
+            history_len,
         })
     }
 
@@ -261,12 +318,12 @@ impl<'a> Runner<'a> {
             torque,
             following_error_m,
         ) {
-            return Err(self.stop_after(v));
+            return Err(self.stop_after(v, torque, following_error_m));
         }
-        self.raw_step(torque)
+        self.raw_step(torque, following_error_m)
     }
 
-    fn raw_step(&mut self, torque_nm: f64) -> Result<Sample> {
+    fn raw_step(&mut self, torque_nm: f64, following_error_m: Option<f64>) -> Result<Sample> {
         let m = match self.axis.exchange(torque_nm) {
             Ok(m) => m,
             Err(error) => {
@@ -281,13 +338,23 @@ impl<'a> Runner<'a> {
         let pos = self.position_m();
         self.velocity_m_s = self.velocity.step(pos);
         self.rigid_velocity_m_s = self.rigid.step(pos);
-        Ok(Sample {
+        let sample = Sample {
             torque_command_nm: torque_nm,
             torque_actual_nm: m.torque_actual_nm,
             motor_angle_rad: self.motor_angle_rad(),
             position_m: pos,
             cart_position_m: m.cart_position_m,
-        })
+        };
+        if self.history.len() == self.history_len {
+            self.history.pop_front();
+        }
+        self.history.push_back(HistorySample {
+            time_s: self.busy_time_s(),
+            sample,
+            velocity_m_s: self.velocity_m_s,
+            following_error_m,
+        });
+        Ok(sample)
     }
 
     /// Run the computation `f` without leaving the axis unsupervised. For an
@@ -330,14 +397,36 @@ impl<'a> Runner<'a> {
         })
     }
 
-    /// Stop after a violation and turn it into the error that ends the command.
-    fn stop_after(&mut self, v: Violation) -> Error {
+    /// Stop after a violation, hand the record to the progress sink and turn
+    /// the violation into the error that ends the command.
+    fn stop_after(
+        &mut self,
+        v: Violation,
+        torque_command_nm: f64,
+        following_error_m: Option<f64>,
+    ) -> Error {
+        let history: Vec<HistorySample> = self.history.iter().copied().collect();
+        let (time_s, position_m, velocity_m_s) =
+            (self.busy_time_s(), self.position_m(), self.velocity_m_s);
         let stop = self.stop();
         let mut reason = v.to_string();
-        match stop {
+        match &stop {
             Ok(at) => reason.push_str(&format!("; axis stopped at {:.1} mm", at * 1e3)),
             Err(e) => reason.push_str(&format!("; the stop itself failed: {e}")),
         }
+        let record = SafetyStopRecord {
+            violation: v,
+            limits: *self.supervisor.limits(),
+            time_s,
+            position_m,
+            velocity_m_s,
+            torque_command_nm,
+            following_error_m,
+            stop_position_m: stop.as_ref().ok().copied(),
+            stop_error: stop.err().map(|e| e.to_string()),
+            history,
+        };
+        self.progress.safety_stopped(&record);
         Error::SafetyStop { reason }
     }
 
@@ -399,7 +488,7 @@ impl<'a> Runner<'a> {
             } else {
                 0.0
             };
-            self.raw_step(tau)?;
+            self.raw_step(tau, None)?;
         }
         Ok(self.position_m())
     }
@@ -553,5 +642,116 @@ mod tests {
             v = rv.step(0.3 * k as f64 * ts);
         }
         assert!((v - 0.3).abs() < 1e-9, "{v}");
+    }
+
+    /// Keeps the record a safety stop hands over.
+    #[derive(Default)]
+    struct Recorder(Option<SafetyStopRecord>);
+    impl Progress for Recorder {
+        fn stage_started(&mut self, _: &str, _: u64) {}
+        fn advance(&mut self, _: u64) {}
+        fn stage_finished(&mut self, _: &str) {}
+        fn safety_stopped(&mut self, record: &SafetyStopRecord) {
+            self.0 = Some(record.clone());
+        }
+    }
+
+    /// Push the light cart of `sim-b` open loop with a constant torque out of a
+    /// narrow window: the record holds exactly the last second of samples
+    /// before the violation, in order and contiguous, ending at the sample the
+    /// supervisor refused to continue from.
+    #[test]
+    fn a_safety_stop_hands_over_the_last_second_of_samples() {
+        let plant = rigs::builtin("sim-b", None).unwrap();
+        let start = 0.05;
+        let mut axis = SimAxis::new(
+            &plant,
+            SimConfig {
+                initial_cart_position_m: Some(start),
+                ..SimConfig::default()
+            },
+        )
+        .unwrap();
+        let info = plant.info();
+        let i_t = match &plant {
+            rigs::Plant::Linear(l) => l.two_mass.i_t,
+            rigs::Plant::Physical(p) => p.i_t(),
+        };
+        let j = plant.worst_case_two_mass().unwrap().rigid_inertia();
+        let limits = SafetyLimits {
+            travel_min_m: 0.0,
+            travel_max_m: 0.6,
+            torque_max_nm: info.torque_max_nm,
+            velocity_max_m_s: 2.5,
+            following_error_max_m: 0.05,
+        };
+        let supervisor = SafetySupervisor::new(limits, 5.0).unwrap();
+        let boot = bootstrap_controller(j, i_t, info.ts_s, info.torque_max_nm).unwrap();
+        let stop_limits = Limits {
+            v_max: 0.5,
+            v_min: -0.5,
+            a_max: 5.0,
+            a_min: -5.0,
+            j_max: 100.0,
+            j_min: -100.0,
+            position_min: 0.0,
+            position_max: 0.6,
+        };
+        let mut rec = Recorder::default();
+        let mut runner = Runner::new(
+            &mut axis,
+            &mut rec,
+            supervisor,
+            i_t,
+            start,
+            boot,
+            stop_limits,
+        )
+        .unwrap();
+        // A tiny torque first (well under a second of it), then a push.
+        let mut steps = 0u64;
+        let err = loop {
+            let tau = if steps < 20_000 { 0.0 } else { 0.05 };
+            match runner.step(tau, None) {
+                Ok(_) => steps += 1,
+                Err(e) => break e,
+            }
+            assert!(steps < 2_000_000, "no safety stop");
+        };
+        assert!(matches!(err, Error::SafetyStop { .. }), "{err}");
+        let r = rec.0.expect("no record handed over");
+        assert!(
+            matches!(
+                r.violation,
+                Violation::Travel { .. }
+                    | Violation::TravelAhead { .. }
+                    | Violation::Velocity { .. }
+            ),
+            "{:?}",
+            r.violation
+        );
+        let ts = info.ts_s;
+        let n = (STOP_HISTORY_S / ts).ceil() as usize;
+        assert!(
+            steps as usize > n,
+            "the run must be longer than the history"
+        );
+        assert_eq!(r.history.len(), n);
+        assert_eq!(r.limits, limits);
+        let last = r.history.last().unwrap();
+        // The violation was judged on the last applied sample: its time, position, velocity.
+        assert_eq!(last.time_s, r.time_s);
+        assert_eq!(r.time_s, steps as f64 * ts);
+        assert_eq!(last.sample.position_m, r.position_m);
+        assert_eq!(last.velocity_m_s, r.velocity_m_s);
+        for w in r.history.windows(2) {
+            assert!((w[1].time_s - w[0].time_s - ts).abs() < 1e-9 * ts.max(1e-3));
+        }
+        assert!(r
+            .history
+            .iter()
+            .all(|h| h.sample.torque_command_nm == 0.05 || h.sample.torque_command_nm == 0.0));
+        assert!(r.stop_position_m.is_some() && r.stop_error.is_none());
+        assert_eq!(r.torque_command_nm, 0.05);
     }
 }

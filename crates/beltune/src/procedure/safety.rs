@@ -131,12 +131,20 @@ impl std::fmt::Display for Violation {
                 torque_nm.abs(),
                 limit_nm
             ),
-            Violation::FollowingError { error_m, limit_m } => write!(
-                f,
-                "following error {:.2} mm exceeded the limit {:.2} mm",
-                error_m.abs() * 1e3,
-                limit_m * 1e3
-            ),
+            Violation::FollowingError { error_m, limit_m } => {
+                // A limit below 0.1 mm in um, so that the digits show it.
+                let (scale, unit) = if limit_m < 1e-4 {
+                    (1e6, "um")
+                } else {
+                    (1e3, "mm")
+                };
+                write!(
+                    f,
+                    "following error {:.2} {unit} exceeded the limit {:.2} {unit}",
+                    error_m.abs() * scale,
+                    limit_m * scale
+                )
+            }
             Violation::NonFinite => write!(f, "a measurement was not finite"),
         }
     }
@@ -502,6 +510,27 @@ mod tests {
             ..limits()
         };
         assert!(SafetySupervisor::new(l, 10.0).is_err());
+    }
+
+    /// Issue 16: a following-error limit of 1 um printed as "0.00 mm".
+    #[test]
+    fn a_small_following_error_limit_prints_in_um() {
+        let v = Violation::FollowingError {
+            error_m: -1.05e-6,
+            limit_m: 1e-6,
+        };
+        assert_eq!(
+            v.to_string(),
+            "following error 1.05 um exceeded the limit 1.00 um"
+        );
+        let v = Violation::FollowingError {
+            error_m: 0.05005,
+            limit_m: 0.05,
+        };
+        assert_eq!(
+            v.to_string(),
+            "following error 50.05 mm exceeded the limit 50.00 mm"
+        );
     }
 
     #[test]

@@ -182,3 +182,152 @@ pub fn run_move(
     let record = track(runner, controller, &traj, spec.settle_s, opts)?;
     summarize(record)
 }
+
+/// The three feedforward variants of the validation (chapter 5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FeedforwardVariant {
+    /// Feedback only.
+    None,
+    /// Inertia and a viscous-only friction fit.
+    Linear,
+    /// Inertia, viscous and Coulomb friction (4.16).
+    Nonlinear,
+}
+
+impl FeedforwardVariant {
+    /// The variants in the order the validation runs them.
+    pub const ALL: [FeedforwardVariant; 3] = [
+        FeedforwardVariant::None,
+        FeedforwardVariant::Linear,
+        FeedforwardVariant::Nonlinear,
+    ];
+
+    /// Label in reports ("no feedforward", ...).
+    pub fn label(self) -> &'static str {
+        match self {
+            FeedforwardVariant::None => "no feedforward",
+            FeedforwardVariant::Linear => "linear feedforward",
+            FeedforwardVariant::Nonlinear => "nonlinear feedforward",
+        }
+    }
+}
+
+/// The controller of a validation move: `feedback` (the designed cascade with
+/// its torque offset, no feedforward) with the variant's feedforward for the
+/// rigid inertia `m_e_kg_m2` and `friction`, the desired velocity filtered by
+/// `G_R` and the feedforward previewed by the current-loop dead time. Stage 8
+/// of the commissioning and the tuning page's simulated move both use it.
+pub fn validation_controller(
+    feedback: &CascadeConfig<f64>,
+    m_e_kg_m2: f64,
+    friction: &super::result::FrictionResult,
+    variant: FeedforwardVariant,
+) -> CascadeConfig<f64> {
+    use beltune_rt::control::Feedforward;
+    let mut c = *feedback;
+    c.feedforward = match variant {
+        FeedforwardVariant::None => Feedforward::none(),
+        FeedforwardVariant::Linear => {
+            Feedforward::linear(m_e_kg_m2, friction.linear_viscous_nm_s_per_rad)
+        }
+        FeedforwardVariant::Nonlinear => Feedforward::nonlinear(
+            m_e_kg_m2,
+            friction.viscous_nm_s_per_rad,
+            friction.coulomb_nm,
+        ),
+    };
+    c.filter_desired_velocity = true;
+    c.feedforward_preview = true;
+    c
+}
+
+/// The tracking options of a validation move for the design model `p`:
+/// feedforward preview by `preview_samples` (the current-loop dead time),
+/// belt-stretch compensation and the static stretch under the holding torque
+/// `holding_nm`.
+pub fn validation_track_options(
+    p: &crate::model::TwoMassParams,
+    preview_samples: usize,
+    holding_nm: f64,
+) -> TrackOptions {
+    TrackOptions {
+        preview_samples,
+        belt_stretch: beltune_rt::control::BeltStretch::On {
+            m_c_kg: p.m_c,
+            c_n_per_m: p.c,
+        },
+        check_following_error: true,
+        static_stretch_m: holding_nm / (p.i_t * p.c),
+    }
+}
+
+/// Deceleration of the supervisor's jerk-limited stop in a simulated
+/// validation move, m/s^2.
+pub const SIM_STOP_DECELERATION_M_S2: f64 = 20.0;
+
+/// The validation move of design `des` on a fresh simulation of `plant`
+/// (noise `seed`), at rest at `spec.start_m`, with the controller and options
+/// of stage 8 ([`validation_controller`], [`validation_track_options`]; the
+/// simulated plants are horizontal: no holding torque). A following error
+/// beyond `following_error_max_m` stops the move (typed error).
+pub fn simulate_validation_move(
+    plant: &crate::model::rigs::Plant,
+    des: &crate::design::ControllerDesign,
+    friction: &super::result::FrictionResult,
+    variant: FeedforwardVariant,
+    spec: &MoveSpec,
+    seed: u64,
+    following_error_max_m: f64,
+) -> Result<MoveResult> {
+    use super::{NoProgress, SafetyLimits, SafetySupervisor};
+    let info = plant.info();
+    let config = crate::sim::SimConfig {
+        seed,
+        initial_cart_position_m: Some(spec.start_m),
+        ..crate::sim::SimConfig::default()
+    };
+    let mut axis = crate::sim::SimAxis::new(plant, config)?;
+    let torque_max = info.torque_max_nm;
+    let feedback = super::commission::cascade_from_design(des, torque_max, 0.0)?;
+    let a_stop = SIM_STOP_DECELERATION_M_S2;
+    let supervisor = SafetySupervisor::new(
+        SafetyLimits {
+            travel_min_m: spec.limits.position_min,
+            travel_max_m: spec.limits.position_max,
+            torque_max_nm: torque_max,
+            velocity_max_m_s: spec.limits.v_max,
+            following_error_max_m,
+        },
+        a_stop,
+    )?;
+    let stop_limits = Limits {
+        a_max: a_stop,
+        a_min: -a_stop,
+        j_max: 20.0 * a_stop,
+        j_min: -20.0 * a_stop,
+        ..spec.limits
+    };
+    let mut progress = NoProgress;
+    let mut runner = Runner::new(
+        &mut axis,
+        &mut progress,
+        supervisor,
+        des.input.model.i_t,
+        spec.start_m,
+        feedback,
+        stop_limits,
+    )?;
+    let model = des.input.model;
+    let controller = validation_controller(&feedback, model.rigid_inertia(), friction, variant);
+    let preview = (des.input.dead_time_s / des.input.ts_s).round() as usize;
+    let opts = validation_track_options(&model, preview, 0.0);
+    run_move(
+        &mut runner,
+        &feedback,
+        &spec.limits,
+        &controller,
+        opts,
+        spec,
+    )
+}

@@ -3,7 +3,7 @@
 use serde::Serialize;
 
 /// One curve of a Bode diagram.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct BodeCurve {
     /// Legend label.
     pub label: String,
@@ -13,10 +13,39 @@ pub struct BodeCurve {
     pub magnitude_db: Vec<f64>,
     /// Phase, degrees (unwrapped).
     pub phase_deg: Vec<f64>,
+    /// Drawn as dots (measured lines) instead of a connected line.
+    #[serde(default)]
+    pub dots: bool,
+    /// Drawn dashed (a "before" or reference curve).
+    #[serde(default)]
+    pub dashed: bool,
+}
+
+/// Which panel of a Bode diagram a point belongs to.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum Panel {
+    /// Magnitude, dB.
+    #[default]
+    Magnitude,
+    /// Phase, deg.
+    Phase,
+}
+
+/// A labelled point (gain or phase margin) in a Bode diagram.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct MarginPoint {
+    /// Label, e.g. "PM 60.0 deg".
+    pub label: String,
+    /// Frequency, Hz.
+    pub freq_hz: f64,
+    /// Value on the panel's axis (dB or deg).
+    pub value: f64,
+    /// The panel.
+    pub panel: Panel,
 }
 
 /// A vertical marker in a Bode diagram (crossover, resonance, ...).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct FrequencyMarker {
     /// Label shown next to the marker.
     pub label: String,
@@ -25,7 +54,7 @@ pub struct FrequencyMarker {
 }
 
 /// A Bode diagram (magnitude over phase).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct BodePlot {
     /// Title.
     pub title: String,
@@ -33,10 +62,18 @@ pub struct BodePlot {
     pub curves: Vec<BodeCurve>,
     /// Vertical markers.
     pub markers: Vec<FrequencyMarker>,
+    /// Horizontal reference lines in the magnitude panel (0 dB), dB.
+    pub magnitude_lines_db: Vec<f64>,
+    /// Horizontal reference lines in the phase panel (-180 deg), deg.
+    pub phase_lines_deg: Vec<f64>,
+    /// Margin points.
+    pub points: Vec<MarginPoint>,
+    /// Draw the magnitude panel only (closed loops, sensitivities).
+    pub magnitude_only: bool,
 }
 
 /// The measured FRF with its coherence and the fitted model.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct FrfPlot {
     /// Measured FRF (all lines; unusable lines are drawn grey).
     pub measured: BodeCurve,
@@ -51,7 +88,7 @@ pub struct FrfPlot {
 }
 
 /// Friction measurements and the fitted curve.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct FrictionPlot {
     /// Motor velocity of each constant-velocity run, rad/s.
     pub velocity_rad_s: Vec<f64>,
@@ -64,7 +101,7 @@ pub struct FrictionPlot {
 }
 
 /// One validation move.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct MovePlot {
     /// Label (e.g. "nonlinear feedforward").
     pub label: String,
@@ -80,8 +117,28 @@ pub struct MovePlot {
     pub torque_nm: Vec<f64>,
 }
 
+/// The identification experiment: torque command and position over time
+/// with the limits drawn.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ExcitationPlot {
+    /// Time, s.
+    pub time_s: Vec<f64>,
+    /// Torque command, N m.
+    pub torque_nm: Vec<f64>,
+    /// Time of the position samples, s.
+    pub position_time_s: Vec<f64>,
+    /// Motor-side position, m.
+    pub position_m: Vec<f64>,
+    /// Torque limit (drawn at +-), N m.
+    pub torque_limit_nm: f64,
+    /// Travel window, m.
+    pub travel_min_m: f64,
+    /// Travel window, m.
+    pub travel_max_m: f64,
+}
+
 /// One row of the parameter table.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct ParameterRow {
     /// Quantity, with symbol.
     pub name: String,
@@ -93,10 +150,13 @@ pub struct ParameterRow {
     pub after: String,
     /// True value of a simulated plant, if known.
     pub truth: Option<String>,
+    /// The "after" value at full precision, in `unit` (written as `data-value`
+    /// so that tests and tools read the exact number).
+    pub value: Option<f64>,
 }
 
 /// Everything the report page shows.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Report {
     /// Page title.
     pub title: String,
@@ -118,4 +178,29 @@ pub struct Report {
     pub parameters: Vec<ParameterRow>,
     /// Validation summary table rows: (variant, max error, static error, settling time) as text.
     pub validation_rows: Vec<[String; 4]>,
+    /// Pass/fail per limit, warnings and the next step (shown first).
+    pub verdict: Option<crate::procedure::verdict::Verdict>,
+    /// Version, date, command line and seed of the run.
+    pub provenance: Option<crate::provenance::Provenance>,
+    /// Closed loops and sensitivities (magnitude).
+    pub closed_loops: Vec<BodePlot>,
+    /// Before/after overlays (e.g. the bootstrap against the designed controller).
+    pub overlays: Vec<BodePlot>,
+    /// The identification experiment.
+    pub excitation: Option<ExcitationPlot>,
+    /// Data files beside the report (names), with what they hold.
+    pub data_files: Vec<(String, String)>,
+    /// Extra tables (title, header, rows), e.g. the parameter changes of a comparison.
+    pub tables: Vec<Table>,
+}
+
+/// A table of text cells.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Table {
+    /// Heading above the table.
+    pub title: String,
+    /// Column headers.
+    pub header: Vec<String>,
+    /// Rows of cells.
+    pub rows: Vec<Vec<String>>,
 }

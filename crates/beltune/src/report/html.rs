@@ -18,29 +18,73 @@ table { border-collapse: collapse; margin: 0.5em 0; }
 td, th { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }
 th { background: #f2f2f2; } td:first-child, th:first-child { text-align: left; }
 .summary { background: #f6f8fa; padding: 0.8em 1em; border-left: 4px solid #1f77b4; }
+.verdict { padding: 0.8em 1em; border: 2px solid; margin: 1em 0; }
+.verdict.pass { border-color: #2ca02c; background: #f0faf0; }
+.verdict.fail { border-color: #d62728; background: #fdf0f0; }
+.verdict h2 { border: none; margin: 0 0 0.4em 0; }
+.verdict .pass { color: #1a7a1a; font-weight: bold; } .verdict .fail { color: #b01c1c; font-weight: bold; }
+.verdict table { background: #fff; }
+.warn { color: #8a5a00; }
+.next { font-weight: bold; }
+.trace { font-size: 0.85em; color: #555; }
 figure { margin: 0.5em 0; } figure svg { width: 100%; height: auto; }
 pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; overflow-x: auto; }
+@media print {
+  body { margin: 0; max-width: none; font-size: 10pt; }
+  h2 { break-after: avoid; }
+  figure, table, .verdict { break-inside: avoid; }
+  .verdict { -webkit-print-color-adjust: exact; print-color-adjust: exact; }
+  pre { white-space: pre-wrap; }
+  a { color: inherit; text-decoration: none; }
+}
 </style>
 </head>
 <body>
 <h1>{{ title }}</h1>
+{% if verdict %}<section id="verdict" class="verdict {{ 'pass' if verdict.passed else 'fail' }}">
+<h2>Verdict: <span id="verdict-result" class="{{ 'pass' if verdict.passed else 'fail' }}">{{ 'PASS' if verdict.passed else ('NOT VALIDATED' if not verdict.checks else 'FAIL') }}</span></h2>
+{% if verdict.checks %}<table id="verdict-checks">
+<tr><th>limit</th><th>measured</th><th>limit</th><th>result</th></tr>
+{% for c in checks %}<tr><td>{{ c.name }}</td><td class="value" data-value="{{ c.value }}">{{ c.value_text }} {{ c.unit }}</td><td>&lt; {{ c.limit }} {{ c.unit }}</td><td class="{{ 'pass' if c.passed else 'fail' }}">{{ 'pass' if c.passed else 'FAIL' }}</td></tr>
+{% endfor %}</table>{% endif %}
+{% if verdict.warnings %}<ul id="verdict-warnings">{% for w in verdict.warnings %}<li class="warn"><b>{{ w.topic }}:</b> {{ w.reason }}</li>{% endfor %}</ul>{% else %}<p>No warnings (coherence, fit residual and margins are fine).</p>{% endif %}
+<p class="next" id="next-step">Next step: {{ verdict.next_step }}</p>
+</section>{% endif %}
 <p class="summary">{{ summary }}</p>
 
 <h2>Parameters</h2>
-<table>
+<table id="parameters">
 <tr><th>quantity</th><th>unit</th><th>before (data sheet / default)</th><th>after (commissioned)</th>{% if has_truth %}<th>simulation truth</th>{% endif %}</tr>
-{% for p in parameters %}<tr><td>{{ p.name }}</td><td>{{ p.unit }}</td><td>{{ p.before or "" }}</td><td>{{ p.after }}</td>{% if has_truth %}<td>{{ p.truth or "" }}</td>{% endif %}</tr>
+{% for p in parameters %}<tr><td>{{ p.name }}</td><td>{{ p.unit }}</td><td>{{ p.before or "" }}</td><td class="after"{% if p.value is not none %} data-value="{{ p.value }}"{% endif %}>{{ p.after }}</td>{% if has_truth %}<td>{{ p.truth or "" }}</td>{% endif %}</tr>
 {% endfor %}</table>
 
 {% if validation_rows %}<h2>Validation</h2>
-<table>
+<table id="validation">
 <tr><th>feedforward</th><th>max cart tracking error</th><th>static error</th><th>settling time</th></tr>
 {% for r in validation_rows %}<tr><td>{{ r[0] }}</td><td>{{ r[1] }}</td><td>{{ r[2] }}</td><td>{{ r[3] }}</td></tr>
 {% endfor %}</table>{% endif %}
 
+{% for t in tables %}<h2>{{ t.title }}</h2>
+<table class="extra">
+<tr>{% for h in t.header %}<th>{{ h }}</th>{% endfor %}</tr>
+{% for r in t.rows %}<tr>{% for c in r %}<td>{{ c }}</td>{% endfor %}</tr>
+{% endfor %}</table>
+{% endfor %}
+
 {% for fig in figures %}<h2>{{ fig.heading }}</h2>
 <figure id="{{ fig.id }}">{{ fig.svg }}</figure>
 {% endfor %}
+
+{% if data_files %}<h2>Data files</h2>
+<ul>{% for f in data_files %}<li><a href="{{ f[0] }}">{{ f[0] }}</a>: {{ f[1] }}</li>{% endfor %}</ul>{% endif %}
+
+{% if provenance %}<h2>Traceability</h2>
+<table id="provenance" class="trace">
+<tr><th>beltune version</th><td>{{ provenance.beltune_version }}</td></tr>
+<tr><th>created (UTC)</th><td>{{ provenance.created_utc }}</td></tr>
+<tr><th>command</th><td><code>{{ command_line }}</code></td></tr>
+<tr><th>seed</th><td>{{ provenance.seed if provenance.seed is not none else "none" }}</td></tr>
+</table>{% endif %}
 
 <h2>Log</h2>
 <pre>{% for line in log %}{{ line }}
@@ -66,17 +110,35 @@ pub fn render_html(report: &Report) -> Result<String> {
             plot::frf_svg(frf)?,
         );
     }
+    if let Some(e) = &report.excitation {
+        add(
+            "excitation",
+            "Identification experiment",
+            plot::excitation_svg(e)?,
+        );
+    }
     if let Some(c) = &report.controller {
         add("controller", "Controller", plot::bode_svg(c)?);
     }
     for (i, ol) in report.open_loops.iter().enumerate() {
         add(&format!("open-loop-{i}"), &ol.title, plot::bode_svg(ol)?);
     }
+    for (i, cl) in report.closed_loops.iter().enumerate() {
+        add(&format!("closed-loop-{i}"), &cl.title, plot::bode_svg(cl)?);
+    }
+    for (i, ov) in report.overlays.iter().enumerate() {
+        add(&format!("overlay-{i}"), &ov.title, plot::bode_svg(ov)?);
+    }
     if let Some(f) = &report.friction {
         add("friction", "Friction", plot::friction_svg(f)?);
     }
     if !report.moves.is_empty() {
-        add("moves", "Validation moves", plot::moves_svg(&report.moves)?);
+        let limit = report.excitation.as_ref().map(|e| e.torque_limit_nm);
+        add(
+            "moves",
+            "Validation moves",
+            plot::moves_svg(&report.moves, limit)?,
+        );
     }
     let mut env = Environment::new();
     env.add_template("report.html", TEMPLATE)
@@ -86,13 +148,34 @@ pub fn render_html(report: &Report) -> Result<String> {
     let tmpl = env.get_template("report.html").map_err(|e| Error::Report {
         reason: e.to_string(),
     })?;
+    let checks: Vec<Value> = report
+        .verdict
+        .iter()
+        .flat_map(|v| v.checks.iter())
+        .map(|c| {
+            context! {
+                name => &c.name,
+                value => c.value,
+                value_text => format!("{:.3}", c.value),
+                limit => c.limit,
+                unit => &c.unit,
+                passed => c.passed,
+            }
+        })
+        .collect();
     tmpl.render(context! {
         title => &report.title,
+        checks => checks,
         summary => &report.summary,
+        verdict => Value::from(Serde(&report.verdict)),
         parameters => Value::from(Serde(&report.parameters)),
         has_truth => report.parameters.iter().any(|p| p.truth.is_some()),
         validation_rows => Value::from(Serde(&report.validation_rows)),
+        tables => Value::from(Serde(&report.tables)),
         figures => figures,
+        data_files => Value::from(Serde(&report.data_files)),
+        provenance => Value::from(Serde(&report.provenance)),
+        command_line => report.provenance.as_ref().map(|p| p.command_line_text()).unwrap_or_default(),
         log => Value::from(Serde(&report.log)),
     })
     .map_err(|e| Error::Report {
@@ -116,6 +199,7 @@ mod tests {
                 before: Some("11.57".into()),
                 after: "13.44".into(),
                 truth: None,
+                value: Some(13.44),
             }],
             friction: Some(FrictionPlot {
                 velocity_rad_s: vec![-10.0, 10.0],
@@ -125,8 +209,30 @@ mod tests {
             }),
             ..Default::default()
         };
+        let mut r = r;
+        r.verdict = Some(crate::procedure::verdict::verdict(
+            &crate::procedure::verdict::VerdictInput {
+                max_tracking_error_m: Some(2e-3),
+                static_error_m: Some(20e-6),
+                velocity_phase_margin_deg: (60.0, 60.0),
+                position_phase_margin_deg: (80.0, 80.0),
+                velocity_gain_margin_db: 12.0,
+                controller_file: "controller.toml".into(),
+                ..Default::default()
+            },
+        ));
+        r.provenance = Some(crate::provenance::Provenance::now(
+            vec!["beltune".into(), "commission".into()],
+            Some(3),
+        ));
         let html = render_html(&r).unwrap();
         assert!(html.contains("axis &lt;1&gt;"));
+        assert!(
+            html.contains("id=\"verdict-result\" class=\"fail\">FAIL<"),
+            "2 mm fails"
+        );
+        assert!(html.contains("@media print"));
+        assert!(html.contains("<code>beltune commission</code>"));
         assert!(html.contains("<svg"));
         assert!(!html.contains("http://") || html.contains("xmlns=\"http://www.w3.org/2000/svg\""));
         assert!(!html.contains("<script"));

@@ -7,6 +7,7 @@ pub mod html;
 pub mod plot;
 
 pub use data::{
-    BodeCurve, BodePlot, FrequencyMarker, FrfPlot, FrictionPlot, MovePlot, ParameterRow, Report,
+    BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrfPlot, FrictionPlot, MarginPoint,
+    MovePlot, Panel, ParameterRow, Report, Table,
 };
 pub use html::render_html;

@@ -1,7 +1,16 @@
-//! SVG plots with `plotters` (text rendered with the embedded DejaVu Sans, so
-//! the output does not depend on the fonts installed on the machine).
+//! SVG plots with `plotters` (text measured with the embedded DejaVu Sans, so
+//! the layout does not depend on the fonts installed on the machine).
+//!
+//! Every plot is drawn at [`SCALE`] times its display size and shown at the
+//! display size (the SVG keeps the fine `viewBox`): plotters rounds coordinates
+//! to whole pixels, which at display size draws staircases. Legends sit above
+//! the plot area, never on the data; marker and point labels are placed so that
+//! no two text boxes overlap.
 
-use super::data::{BodeCurve, BodePlot, FrequencyMarker, FrfPlot, FrictionPlot, MovePlot};
+use super::data::{
+    BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrfPlot, FrictionPlot, MarginPoint,
+    MovePlot, Panel,
+};
 use crate::{Error, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -11,7 +20,10 @@ use std::sync::Once;
 static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
-const WIDTH: u32 = 900;
+/// Drawing resolution over display resolution.
+pub const SCALE: u32 = 4;
+/// Display width of every plot, px.
+pub const WIDTH: u32 = 900;
 const PALETTE: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
@@ -21,14 +33,21 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(23, 190, 207),
 ];
 const GREY: RGBColor = RGBColor(170, 170, 170);
+/// Font size of tick labels, legends and marker labels (display px).
+const SMALL: u32 = 13;
+/// Most y tick labels per panel (panels are 150..250 px high: a label
+/// every 25 px or more keeps them apart).
+const Y_LABELS: usize = 6;
+/// Font size of captions (display px).
+const CAPTION: u32 = 16;
 
-/// How a curve is drawn.
-#[derive(Clone, Copy)]
-enum Draw {
-    /// Connected line.
-    Line,
-    /// One dot per point (for scattered, excluded lines).
-    Dots,
+/// Display px to drawing px.
+const fn px(v: u32) -> u32 {
+    v * SCALE
+}
+
+fn font(size: u32) -> TextStyle<'static> {
+    TextStyle::from(("sans-serif", px(size) as f64).into_font())
 }
 
 fn register_font() {
@@ -42,6 +61,71 @@ fn err<E: std::fmt::Display>(e: E) -> Error {
     Error::Report {
         reason: e.to_string(),
     }
+}
+
+/// Width and height of `text` at `size` (display px), in drawing px.
+fn text_size(text: &str, size: u32) -> (i32, i32) {
+    let f = ("sans-serif", px(size) as f64).into_font();
+    match f.box_size(text) {
+        Ok((w, h)) => (w as i32, h as i32),
+        Err(_) => (
+            (text.len() as u32 * px(size) * 6 / 10) as i32,
+            px(size) as i32,
+        ),
+    }
+}
+
+/// Boxes of the labels placed so far (drawing px); a new label is moved down
+/// (then up) by whole rows until it overlaps none of them.
+#[derive(Default)]
+struct Labels {
+    boxes: Vec<[i32; 4]>,
+}
+
+impl Labels {
+    fn overlaps(&self, b: [i32; 4]) -> bool {
+        self.boxes
+            .iter()
+            .any(|o| b[0] < o[2] && o[0] < b[2] && b[1] < o[3] && o[1] < b[3])
+    }
+
+    /// Place a `w` x `h` box near `(x, y)` (top-left) inside `bounds`
+    /// `[x0, y0, x1, y1]`; returns its top-left corner.
+    fn place(&mut self, x: i32, y: i32, w: i32, h: i32, bounds: [i32; 4]) -> (i32, i32) {
+        let x = x.min(bounds[2] - w).max(bounds[0]);
+        let row = h + px(2) as i32;
+        let mut best = (x, y);
+        for k in 0..24 {
+            let dy = if k % 2 == 0 {
+                k / 2 * row
+            } else {
+                -(k / 2 + 1) * row
+            };
+            let yy = y + dy;
+            if yy < bounds[1] || yy + h > bounds[3] {
+                continue;
+            }
+            let b = [x - px(1) as i32, yy, x + w + px(1) as i32, yy + h];
+            if !self.overlaps(b) {
+                best = (x, yy);
+                break;
+            }
+        }
+        self.boxes.push([
+            best.0 - px(1) as i32,
+            best.1,
+            best.0 + w + px(1) as i32,
+            best.1 + h,
+        ]);
+        best
+    }
+}
+
+/// The finished SVG at display size (the drawing-size `viewBox` stays).
+fn finish(svg: String, height: u32) -> String {
+    let from = format!("<svg width=\"{}\" height=\"{}\"", px(WIDTH), px(height));
+    let to = format!("<svg width=\"{WIDTH}\" height=\"{height}\"");
+    svg.replacen(&from, &to, 1)
 }
 
 /// Finite range of values with a margin; a fallback when there is no data.
@@ -59,6 +143,21 @@ fn range_of<'a>(values: impl Iterator<Item = &'a f64>, fallback: Range<f64>) -> 
         return (lo - pad)..(hi + pad);
     }
     let pad = 0.05 * (hi - lo);
+    (lo - pad)..(hi + pad)
+}
+
+/// Phase axis: the data range widened to whole multiples of 90 deg.
+fn phase_range<'a>(values: impl Iterator<Item = &'a f64>) -> Range<f64> {
+    let r = range_of(values, -360.0..0.0);
+    let lo = (r.start / 90.0).floor() * 90.0;
+    let hi = (r.end / 90.0).ceil() * 90.0;
+    let (lo, hi) = if hi - lo < 90.0 {
+        (lo, lo + 90.0)
+    } else {
+        (lo, hi)
+    };
+    // a little room so the lowest value label does not meet the first frequency label
+    let pad = 0.02 * (hi - lo);
     (lo - pad)..(hi + pad)
 }
 
@@ -84,192 +183,356 @@ fn points(x: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Draw magnitude and phase panels of Bode curves on `areas[0]`, `areas[1]`.
-fn draw_bode_panels(
-    mag_area: &DrawingArea<SVGBackend, Shift>,
-    phase_area: &DrawingArea<SVGBackend, Shift>,
-    title: &str,
-    curves: &[(&BodeCurve, RGBColor, Draw)],
-    markers: &[FrequencyMarker],
-) -> Result<()> {
-    let refs: Vec<&BodeCurve> = curves.iter().map(|(c, _, _)| *c).collect();
-    let fr = freq_range(&refs);
-    let mag = range_of(refs.iter().flat_map(|c| c.magnitude_db.iter()), -60.0..20.0);
-    let ph = range_of(refs.iter().flat_map(|c| c.phase_deg.iter()), -360.0..0.0);
+/// How one series is drawn.
+#[derive(Clone)]
+struct Style {
+    label: String,
+    color: RGBColor,
+    dots: bool,
+    dashed: bool,
+    /// Whether the series sets the axis range (excluded lines do not: they
+    /// are drawn where they fall inside it).
+    sets_range: bool,
+}
 
-    let mut chart = ChartBuilder::on(mag_area)
-        .caption(title, ("sans-serif", 18))
-        .margin(8)
-        .x_label_area_size(20)
-        .y_label_area_size(55)
-        .build_cartesian_2d(fr.clone().log_scale(), mag.clone())
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .y_desc("magnitude / dB")
-        .label_style(("sans-serif", 12))
-        .draw()
-        .map_err(err)?;
-    for (c, color, how) in curves {
-        let pts = points(&c.freq_hz, &c.magnitude_db);
-        let color = *color;
-        let series = match how {
-            Draw::Line => chart.draw_series(LineSeries::new(pts, color.stroke_width(2))),
-            Draw::Dots => {
-                chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 1, color.filled())))
-            }
+/// Legend entries in one or more rows across `area`; returns nothing drawn
+/// on the data.
+fn draw_legend(area: &DrawingArea<SVGBackend, Shift>, entries: &[Style], left: i32) -> Result<()> {
+    let (w, _) = area.dim_in_pixel();
+    let mut x = left;
+    let mut y = px(4) as i32;
+    let row = px(SMALL + 6) as i32;
+    for e in entries.iter().filter(|e| !e.label.is_empty()) {
+        let (tw, _) = text_size(&e.label, SMALL);
+        let need = px(26) as i32 + tw + px(14) as i32;
+        if x + need > w as i32 && x > left {
+            x = left;
+            y += row;
         }
-        .map_err(err)?;
-        series.label(c.label.clone()).legend(move |(x, y)| {
-            PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-        });
-    }
-    for m in markers
-        .iter()
-        .filter(|m| m.freq_hz > fr.start && m.freq_hz < fr.end)
-    {
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(m.freq_hz, mag.start), (m.freq_hz, mag.end)],
-                5,
-                4,
-                BLACK.mix(0.6).stroke_width(1),
+        let mid = y + px(SMALL) as i32 / 2;
+        if e.dots {
+            area.draw(&Circle::new(
+                (x + px(9) as i32, mid),
+                px(3),
+                e.color.filled(),
             ))
             .map_err(err)?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                m.label.clone(),
-                (m.freq_hz, mag.end - 0.08 * (mag.end - mag.start)),
-                ("sans-serif", 12),
-            )))
-            .map_err(err)?;
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .label_font(("sans-serif", 12))
-        .draw()
-        .map_err(err)?;
-
-    let mut chart = ChartBuilder::on(phase_area)
-        .margin(8)
-        .x_label_area_size(35)
-        .y_label_area_size(55)
-        .build_cartesian_2d(fr.clone().log_scale(), ph.clone())
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("frequency / Hz")
-        .y_desc("phase / deg")
-        .label_style(("sans-serif", 12))
-        .draw()
-        .map_err(err)?;
-    for (c, color, how) in curves {
-        let pts = points(&c.freq_hz, &c.phase_deg);
-        match how {
-            Draw::Line => chart.draw_series(LineSeries::new(pts, color.stroke_width(2))),
-            Draw::Dots => {
-                chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 1, color.filled())))
+        } else if e.dashed {
+            for k in 0..3 {
+                let x0 = x + k * px(8) as i32;
+                area.draw(&PathElement::new(
+                    vec![(x0, mid), (x0 + px(5) as i32, mid)],
+                    e.color.stroke_width(px(2)),
+                ))
+                .map_err(err)?;
             }
+        } else {
+            area.draw(&PathElement::new(
+                vec![(x, mid), (x + px(20) as i32, mid)],
+                e.color.stroke_width(px(2)),
+            ))
+            .map_err(err)?;
         }
+        area.draw(&Text::new(
+            e.label.clone(),
+            (x + px(26) as i32, y),
+            font(SMALL),
+        ))
         .map_err(err)?;
+        x += need;
     }
-    for m in markers
-        .iter()
-        .filter(|m| m.freq_hz > fr.start && m.freq_hz < fr.end)
-    {
+    Ok(())
+}
+
+/// Rows the legend needs across `width_px` (drawing px).
+fn legend_rows(entries: &[Style], width_px: i32, left: i32) -> u32 {
+    let mut x = left;
+    let mut rows = 1;
+    for e in entries.iter().filter(|e| !e.label.is_empty()) {
+        let (tw, _) = text_size(&e.label, SMALL);
+        let need = px(26) as i32 + tw + px(14) as i32;
+        if x + need > width_px && x > left {
+            x = left;
+            rows += 1;
+        }
+        x += need;
+    }
+    rows
+}
+
+type Chart<'a> = ChartContext<
+    'a,
+    SVGBackend<'a>,
+    Cartesian2d<
+        plotters::coord::combinators::LogCoord<f64>,
+        plotters::coord::types::RangedCoordf64,
+    >,
+>;
+
+fn draw_series_on(chart: &mut Chart, pts: Vec<(f64, f64)>, s: &Style) -> Result<()> {
+    let color = s.color;
+    if s.dots {
+        chart
+            .draw_series(
+                pts.into_iter()
+                    .map(|p| Circle::new(p, px(1) + 1, color.filled())),
+            )
+            .map_err(err)?;
+    } else if s.dashed {
         chart
             .draw_series(DashedLineSeries::new(
-                vec![(m.freq_hz, ph.start), (m.freq_hz, ph.end)],
-                5,
-                4,
-                BLACK.mix(0.6).stroke_width(1),
+                pts,
+                px(6),
+                px(4),
+                color.stroke_width(px(2)),
             ))
+            .map_err(err)?;
+    } else {
+        chart
+            .draw_series(LineSeries::new(pts, color.stroke_width(px(2))))
             .map_err(err)?;
     }
     Ok(())
 }
 
-/// A Bode diagram (magnitude over phase) as an SVG document.
-pub fn bode_svg(plot: &BodePlot) -> Result<String> {
-    register_font();
-    let mut out = String::new();
-    {
-        let root = SVGBackend::with_string(&mut out, (WIDTH, 560)).into_drawing_area();
-        root.fill(&WHITE).map_err(err)?;
-        let (top, bottom) = root.split_vertically(300);
-        let curves: Vec<(&BodeCurve, RGBColor, Draw)> = plot
-            .curves
-            .iter()
-            .enumerate()
-            .map(|(i, c)| (c, PALETTE[i % PALETTE.len()], Draw::Line))
-            .collect();
-        draw_bode_panels(&top, &bottom, &plot.title, &curves, &plot.markers)?;
-        root.present().map_err(err)?;
-    }
-    Ok(out)
+/// Plot area bounds of a chart in drawing px.
+fn plot_bounds(chart: &Chart, fr: &Range<f64>, yr: &Range<f64>) -> [i32; 4] {
+    let (x0, y1) = chart.backend_coord(&(fr.start, yr.start));
+    let (x1, y0) = chart.backend_coord(&(fr.end, yr.end));
+    [x0, y0, x1, y1]
 }
 
-/// The measured FRF (usable lines in colour, excluded lines grey), the fitted
-/// model, and the coherence below, as an SVG document.
-pub fn frf_svg(plot: &FrfPlot) -> Result<String> {
+/// One Bode panel: curves, horizontal reference lines, vertical markers (with
+/// labels if `marker_labels`), margin points.
+#[allow(clippy::too_many_arguments)]
+fn bode_panel(
+    root: &DrawingArea<SVGBackend, Shift>,
+    area: &DrawingArea<SVGBackend, Shift>,
+    curves: &[(&BodeCurve, Style)],
+    panel: Panel,
+    fr: &Range<f64>,
+    hlines: &[f64],
+    markers: &[FrequencyMarker],
+    points_: &[MarginPoint],
+    x_label: bool,
+    labels: &mut Labels,
+) -> Result<()> {
+    let value = |c: &BodeCurve| -> Vec<f64> {
+        match panel {
+            Panel::Magnitude => c.magnitude_db.clone(),
+            Panel::Phase => c.phase_deg.clone(),
+        }
+    };
+    let ranged: Vec<f64> = curves
+        .iter()
+        .filter(|(_, s)| s.sets_range)
+        .flat_map(|(c, _)| value(c))
+        .chain(hlines.iter().copied())
+        .chain(points_.iter().filter(|p| p.panel == panel).map(|p| p.value))
+        .collect();
+    let yr = match panel {
+        Panel::Magnitude => range_of(ranged.iter(), -60.0..20.0),
+        Panel::Phase => phase_range(ranged.iter()),
+    };
+    let mut chart = ChartBuilder::on(area)
+        .margin_left(px(8))
+        .margin_right(px(16))
+        .margin_top(px(4))
+        .x_label_area_size(px(if x_label { 36 } else { 18 }))
+        .y_label_area_size(px(62))
+        .build_cartesian_2d(fr.clone().log_scale(), yr.clone())
+        .map_err(err)?;
+    let mut mesh = chart.configure_mesh();
+    mesh.y_desc(match panel {
+        Panel::Magnitude => "magnitude / dB",
+        Panel::Phase => "phase / deg",
+    })
+    .y_labels(Y_LABELS)
+    .label_style(font(SMALL))
+    .axis_desc_style(font(SMALL))
+    .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
+    .light_line_style(BLACK.mix(0.04).stroke_width(px(1) / 2))
+    .axis_style(BLACK.stroke_width(px(1) / 2))
+    .x_label_formatter(&|f| format_hz(*f));
+    if panel == Panel::Phase {
+        mesh.y_label_formatter(&|v| format!("{v:.0}"));
+    }
+    if x_label {
+        mesh.x_desc("frequency / Hz");
+    } else {
+        mesh.x_label_formatter(&|_| String::new());
+    }
+    mesh.draw().map_err(err)?;
+    let in_range = |v: f64| v >= yr.start && v <= yr.end;
+    for (c, s) in curves {
+        let pts: Vec<(f64, f64)> = points(&c.freq_hz, &value(c))
+            .into_iter()
+            .filter(|p| s.sets_range || in_range(p.1))
+            .filter(|p| p.0 >= fr.start && p.0 <= fr.end)
+            .collect();
+        draw_series_on(&mut chart, pts, s)?;
+    }
+    for h in hlines.iter().filter(|h| in_range(**h)) {
+        chart
+            .draw_series(LineSeries::new(
+                vec![(fr.start, *h), (fr.end, *h)],
+                BLACK.mix(0.55).stroke_width(px(1)),
+            ))
+            .map_err(err)?;
+    }
+    let bounds = plot_bounds(&chart, fr, &yr);
+    let (_, th) = text_size("Hg", SMALL);
+    let mut sorted: Vec<&FrequencyMarker> = markers
+        .iter()
+        .filter(|m| m.freq_hz > fr.start && m.freq_hz < fr.end)
+        .collect();
+    sorted.sort_by(|a, b| a.freq_hz.total_cmp(&b.freq_hz));
+    for m in &sorted {
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(m.freq_hz, yr.start), (m.freq_hz, yr.end)],
+                px(5),
+                px(4),
+                BLACK.mix(0.5).stroke_width(px(1)),
+            ))
+            .map_err(err)?;
+        if panel == Panel::Magnitude {
+            let (x, _) = chart.backend_coord(&(m.freq_hz, yr.end));
+            let (tw, _) = text_size(&m.label, SMALL);
+            let (lx, ly) = labels.place(x + px(3) as i32, bounds[1] + px(3) as i32, tw, th, bounds);
+            root.draw(&Text::new(m.label.clone(), (lx, ly), font(SMALL)))
+                .map_err(err)?;
+        }
+    }
+    for p in points_.iter().filter(|p| p.panel == panel) {
+        if !(p.freq_hz > fr.start && p.freq_hz < fr.end && in_range(p.value)) {
+            continue;
+        }
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                (p.freq_hz, p.value),
+                px(4),
+                BLACK.stroke_width(px(1)),
+            )))
+            .map_err(err)?;
+        let (x, y) = chart.backend_coord(&(p.freq_hz, p.value));
+        let (tw, _) = text_size(&p.label, SMALL);
+        let (lx, ly) = labels.place(x + px(6) as i32, y + px(4) as i32, tw, th, bounds);
+        root.draw(&Text::new(p.label.clone(), (lx, ly), font(SMALL)))
+            .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// A frequency tick label: "0.1", "1", "10", "100", "1k".
+fn format_hz(f: f64) -> String {
+    if f >= 1000.0 {
+        format!("{}k", f / 1000.0)
+    } else if f >= 1.0 {
+        format!("{f:.0}")
+    } else {
+        format!("{f}")
+    }
+}
+
+fn styles(plot: &BodePlot) -> Vec<Style> {
+    plot.curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| Style {
+            label: c.label.clone(),
+            color: PALETTE[i % PALETTE.len()],
+            dots: c.dots,
+            dashed: c.dashed,
+            sets_range: true,
+        })
+        .collect()
+}
+
+/// A panel drawn below the Bode panels (the coherence) on the shared frequency range.
+type ExtraPanel<'a> = &'a dyn Fn(&DrawingArea<SVGBackend, Shift>, &Range<f64>) -> Result<()>;
+
+/// Caption, legend strip, magnitude and (unless `magnitude_only`) phase.
+fn bode_figure(
+    plot: &BodePlot,
+    curves: &[(&BodeCurve, Style)],
+    extra_panel: Option<ExtraPanel>,
+) -> Result<(String, u32)> {
     register_font();
+    let st: Vec<Style> = curves.iter().map(|(_, s)| s.clone()).collect();
+    let rows = legend_rows(&st, px(WIDTH) as i32, px(70) as i32);
+    let head = CAPTION + 12 + rows * (SMALL + 6) + 4;
+    let mag_h = 250;
+    let phase_h = if plot.magnitude_only { 0 } else { 210 };
+    let extra_h = if extra_panel.is_some() { 170 } else { 0 };
+    let height = head + mag_h + phase_h + extra_h + 20;
     let mut out = String::new();
     {
-        let root = SVGBackend::with_string(&mut out, (WIDTH, 720)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, (px(WIDTH), px(height))).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        let (top, rest) = root.split_vertically(300);
-        let (middle, bottom) = rest.split_vertically(240);
-        // Split the measured curve into used and excluded lines.
-        let pick = |keep: bool| BodeCurve {
-            label: if keep {
-                format!("{} (used by the fit)", plot.measured.label)
-            } else {
-                "excluded lines".to_string()
-            },
-            freq_hz: filter_by(&plot.measured.freq_hz, &plot.usable, keep),
-            magnitude_db: filter_by(&plot.measured.magnitude_db, &plot.usable, keep),
-            phase_deg: filter_by(&plot.measured.phase_deg, &plot.usable, keep),
-        };
-        let used = pick(true);
-        let excluded = pick(false);
-        let curves = [
-            (&excluded, GREY, Draw::Dots),
-            (&used, PALETTE[0], Draw::Line),
-            (&plot.model, PALETTE[1], Draw::Line),
-        ];
-        draw_bode_panels(
-            &top,
-            &middle,
-            "Measured frequency response and fitted model",
-            &curves,
+        root.draw(&Text::new(
+            plot.title.clone(),
+            (px(70) as i32, px(6) as i32),
+            font(CAPTION),
+        ))
+        .map_err(err)?;
+        let (top, body) = root.split_vertically(px(head));
+        let (_, legend) = top.split_vertically(px(CAPTION + 12));
+        draw_legend(&legend, &st, px(70) as i32)?;
+        let refs: Vec<&BodeCurve> = curves
+            .iter()
+            .filter(|(_, s)| s.sets_range)
+            .map(|(c, _)| *c)
+            .collect();
+        let fr = freq_range(&refs);
+        let mut labels = Labels::default();
+        let last_is_mag = plot.magnitude_only && extra_panel.is_none();
+        let (mag, rest) = body.split_vertically(px(mag_h + if last_is_mag { 20 } else { 0 }));
+        bode_panel(
+            &root,
+            &mag,
+            curves,
+            Panel::Magnitude,
+            &fr,
+            &plot.magnitude_lines_db,
             &plot.markers,
+            &plot.points,
+            last_is_mag,
+            &mut labels,
         )?;
-        let fr = freq_range(&[&plot.measured]);
-        let mut chart = ChartBuilder::on(&bottom)
-            .margin(8)
-            .x_label_area_size(35)
-            .y_label_area_size(55)
-            .build_cartesian_2d(fr.log_scale(), 0.0..1.05)
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc("frequency / Hz")
-            .y_desc("coherence")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(err)?;
-        chart
-            .draw_series(
-                points(&plot.measured.freq_hz, &plot.coherence)
-                    .into_iter()
-                    .map(|p| Circle::new(p, 2, PALETTE[2].filled())),
-            )
-            .map_err(err)?;
+        let rest = if plot.magnitude_only {
+            rest
+        } else {
+            let last = extra_panel.is_none();
+            let (phase, rest) = rest.split_vertically(px(phase_h + if last { 20 } else { 0 }));
+            bode_panel(
+                &root,
+                &phase,
+                curves,
+                Panel::Phase,
+                &fr,
+                &plot.phase_lines_deg,
+                &plot.markers,
+                &plot.points,
+                last,
+                &mut labels,
+            )?;
+            rest
+        };
+        if let Some(f) = extra_panel {
+            f(&rest, &fr)?;
+        }
         root.present().map_err(err)?;
     }
-    Ok(out)
+    Ok((out, height))
+}
+
+/// A Bode diagram (magnitude over phase, or magnitude only) as an SVG document.
+pub fn bode_svg(plot: &BodePlot) -> Result<String> {
+    let st = styles(plot);
+    let curves: Vec<(&BodeCurve, Style)> = plot.curves.iter().zip(st).collect();
+    let (svg, h) = bode_figure(plot, &curves, None)?;
+    Ok(finish(svg, h))
 }
 
 fn filter_by(xs: &[f64], mask: &[bool], keep: bool) -> Vec<f64> {
@@ -279,14 +542,134 @@ fn filter_by(xs: &[f64], mask: &[bool], keep: bool) -> Vec<f64> {
         .collect()
 }
 
+/// The measured FRF (lines used by the fit in colour, excluded lines grey),
+/// the fitted model, and the coherence below, as an SVG document.
+pub fn frf_svg(plot: &FrfPlot) -> Result<String> {
+    let pick = |keep: bool| BodeCurve {
+        label: String::new(),
+        freq_hz: filter_by(&plot.measured.freq_hz, &plot.usable, keep),
+        magnitude_db: filter_by(&plot.measured.magnitude_db, &plot.usable, keep),
+        phase_deg: filter_by(&plot.measured.phase_deg, &plot.usable, keep),
+        dots: true,
+        dashed: false,
+    };
+    let used = pick(true);
+    let excluded = pick(false);
+    let style = |label: &str, color, dots, sets_range| Style {
+        label: label.into(),
+        color,
+        dots,
+        dashed: false,
+        sets_range,
+    };
+    let curves = [
+        (
+            &excluded,
+            style(
+                "excluded lines (noisy or outside the band)",
+                GREY,
+                true,
+                false,
+            ),
+        ),
+        (
+            &used,
+            style("measured, used by the fit", PALETTE[0], true, true),
+        ),
+        (
+            &plot.model,
+            style(&plot.model.label, PALETTE[1], false, true),
+        ),
+    ];
+    let header = BodePlot {
+        title: "Measured frequency response (torque command -> motor angle) and fitted model"
+            .into(),
+        markers: plot.markers.clone(),
+        ..BodePlot::default()
+    };
+    let coherence = |area: &DrawingArea<SVGBackend, Shift>, fr: &Range<f64>| -> Result<()> {
+        let mut chart = ChartBuilder::on(area)
+            .margin_left(px(8))
+            .margin_right(px(16))
+            .margin_top(px(4))
+            .x_label_area_size(px(36))
+            .y_label_area_size(px(62))
+            .build_cartesian_2d(fr.clone().log_scale(), 0.0..1.05)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("frequency / Hz")
+            .y_desc("coherence")
+            .y_labels(Y_LABELS)
+            .label_style(font(SMALL))
+            .axis_desc_style(font(SMALL))
+            .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
+            .light_line_style(BLACK.mix(0.04).stroke_width(px(1) / 2))
+            .x_label_formatter(&|f| format_hz(*f))
+            .draw()
+            .map_err(err)?;
+        for keep in [false, true] {
+            let color = if keep { PALETTE[2] } else { GREY };
+            let pts: Vec<(f64, f64)> = points(
+                &plot.measured.freq_hz,
+                &filter_by(&plot.coherence, &plot.usable, keep),
+            )
+            .into_iter()
+            .filter(|p| p.0 >= fr.start && p.0 <= fr.end)
+            .collect();
+            chart
+                .draw_series(
+                    pts.into_iter()
+                        .map(|p| Circle::new(p, px(1) + 1, color.filled())),
+                )
+                .map_err(err)?;
+        }
+        Ok(())
+    };
+    let (svg, h) = bode_figure(&header, &curves, Some(&coherence))?;
+    Ok(finish(svg, h))
+}
+
 /// The friction curve: measured torque per constant-velocity run and the fitted
-/// `tau = d_v omega + tau_c sign(omega)` (3.36), as an SVG document.
+/// `tau = d_v omega + tau_c sign(omega)`, as an SVG document.
 pub fn friction_svg(plot: &FrictionPlot) -> Result<String> {
     register_font();
+    let height = 440;
     let mut out = String::new();
     {
-        let root = SVGBackend::with_string(&mut out, (WIDTH, 420)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, (px(WIDTH), px(height))).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
+        let label = format!(
+            "fit: viscous d_v = {:.3e} N m s/rad, Coulomb tau_c = {:.4} N m",
+            plot.viscous_nm_s_per_rad, plot.coulomb_nm
+        );
+        let st = [
+            Style {
+                label: "measured (mean torque per constant-velocity run)".into(),
+                color: PALETTE[0],
+                dots: true,
+                dashed: false,
+                sets_range: true,
+            },
+            Style {
+                label: label.clone(),
+                color: PALETTE[1],
+                dots: false,
+                dashed: false,
+                sets_range: true,
+            },
+        ];
+        let rows = legend_rows(&st, px(WIDTH) as i32, px(70) as i32);
+        let head = CAPTION + 12 + rows * (SMALL + 6) + 4;
+        root.draw(&Text::new(
+            "Friction: measured torque and fitted model".to_string(),
+            (px(70) as i32, px(6) as i32),
+            font(CAPTION),
+        ))
+        .map_err(err)?;
+        let (top, body) = root.split_vertically(px(head));
+        let (_, legend) = top.split_vertically(px(CAPTION + 12));
+        draw_legend(&legend, &st, px(70) as i32)?;
         let vr = range_of(plot.velocity_rad_s.iter(), -100.0..100.0);
         let model = |w: f64| plot.viscous_nm_s_per_rad * w + plot.coulomb_nm * w.signum();
         let tr = range_of(
@@ -295,32 +678,31 @@ pub fn friction_svg(plot: &FrictionPlot) -> Result<String> {
                 .chain([model(vr.start), model(vr.end)].iter()),
             -1.0..1.0,
         );
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                "Friction: measured torque and fitted model (3.36)",
-                ("sans-serif", 18),
-            )
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(60)
+        let mut chart = ChartBuilder::on(&body)
+            .margin_left(px(8))
+            .margin_right(px(16))
+            .x_label_area_size(px(36))
+            .y_label_area_size(px(62))
             .build_cartesian_2d(vr.clone(), tr)
             .map_err(err)?;
         chart
             .configure_mesh()
             .x_desc("motor velocity / (rad/s)")
             .y_desc("torque / N m")
-            .label_style(("sans-serif", 12))
+            .y_labels(Y_LABELS)
+            .label_style(font(SMALL))
+            .axis_desc_style(font(SMALL))
+            .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
+            .light_line_style(BLACK.mix(0.04).stroke_width(px(1) / 2))
             .draw()
             .map_err(err)?;
         chart
             .draw_series(
                 points(&plot.velocity_rad_s, &plot.torque_nm)
                     .into_iter()
-                    .map(|p| Circle::new(p, 4, PALETTE[0].filled())),
+                    .map(|p| Circle::new(p, px(4), PALETTE[0].filled())),
             )
-            .map_err(err)?
-            .label("measured (mean torque per run)")
-            .legend(|(x, y)| Circle::new((x + 8, y), 4, PALETTE[0].filled()));
+            .map_err(err)?;
         let n = 400;
         let curve: Vec<(f64, f64)> = (0..=n)
             .map(|i| vr.start + (vr.end - vr.start) * i as f64 / n as f64)
@@ -328,184 +710,309 @@ pub fn friction_svg(plot: &FrictionPlot) -> Result<String> {
             .map(|w| (w, model(w)))
             .collect();
         let (neg, pos): (Vec<_>, Vec<_>) = curve.into_iter().partition(|p| p.0 < 0.0);
-        let label = format!(
-            "fit: d_v = {:.3e} N m s/rad, tau_c = {:.4} N m",
-            plot.viscous_nm_s_per_rad, plot.coulomb_nm
-        );
-        chart
-            .draw_series(LineSeries::new(pos, PALETTE[1].stroke_width(2)))
-            .map_err(err)?
-            .label(label)
-            .legend(|(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], PALETTE[1].stroke_width(2))
-            });
-        chart
-            .draw_series(LineSeries::new(neg, PALETTE[1].stroke_width(2)))
-            .map_err(err)?;
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font(("sans-serif", 12))
-            .draw()
-            .map_err(err)?;
+        for part in [pos, neg] {
+            chart
+                .draw_series(LineSeries::new(part, PALETTE[1].stroke_width(px(2))))
+                .map_err(err)?;
+        }
         root.present().map_err(err)?;
     }
-    Ok(out)
+    Ok(finish(out, height))
 }
 
-/// One panel of time series sharing the time axis.
+/// One series of a time panel: label, time (s), values, colour, dashed.
+type TimeSeries<'a> = (String, &'a [f64], &'a [f64], RGBColor, bool);
+
+/// One panel of time series sharing the time axis; `hlines` are limits drawn
+/// as dashed red lines with their label.
+#[allow(clippy::too_many_arguments)]
 fn draw_time_panel(
+    root: &DrawingArea<SVGBackend, Shift>,
     area: &DrawingArea<SVGBackend, Shift>,
-    title: Option<&str>,
     y_desc: &str,
     t_range: Range<f64>,
-    series: &[(String, &[f64], &[f64], RGBColor)],
+    series: &[TimeSeries],
     scale: f64,
+    hlines: &[(f64, String)],
     x_label: bool,
+    labels: &mut Labels,
 ) -> Result<()> {
-    let yr = range_of(
-        series
-            .iter()
-            .flat_map(|s| s.2.iter())
-            .map(|v| v * scale)
-            .collect::<Vec<_>>()
-            .iter(),
-        -1.0..1.0,
-    );
-    let mut builder = ChartBuilder::on(area);
-    builder
-        .margin(8)
-        .x_label_area_size(if x_label { 35 } else { 20 })
-        .y_label_area_size(65);
-    if let Some(t) = title {
-        builder.caption(t, ("sans-serif", 18));
-    }
-    let mut chart = builder.build_cartesian_2d(t_range, yr).map_err(err)?;
+    let values: Vec<f64> = series
+        .iter()
+        .flat_map(|s| s.2.iter().map(|v| v * scale))
+        .chain(hlines.iter().map(|h| h.0 * scale))
+        .collect();
+    let yr = range_of(values.iter(), -1.0..1.0);
+    let mut chart = ChartBuilder::on(area)
+        .margin_left(px(8))
+        .margin_right(px(16))
+        .margin_top(px(4))
+        .x_label_area_size(px(if x_label { 36 } else { 18 }))
+        .y_label_area_size(px(70))
+        .build_cartesian_2d(t_range.clone(), yr.clone())
+        .map_err(err)?;
     let mut mesh = chart.configure_mesh();
-    mesh.y_desc(y_desc).label_style(("sans-serif", 12));
+    mesh.y_desc(y_desc)
+        .y_labels(Y_LABELS)
+        .label_style(font(SMALL))
+        .axis_desc_style(font(SMALL))
+        .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
+        .light_line_style(BLACK.mix(0.04).stroke_width(px(1) / 2));
     if x_label {
         mesh.x_desc("time / s");
+    } else {
+        mesh.x_label_formatter(&|_| String::new());
     }
     mesh.draw().map_err(err)?;
-    for (label, t, y, color) in series {
+    for (_, t, y, color, dashed) in series {
         let pts: Vec<(f64, f64)> = points(t, y)
             .into_iter()
             .map(|(a, b)| (a, b * scale))
             .collect();
-        let color = *color;
-        chart
-            .draw_series(LineSeries::new(pts, color.stroke_width(2)))
-            .map_err(err)?
-            .label(label.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-            });
+        if *dashed {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    pts,
+                    px(6),
+                    px(4),
+                    color.stroke_width(px(2)),
+                ))
+                .map_err(err)?;
+        } else {
+            chart
+                .draw_series(LineSeries::new(pts, color.stroke_width(px(2))))
+                .map_err(err)?;
+        }
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .label_font(("sans-serif", 11))
-        .draw()
-        .map_err(err)?;
+    let (x0, y1) = chart.backend_coord(&(t_range.start, yr.start));
+    let (x1, y0) = chart.backend_coord(&(t_range.end, yr.end));
+    let bounds = [x0, y0, x1, y1];
+    let (_, th) = text_size("Hg", SMALL);
+    for (h, label) in hlines {
+        let v = h * scale;
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(t_range.start, v), (t_range.end, v)],
+                px(6),
+                px(4),
+                RED.mix(0.8).stroke_width(px(1)),
+            ))
+            .map_err(err)?;
+        let (_, y) = chart.backend_coord(&(t_range.start, v));
+        let (tw, _) = text_size(label, SMALL);
+        let above = if v > 0.5 * (yr.start + yr.end) {
+            y + px(2) as i32
+        } else {
+            y - th - px(2) as i32
+        };
+        let (lx, ly) = labels.place(x1 - tw - px(4) as i32, above, tw, th, bounds);
+        root.draw(&Text::new(label.clone(), (lx, ly), font(SMALL).color(&RED)))
+            .map_err(err)?;
+    }
     Ok(())
 }
 
-/// The validation moves: desired position, cart and motor-side tracking errors
-/// (mm) and torque, one colour per feedforward variant, as an SVG document.
-pub fn moves_svg(moves: &[MovePlot]) -> Result<String> {
+/// Time-series figure: caption, legend, panels (each a list of series, its
+/// y description, scale, limit lines).
+#[allow(clippy::type_complexity)]
+fn time_figure(
+    title: &str,
+    legend: &[Style],
+    panels: &[(&str, Vec<TimeSeries>, f64, Vec<(f64, String)>)],
+) -> Result<String> {
     register_font();
+    let rows = legend_rows(legend, px(WIDTH) as i32, px(78) as i32);
+    let head = CAPTION + 12 + rows * (SMALL + 6) + 4;
+    let panel_h = 190;
+    let height = head + panel_h * panels.len() as u32 + 20;
     let mut out = String::new();
     {
-        let root = SVGBackend::with_string(&mut out, (WIDTH, 900)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, (px(WIDTH), px(height))).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        let panels = root.split_evenly((4, 1));
-        let t_range = range_of(moves.iter().flat_map(|m| m.time_s.iter()), 0.0..1.0);
-        let t_range = t_range.start.max(0.0)..t_range.end;
-        let color = |i: usize| PALETTE[i % PALETTE.len()];
-        let desired: Vec<(String, &[f64], &[f64], RGBColor)> = moves
-            .iter()
-            .take(1)
-            .map(|m| {
-                (
-                    "desired".to_string(),
-                    &m.time_s[..],
-                    &m.desired_m[..],
-                    BLACK,
-                )
-            })
-            .collect();
-        draw_time_panel(
-            &panels[0],
-            Some("Validation move 0 -> 500 mm"),
-            "position / m",
-            t_range.clone(),
-            &desired,
-            1.0,
-            false,
-        )?;
-        let cart: Vec<_> = moves
-            .iter()
-            .enumerate()
-            .filter(|(_, m)| !m.cart_error_m.is_empty())
-            .map(|(i, m)| {
-                (
-                    m.label.clone(),
-                    &m.time_s[..],
-                    &m.cart_error_m[..],
-                    color(i),
-                )
-            })
-            .collect();
-        draw_time_panel(
-            &panels[1],
-            None,
-            "cart error / mm",
-            t_range.clone(),
-            &cart,
-            1e3,
-            false,
-        )?;
-        let motor: Vec<_> = moves
-            .iter()
-            .enumerate()
-            .map(|(i, m)| {
-                (
-                    m.label.clone(),
-                    &m.time_s[..],
-                    &m.motor_error_m[..],
-                    color(i),
-                )
-            })
-            .collect();
-        draw_time_panel(
-            &panels[2],
-            None,
-            "motor-side error / mm",
-            t_range.clone(),
-            &motor,
-            1e3,
-            false,
-        )?;
-        let torque: Vec<_> = moves
-            .iter()
-            .enumerate()
-            .map(|(i, m)| (m.label.clone(), &m.time_s[..], &m.torque_nm[..], color(i)))
-            .collect();
-        draw_time_panel(
-            &panels[3],
-            None,
-            "torque / N m",
-            t_range,
-            &torque,
-            1.0,
-            true,
-        )?;
+        root.draw(&Text::new(
+            title.to_string(),
+            (px(78) as i32, px(6) as i32),
+            font(CAPTION),
+        ))
+        .map_err(err)?;
+        let (top, mut body) = root.split_vertically(px(head));
+        let (_, leg) = top.split_vertically(px(CAPTION + 12));
+        draw_legend(&leg, legend, px(78) as i32)?;
+        let t_range = range_of(
+            panels
+                .iter()
+                .flat_map(|p| p.1.iter().flat_map(|s| s.1.iter())),
+            0.0..1.0,
+        );
+        // (the 5 % pad before the first sample keeps the first time label
+        // away from the lowest value label of the bottom panel)
+        let mut labels = Labels::default();
+        for (i, (desc, series, scale, hl)) in panels.iter().enumerate() {
+            let last = i + 1 == panels.len();
+            let (area, rest) = body.split_vertically(px(panel_h + if last { 20 } else { 0 }));
+            draw_time_panel(
+                &root,
+                &area,
+                desc,
+                t_range.clone(),
+                series,
+                *scale,
+                hl,
+                last,
+                &mut labels,
+            )?;
+            body = rest;
+        }
         root.present().map_err(err)?;
     }
-    Ok(out)
+    Ok(finish(out, height))
+}
+
+/// The validation moves: desired position, cart and motor-side tracking errors
+/// (mm) with the 1 mm limit, and torque, one colour per variant, as an SVG document.
+pub fn moves_svg(moves: &[MovePlot], torque_limit_nm: Option<f64>) -> Result<String> {
+    let color = |i: usize| PALETTE[i % PALETTE.len()];
+    let mut legend = vec![Style {
+        label: "desired position".into(),
+        color: BLACK,
+        dots: false,
+        dashed: false,
+        sets_range: true,
+    }];
+    legend.extend(moves.iter().enumerate().map(|(i, m)| Style {
+        label: m.label.clone(),
+        color: color(i),
+        dots: false,
+        dashed: false,
+        sets_range: true,
+    }));
+    let desired: Vec<TimeSeries> = moves
+        .iter()
+        .take(1)
+        .map(|m| {
+            (
+                "desired".to_string(),
+                &m.time_s[..],
+                &m.desired_m[..],
+                BLACK,
+                false,
+            )
+        })
+        .collect();
+    let series = |f: &dyn Fn(&MovePlot) -> &[f64]| -> Vec<TimeSeries> {
+        moves
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| !f(m).is_empty())
+            .map(|(i, m)| (m.label.clone(), &m.time_s[..], f(m), color(i), false))
+            .collect()
+    };
+    let limit = crate::procedure::verdict::DYNAMIC_ERROR_LIMIT_M;
+    let error_limits = vec![
+        (limit, "limit +1 mm".to_string()),
+        (-limit, "limit -1 mm".to_string()),
+    ];
+    let torque_limits = torque_limit_nm
+        .map(|t| {
+            vec![
+                (t, format!("torque limit {t:.2} N m")),
+                (-t, format!("torque limit -{t:.2} N m")),
+            ]
+        })
+        .unwrap_or_default();
+    let mut panels = vec![("position / m", desired, 1.0, vec![])];
+    let cart = series(&|m| &m.cart_error_m);
+    if !cart.is_empty() {
+        panels.push(("cart error / mm", cart, 1e3, error_limits.clone()));
+    }
+    panels.push((
+        "motor-side error / mm",
+        series(&|m| &m.motor_error_m),
+        1e3,
+        vec![],
+    ));
+    panels.push((
+        "torque / N m",
+        series(&|m| &m.torque_nm),
+        1.0,
+        torque_limits,
+    ));
+    let title = match moves.first() {
+        Some(m) => {
+            let (a, b) = (
+                m.desired_m.first().copied().unwrap_or(0.0),
+                m.desired_m.last().copied().unwrap_or(0.0),
+            );
+            format!("Validation move {:.0} -> {:.0} mm", a * 1e3, b * 1e3)
+        }
+        None => "Validation move".to_string(),
+    };
+    time_figure(&title, &legend, &panels)
+}
+
+/// The identification experiment: torque command with the torque limit and
+/// position with the travel window, as an SVG document.
+pub fn excitation_svg(plot: &ExcitationPlot) -> Result<String> {
+    let legend = [
+        Style {
+            label: "torque command".into(),
+            color: PALETTE[0],
+            dots: false,
+            dashed: false,
+            sets_range: true,
+        },
+        Style {
+            label: "motor-side position".into(),
+            color: PALETTE[2],
+            dots: false,
+            dashed: false,
+            sets_range: true,
+        },
+    ];
+    let t = plot.torque_limit_nm;
+    let panels = vec![
+        (
+            "torque / N m",
+            vec![(
+                "torque".to_string(),
+                &plot.time_s[..],
+                &plot.torque_nm[..],
+                PALETTE[0],
+                false,
+            )],
+            1.0,
+            vec![
+                (t, format!("torque limit {t:.2} N m")),
+                (-t, format!("torque limit -{t:.2} N m")),
+            ],
+        ),
+        (
+            "position / mm",
+            vec![(
+                "position".to_string(),
+                &plot.position_time_s[..],
+                &plot.position_m[..],
+                PALETTE[2],
+                false,
+            )],
+            1e3,
+            vec![
+                (
+                    plot.travel_max_m,
+                    format!("travel max {:.0} mm", plot.travel_max_m * 1e3),
+                ),
+                (
+                    plot.travel_min_m,
+                    format!("travel min {:.0} mm", plot.travel_min_m * 1e3),
+                ),
+            ],
+        ),
+    ];
+    time_figure(
+        "Identification: PRBS excitation and response, with the limits",
+        &legend,
+        &panels,
+    )
 }
 
 #[cfg(test)]
@@ -521,6 +1028,7 @@ mod tests {
             freq_hz,
             magnitude_db,
             phase_deg,
+            ..BodeCurve::default()
         }
     }
 
@@ -530,14 +1038,35 @@ mod tests {
             title: "open loop".into(),
             curves: vec![curve()],
             markers: vec![FrequencyMarker {
-                label: "w_c".into(),
+                label: "f_c".into(),
                 freq_hz: 10.0,
             }],
+            ..BodePlot::default()
         })
         .unwrap();
-        assert!(svg.starts_with("<svg"));
+        assert!(
+            svg.starts_with(&format!("<svg width=\"{WIDTH}\"")),
+            "{}",
+            &svg[..80]
+        );
+        assert!(svg.contains("viewBox=\"0 0 3600"), "drawn at SCALE");
         assert!(svg.contains("<polyline"), "no curve drawn");
-        assert!(svg.contains("open loop") && svg.contains("w_c"));
+        assert!(svg.contains("open loop") && svg.contains("f_c"));
+    }
+
+    /// Two markers 1 % apart: the second label goes to another row.
+    #[test]
+    fn marker_labels_do_not_share_a_box() {
+        let mut l = Labels::default();
+        let b = [0, 0, 4000, 4000];
+        let a = l.place(100, 100, 400, 48, b);
+        let c = l.place(110, 100, 400, 48, b);
+        assert_eq!(a, (100, 100));
+        assert!((c.1 - a.1).abs() >= 48, "{c:?}");
+        // at the top of the area the next free row is below
+        let top = l.place(105, 0, 400, 48, b);
+        let top2 = l.place(108, 0, 400, 48, b);
+        assert!(top2.1 >= top.1 + 48, "{top:?} {top2:?}");
     }
 
     #[test]
@@ -554,6 +1083,7 @@ mod tests {
         })
         .is_ok());
         assert!(friction_svg(&FrictionPlot::default()).is_ok());
-        assert!(moves_svg(&[]).is_ok());
+        assert!(moves_svg(&[], None).is_ok());
+        assert!(excitation_svg(&ExcitationPlot::default()).is_ok());
     }
 }

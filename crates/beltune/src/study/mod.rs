@@ -207,7 +207,7 @@ impl Axis for Watched {
 pub const TRAVEL_TOLERANCE_M: f64 = 1e-3;
 
 fn velocity_margin_on(design: &ControllerDesign, truth: &crate::model::TwoMassParams) -> f64 {
-    match crate::procedure::verdict::margins_on(design, truth) {
+    match crate::procedure::acceptance::margins_on(design, truth) {
         Ok(m) => m.velocity_phase_margin_deg,
         Err(_) => f64::NAN,
     }

@@ -84,6 +84,7 @@
     const ok = (x, y) => isFinite(x) && isFinite(y) && (!opts.xlog || x > 0);
     let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
     for (const s of opts.series) {
+      if (s.norange) continue;
       for (let i = 0; i < s.x.length; i++) {
         if (!ok(s.x[i], s.y[i])) continue;
         x0 = Math.min(x0, s.x[i]); x1 = Math.max(x1, s.x[i]);
@@ -127,6 +128,18 @@
       svg.appendChild(el('line', { x1: L, x2: W - R, y1: Y, y2: Y, class: h.cls || 'ref' }));
     }
     for (const s of opts.series) {
+      if (s.dots) {
+        const g = el('g', { class: `series ${s.cls}`, 'data-name': s.name, 'data-points': 0 });
+        let n = 0;
+        for (let i = 0; i < s.x.length; i++) {
+          if (!ok(s.x[i], s.y[i]) || s.y[i] < y0 || s.y[i] > y1) continue;
+          g.appendChild(el('circle', { cx: px(s.x[i]).toFixed(2), cy: py(s.y[i]).toFixed(2), r: 1.6 }));
+          n++;
+        }
+        g.setAttribute('data-points', n);
+        svg.appendChild(g);
+        continue;
+      }
       let d = '';
       let pen = 'M';
       let n = 0;
@@ -150,41 +163,82 @@
     }
   }
 
+  const TWO_PI = 2 * Math.PI;
+  const hz = (w) => w / TWO_PI;
+
+  // The measured FRF of the loaded commissioning and its fitted model (drawn once).
+  function drawFrf() {
+    const f = info && info.measured_frf;
+    if (!f) {
+      $('frf-figures').hidden = true;
+      return;
+    }
+    $('frf-figures').hidden = false;
+    const pick = (arr, used) => arr.map((v, i) => (f.used_by_fit[i] === used ? v : NaN));
+    const markers = [
+      { x: info.f_z_hz, name: 'antiresonance', cls: 'ref', label: `fz ${fmt(info.f_z_hz, 3)} Hz`, row: 0 },
+      { x: info.f_r_hz, name: 'resonance', cls: 'ref', label: `fr ${fmt(info.f_r_hz, 3)} Hz`, row: 1 },
+    ];
+    for (const [id, key, mkey] of [['plot-frf-mag', 'magnitude_db', 'model_magnitude_db'],
+      ['plot-frf-phase', 'phase_deg', 'model_phase_deg']]) {
+      plot($(id), {
+        xlog: true, xlabel: 'Hz',
+        series: [
+          { x: f.freq_hz, y: pick(f[key], false), cls: 'excluded', name: 'measured-excluded', dots: true, norange: true },
+          { x: f.freq_hz, y: pick(f[key], true), cls: 's0', name: 'measured', dots: true },
+          { x: f.model_freq_hz, y: f[mkey], cls: 's1', name: 'model' },
+        ],
+        vlines: id === 'plot-frf-mag' ? markers : markers.map((m) => ({ x: m.x, name: m.name, cls: 'ref' })),
+      });
+    }
+  }
+
   function drawPlots(r) {
-    const w = r.bode.omega_rad_s;
+    const f = r.bode.freq_hz;
     const ol = r.bode.open_loop_velocity, op = r.bode.open_loop_position, cl = r.bode.closed_loop_position;
-    const wr = info ? 2 * Math.PI * info.f_r_hz : NaN;
+    const fr = info ? info.f_r_hz : NaN;
     const cv = r.velocity_loop, cp = r.position_loop;
     const cross = [
-      { x: cv.crossover_rad_s, name: 'crossover-velocity', label: `ωc,v ${fmt(cv.crossover_rad_s, 3)}`, row: 0 },
-      { x: cp.crossover_rad_s, name: 'crossover-position', label: `ωc,p ${fmt(cp.crossover_rad_s, 3)}`, row: 1 },
-      { x: wr, name: 'resonance', cls: 'ref', label: 'ωr', row: 2 },
+      { x: hz(cv.crossover_rad_s), name: 'crossover-velocity', label: `fc,v ${fmt(hz(cv.crossover_rad_s), 3)} Hz`, row: 0 },
+      { x: hz(cp.crossover_rad_s), name: 'crossover-position', label: `fc,p ${fmt(hz(cp.crossover_rad_s), 3)} Hz`, row: 1 },
+      { x: fr, name: 'resonance', cls: 'ref', label: `fr ${fmt(fr, 3)} Hz`, row: 2 },
     ];
     plot($('plot-bode-mag'), {
-      xlog: true, xlabel: 'rad/s', yspan: 160,
+      xlog: true, xlabel: 'Hz', yspan: 160,
       series: [
-        { x: w, y: ol.magnitude_db, cls: 's0', name: 'open-loop-velocity' },
-        { x: w, y: op.magnitude_db, cls: 's1', name: 'open-loop-position' },
+        { x: f, y: ol.magnitude_db, cls: 's0', name: 'open-loop-velocity' },
+        { x: f, y: op.magnitude_db, cls: 's1', name: 'open-loop-position' },
       ],
       hlines: [{ y: 0 }, { y: r.knobs.resonance_suppression_db, cls: 'ref' }],
       vlines: cross,
     });
     plot($('plot-bode-phase'), {
-      xlog: true, xlabel: 'rad/s', yspan: 720,
+      xlog: true, xlabel: 'Hz', yspan: 720,
       series: [
-        { x: w, y: ol.phase_deg, cls: 's0', name: 'open-loop-velocity' },
-        { x: w, y: op.phase_deg, cls: 's1', name: 'open-loop-position' },
+        { x: f, y: ol.phase_deg, cls: 's0', name: 'open-loop-velocity' },
+        { x: f, y: op.phase_deg, cls: 's1', name: 'open-loop-position' },
       ],
       hlines: [{ y: -180 }],
       vlines: [
-        { x: cv.crossover_rad_s, name: 'crossover-velocity', label: `PMv ${fmt(cv.phase_margin_deg, 3)}°`, row: 0 },
-        { x: cp.crossover_rad_s, name: 'crossover-position', label: `PMp ${fmt(cp.phase_margin_deg, 3)}°`, row: 1 },
+        { x: hz(cv.crossover_rad_s), name: 'crossover-velocity', label: `PMv ${fmt(cv.phase_margin_deg, 3)}°`, row: 0 },
+        { x: hz(cp.crossover_rad_s), name: 'crossover-position', label: `PMp ${fmt(cp.phase_margin_deg, 3)}°`, row: 1 },
       ],
     });
     plot($('plot-closed-loop'), {
-      xlog: true, xlabel: 'rad/s', yspan: 120,
-      series: [{ x: w, y: cl.magnitude_db, cls: 's2', name: 'closed-loop-position' }],
+      xlog: true, xlabel: 'Hz', yspan: 120,
+      series: [
+        { x: f, y: cl.magnitude_db, cls: 's2', name: 'closed-loop-position' },
+        { x: f, y: r.bode.closed_loop_velocity.magnitude_db, cls: 's0', name: 'closed-loop-velocity' },
+      ],
       hlines: [{ y: 0 }, { y: -3, cls: 'ref' }],
+    });
+    plot($('plot-sensitivity'), {
+      xlog: true, xlabel: 'Hz', yspan: 120,
+      series: [
+        { x: f, y: r.bode.sensitivity_velocity.magnitude_db, cls: 's0', name: 'sensitivity-velocity' },
+        { x: f, y: r.bode.sensitivity_position.magnitude_db, cls: 's1', name: 'sensitivity-position' },
+      ],
+      hlines: [{ y: 0 }, { y: 6, cls: 'ref' }],
     });
     const m = r.validation_move;
     if (m) {
@@ -192,15 +246,15 @@
       plot($('plot-error'), {
         xlabel: 's',
         series: [{ x: m.t_s, y: m.error_m.map((e) => e * 1e3), cls: 's0', name: 'tracking-error' }],
-        hlines: [{ y: 0 }],
+        hlines: [{ y: 0 }, { y: 1, cls: 'limit' }, { y: -1, cls: 'limit' }],
       });
       plot($('plot-torque'), {
         xlabel: 's',
         series: [{ x: m.t_s, y: m.torque_nm, cls: 's2', name: 'torque' }],
         hlines: [{ y: 0 }],
       });
-      $('move-note').textContent = `Simulated move with ${fmt(m.payload_kg, 3)} kg payload` +
-        (tEnd === null ? ' (did not settle).' : '.');
+      $('move-note').textContent = `Move ${m.plant} with ${fmt(m.payload_kg, 3)} kg payload` +
+        (tEnd === null ? ' (did not settle).' : '.') + ' Dashed red: the 1 mm limit.';
     } else {
       const why = r.move_error || 'no simulated move';
       plot($('plot-error'), { empty: why });
@@ -234,15 +288,15 @@
       setNumber('prefilter-param', null);
       $('prefilter-param-unit').textContent = '';
     } else {
-      $('prefilter-param-name').textContent = 'Butterworth ωbw';
-      setNumber('prefilter-param', p.omega_bw_rad_s);
-      $('prefilter-param-unit').textContent = 'rad/s';
+      $('prefilter-param-name').textContent = 'Butterworth corner fbw';
+      setNumber('prefilter-param', p.omega_bw_rad_s, 1 / TWO_PI);
+      $('prefilter-param-unit').textContent = 'Hz';
     }
-    setNumber('crossover_velocity', r.velocity_loop.crossover_rad_s);
+    setNumber('crossover_velocity', r.velocity_loop.crossover_rad_s, 1 / TWO_PI);
     setNumber('pm_velocity', r.velocity_loop.phase_margin_deg);
     setNumber('gm_velocity', r.velocity_loop.gain_margin_db);
     setNumber('gain_at_resonance', r.gain_at_resonance_db);
-    setNumber('crossover_position', r.position_loop.crossover_rad_s);
+    setNumber('crossover_position', r.position_loop.crossover_rad_s, 1 / TWO_PI);
     setNumber('pm_position', r.position_loop.phase_margin_deg);
     const m = r.validation_move;
     setNumber('max_error', m ? m.max_error_m : null, 1e3);
@@ -334,8 +388,9 @@
         return;
       }
       out.dataset.path = body.path;
+      out.dataset.dir = body.dir;
       out.dataset.state = 'ok';
-      out.textContent = `saved ${body.path} (${body.bytes} bytes)`;
+      out.textContent = `saved a new set in ${body.dir}: ${body.files.join(', ')} (controller ${body.path}, ${body.bytes} bytes)`;
     } catch (e) {
       out.textContent = `not saved: ${e}`;
       out.dataset.state = 'error';
@@ -363,8 +418,14 @@
       return;
     }
     $('model-info').textContent = `${info.model_source}: fr ${fmt(info.f_r_hz, 4)} Hz, ` +
-      `fz ${fmt(info.f_z_hz, 4)} Hz, design payload ${fmt(info.nominal_payload_kg, 3)} kg; ` +
-      `saves to ${info.save_dir}`;
+      `fz ${fmt(info.f_z_hz, 4)} Hz; simulated move with ${fmt(info.nominal_payload_kg, 3)} kg payload ` +
+      `unless set below; Save writes a new folder in ${info.save_dir}`;
+    setNumber('f_r', info.f_r_hz);
+    setNumber('f_z', info.f_z_hz);
+    const cm = info.commissioned;
+    setNumber('commissioned_max_error', cm ? cm.max_error_m : null, 1e3);
+    setNumber('commissioned_static_error', cm ? cm.static_error_m : null, 1e6);
+    drawFrf();
     for (const r of info.ranges) {
       const s = $(r.name);
       s.min = String(r.min);

@@ -81,7 +81,7 @@ const ROBUST_PREFILTERS: [(crate::design::PrefilterKind, f64); 5] = [
 /// attenuation, notches at `w_r` of growing width) is designed with the
 /// thesis' conditions (4.7)-(4.9) on the bounded model, its margins are
 /// checked over the identification's uncertainty box
-/// ([`crate::procedure::verdict::guaranteed_margins`]), and the fastest
+/// ([`crate::procedure::acceptance::guaranteed_margins`]), and the fastest
 /// velocity loop that keeps [`ROBUST_PHASE_MARGIN_DEG`] there wins; if none
 /// does, the one with the largest guaranteed margin.
 pub fn robust_design(
@@ -92,10 +92,10 @@ pub fn robust_design(
     knobs: &crate::design::DesignKnobs,
 ) -> Result<(
     ControllerDesign,
-    crate::procedure::verdict::GuaranteedMargins,
+    crate::procedure::acceptance::GuaranteedMargins,
     String,
 )> {
-    use crate::procedure::verdict::guaranteed_margins;
+    use crate::procedure::acceptance::guaranteed_margins;
     let mut tried = Vec::new();
     let input = DesignInput {
         model: *bounded,
@@ -117,7 +117,7 @@ pub fn robust_design(
     }
     let mut best: Option<(
         ControllerDesign,
-        crate::procedure::verdict::GuaranteedMargins,
+        crate::procedure::acceptance::GuaranteedMargins,
     )> = None;
     for d in candidates {
         let Ok(g) = guaranteed_margins(&d, bounded, m_c_sigma_kg, c_sigma_n_per_m) else {
@@ -130,7 +130,7 @@ pub fn robust_design(
             d.velocity_margins.crossover_rad_s / (2.0 * std::f64::consts::PI),
             g.velocity_phase_margin_deg
         ));
-        let ok = |g: &crate::procedure::verdict::GuaranteedMargins| {
+        let ok = |g: &crate::procedure::acceptance::GuaranteedMargins| {
             g.velocity_phase_margin_deg >= ROBUST_PHASE_MARGIN_DEG
                 && g.position_phase_margin_deg >= ROBUST_PHASE_MARGIN_DEG
         };

@@ -28,6 +28,12 @@ pub struct Identification {
     pub dead_time: DeadTime,
     /// The model summary.
     pub identified: IdentifiedModel,
+    /// Time of each excitation sample since the axis was taken, s.
+    pub excitation_time_s: Vec<f64>,
+    /// Torque command of each sample (holding torque plus PRBS), N m.
+    pub excitation_torque_nm: Vec<f64>,
+    /// Motor-side position of each sample, m.
+    pub excitation_position_m: Vec<f64>,
 }
 
 /// Stage 5: excite around `holding_nm` with amplitude `amplitude_nm` at
@@ -53,12 +59,15 @@ pub fn identification(
     let mut cmd = Vec::with_capacity(n);
     let mut act = Vec::with_capacity(n);
     let mut ang = Vec::with_capacity(n);
+    let mut pos = Vec::with_capacity(n);
+    let t_start = st.runner.busy_time_s();
     for _ in 0..n {
         let tau = holding_nm + prbs.step();
         let s = st.runner.step(tau, None)?;
         cmd.push(s.torque_command_nm);
         act.push(s.torque_actual_nm);
         ang.push(s.motor_angle_rad);
+        pos.push(s.position_m);
     }
     let (frf, fit, dead_time) = st.compute(|| -> Result<_> {
         // Below 0.4 f_s the PRBS spectrum and the Tustin/ZOH effects stay mild.
@@ -117,5 +126,8 @@ pub fn identification(
         fit,
         dead_time,
         identified,
+        excitation_time_s: (0..n).map(|k| t_start + k as f64 * ts).collect(),
+        excitation_torque_nm: cmd,
+        excitation_position_m: pos,
     })
 }

@@ -3,13 +3,14 @@
 //! to the start runs under the feedback cascade.
 
 use super::super::commission::{CommissioningConfig, DataSheet};
-use super::super::motion::TrackOptions;
 use super::super::result::{FrictionResult, Validation};
-use super::super::validation::{run_move, MoveResult};
+use super::super::validation::{
+    run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
+};
 use super::Stages;
 use crate::ident::fit::TwoMassFit;
 use crate::{Error, Result};
-use beltune_rt::control::{BeltStretch, CascadeConfig, Feedforward};
+use beltune_rt::control::CascadeConfig;
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 
 /// What stage 8 hands on.
@@ -154,21 +155,9 @@ pub fn validation_moves(
     let ts = st.runner.info().ts_s;
     let p = fit.params;
     let m_e = p.rigid_inertia();
-    let variants = [
-        Feedforward::none(),
-        Feedforward::linear(m_e, friction.linear_viscous_nm_s_per_rad),
-        Feedforward::nonlinear(m_e, friction.viscous_nm_s_per_rad, friction.coulomb_nm),
-    ];
-    let opts = TrackOptions {
-        preview_samples: preview,
-        belt_stretch: BeltStretch::On {
-            m_c_kg: p.m_c,
-            c_n_per_m: p.c,
-        },
-        check_following_error: true,
-        static_stretch_m: holding_nm / (p.i_t * p.c),
-    };
-    let move_samples = ((cfg.validation.settle_s + 1.5) / ts) as u64 * variants.len() as u64;
+    let opts = validation_track_options(&p, preview, holding_nm);
+    let move_samples =
+        ((cfg.validation.settle_s + 1.5) / ts) as u64 * FeedforwardVariant::ALL.len() as u64;
     st.start("validation moves", move_samples);
     let mut moves: Vec<MoveResult> = Vec::with_capacity(3);
     let planned = plan_validation_move(
@@ -202,11 +191,9 @@ pub fn validation_moves(
         position_max: datasheet.travel_max_m,
         ..planned.limits
     };
-    for ff in variants {
-        let mut c = *feedback;
-        c.feedforward = ff;
-        c.filter_desired_velocity = true;
-        c.feedforward_preview = true;
+    for variant in FeedforwardVariant::ALL {
+        // the same controller the tuning page simulates (issue 16)
+        let c = validation_controller(feedback, m_e, friction, variant);
         // Return to the start with the thesis' own limits (it is not measured).
         moves.push(run_move(
             st.runner,

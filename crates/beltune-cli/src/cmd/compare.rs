@@ -1,0 +1,29 @@
+//! `beltune compare A B`: a report comparing two commissionings (issue 16):
+//! both FRFs and fits, the loops and the moves overlaid, and the change of
+//! every parameter in percent.
+
+use beltune::procedure::compare::compare_report;
+use beltune::report::render_html;
+use std::path::PathBuf;
+
+/// Arguments of `beltune compare`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The first commissioning folder (the reference, "A").
+    pub a: PathBuf,
+    /// The second commissioning folder ("B"); changes are B against A.
+    pub b: PathBuf,
+    /// The report file to write (one self-contained HTML page).
+    #[arg(long, default_value = "compare.html")]
+    pub out: PathBuf,
+}
+
+/// Run the subcommand.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let report = compare_report(&args.a, &args.b)?;
+    let html = render_html(&report)?;
+    beltune::io::write_atomic(&args.out, html.as_bytes())?;
+    println!("{}", report.summary);
+    println!("wrote {}", args.out.display());
+    Ok(())
+}

@@ -1,0 +1,267 @@
+//! `beltune plant template`: an annotated plant TOML, every key with its
+//! meaning and unit, that `--plant FILE` reads unchanged. The values are those
+//! of a built-in plant (egc70 by default), so the file is a working start.
+
+use crate::term;
+use beltune::model::rigs::Plant;
+use std::path::PathBuf;
+
+/// Arguments of `beltune plant template`.
+#[derive(clap::Args)]
+pub struct TemplateArgs {
+    /// The built-in plant whose values the file starts from (egc70 physical;
+    /// sim-a, sim-b, sim-c linear two-mass sets).
+    #[arg(long, default_value = "egc70")]
+    pub plant: String,
+    /// Payload on the cart, kg (egc70 only; default 11.2 kg).
+    #[arg(long, allow_negative_numbers = true)]
+    pub payload: Option<f64>,
+    /// Write the file here (atomically) instead of printing it.
+    #[arg(long, value_name = "FILE.toml")]
+    pub out: Option<PathBuf>,
+}
+
+/// A group heading, or a key with its comment.
+enum Line {
+    Group(&'static str),
+    Key(&'static str, &'static str),
+}
+use Line::{Group, Key};
+
+/// The keys of a physical plant in the order of `PhysicalParams`, with comments.
+const PHYSICAL: &[Line] = &[
+    Group("drive train (thesis 2.8)"),
+    Key("theta_motor_kg_m2", "Theta_m: motor rotor inertia, kg m^2"),
+    Key("theta_coupling_kg_m2", "coupling (connection kit) inertia, kg m^2; counts on the motor side"),
+    Key("theta_gearbox_kg_m2", "Theta_g: gearbox inertia, kg m^2 (0 without gearbox)"),
+    Key("theta_driving_pulley_kg_m2", "Theta_r: inertia of the driving pulley, kg m^2"),
+    Key("theta_end_pulley_kg_m2", "inertia of the end (driven) pulley, kg m^2"),
+    Key("r_m", "r: effective pulley radius, m (feed per revolution / 2 pi)"),
+    Key("i_g", "i_g = omega_m / omega_g: gear ratio, 1 without gearbox"),
+    Group("belt (thesis 2.10)"),
+    Key("c_b_n", "c_b = E A: specific belt stiffness, N (a free segment of length l has c_b / l N/m)"),
+    Key("d_b_n_s", "specific belt damping, N s (a segment of length l has d_b / l N s/m)"),
+    Key("end_compliance_length_m", "l_e: equivalent free-belt length of tooth engagement and clamp per segment, m"),
+    Group("geometry"),
+    Key("pulley_distance_m", "l_3: distance between the pulley centres, m"),
+    Key("l_xi_m", "l_xi: driving pulley centre to cart centre at xi = 0, m"),
+    Key("cart_belt_span_m", "distance between the two belt clamps on the cart, m"),
+    Key("stroke_m", "usable stroke, m: the cart position xi ranges over [0, stroke_m]"),
+    Group("masses"),
+    Key("m_cart_kg", "moving mass of the empty cart (slide, mounting parts), kg"),
+    Key("payload_kg", "payload mounted on the cart, kg"),
+    Group("friction (thesis 2.21, 2.23)"),
+    Key("d_m_n_s_per_m", "d_m: motor-side viscous friction as translational equivalent, N s/m"),
+    Key("tau_c_motor_nm", "tau_c: motor-side Coulomb friction torque, N m"),
+    Key("d_c_n_s_per_m", "d_c: cart viscous friction, N s/m"),
+    Key("f_c_cart_n", "f_c: cart Coulomb friction force, N"),
+    Key("d_end_pulley_n_s_per_m", "end-pulley viscous friction, translational equivalent, N s/m"),
+    Key("tau_c_end_pulley_nm", "end-pulley Coulomb friction torque, N m"),
+    Group("installation and drive"),
+    Key("tilt_rad", "alpha: tilt against the horizontal, rad (optional, default 0; positive lifts the cart as xi grows)"),
+    Key("dead_time_s", "current-loop dead time, s (thesis 3.30)"),
+    Key("torque_max_nm", "torque limit of the drive, N m"),
+    Key("motor_rad_per_count", "motor encoder resolution, rad per count (2 pi / counts per revolution)"),
+    Key("ts_s", "sampling time of the drive, s"),
+];
+
+/// The keys of a linear plant, top level first, then the `[two_mass]` table.
+const LINEAR: &[Line] = &[
+    Group("drive"),
+    Key("dead_time_s", "current-loop dead time, s (thesis 3.30)"),
+    Key("torque_max_nm", "torque limit of the drive, N m"),
+    Key(
+        "motor_rad_per_count",
+        "motor encoder resolution, rad per count",
+    ),
+    Key("ts_s", "sampling time of the drive, s"),
+];
+
+/// The keys of the `[two_mass]` table of a linear plant (thesis 2.33, Table A.4).
+const TWO_MASS: &[Line] = &[
+    Key(
+        "theta_e",
+        "Theta_e: motor-side inertia (motor, coupling, gearbox, driving pulley), kg m^2",
+    ),
+    Key("m_c", "m_c: moving mass (cart and payload), kg"),
+    Key("c", "c: replacement belt stiffness (2.26), N/m"),
+    Key("d", "d: belt damping (2.27), N s/m (optional, default 0)"),
+    Key(
+        "d_m",
+        "d_m: motor viscous damping as translational equivalent, N s/m",
+    ),
+    Key("d_c", "d_c: cart viscous damping, N s/m"),
+    Key("i_t", "i_t = r / i_g: motor angle to belt travel, m/rad"),
+];
+
+/// A float as TOML: 12 significant digits ([`term::tidy`]), always with a
+/// fraction or an exponent so that it reads back as a float.
+fn toml_float(v: f64) -> String {
+    let s = term::tidy(v);
+    if s.contains(['.', 'e', 'E']) || !v.is_finite() {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+fn toml_value(v: &toml::Value) -> anyhow::Result<String> {
+    Ok(match v {
+        toml::Value::Float(f) => toml_float(*f),
+        toml::Value::Integer(_) | toml::Value::String(_) | toml::Value::Boolean(_) => v.to_string(),
+        other => anyhow::bail!("plant template: unexpected value {other}"),
+    })
+}
+
+/// Write `lines` for the keys of `table`; every key of the table must have a
+/// line and every line a key (so that the comments follow the struct).
+fn section(
+    out: &mut String,
+    lines: &[Line],
+    table: &toml::Table,
+    skip: &[&str],
+) -> anyhow::Result<()> {
+    let documented: Vec<&str> = lines
+        .iter()
+        .filter_map(|l| match l {
+            Key(k, _) => Some(*k),
+            Group(_) => None,
+        })
+        .collect();
+    if let Some(k) = table
+        .keys()
+        .find(|k| !skip.contains(&k.as_str()) && !documented.contains(&k.as_str()))
+    {
+        anyhow::bail!("plant template: key `{k}` has no comment");
+    }
+    for line in lines {
+        match line {
+            Group(g) => out.push_str(&format!("\n# ---- {g} ----\n")),
+            Key(k, comment) => {
+                let v = table
+                    .get(*k)
+                    .ok_or_else(|| anyhow::anyhow!("plant template: the plant has no `{k}`"))?;
+                out.push_str(&format!("# {comment}\n{k} = {}\n", toml_value(v)?));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The annotated TOML of `plant`; `name` says where its values come from.
+pub fn template(plant: &Plant, name: &str) -> anyhow::Result<String> {
+    let table = toml::Table::try_from(plant)?;
+    let kind = table
+        .get("kind")
+        .and_then(|k| k.as_str())
+        .unwrap_or("physical")
+        .to_string();
+    let mut out = format!(
+        "# beltune plant file ({kind}), written by `beltune plant template` with the values of `{name}`.\n\
+         # Edit the values for your axis, check them with `beltune plant show --plant FILE.toml`,\n\
+         # then commission with `beltune commission --plant FILE.toml`. SI units throughout;\n\
+         # every key is required unless its comment says otherwise, an unknown key is an error.\n\n\
+         kind = \"{kind}\"\n"
+    );
+    match plant {
+        Plant::Physical(_) => section(&mut out, PHYSICAL, &table, &["kind"])?,
+        Plant::Linear(_) => {
+            section(&mut out, LINEAR, &table, &["kind", "two_mass"])?;
+            let two_mass = table
+                .get("two_mass")
+                .and_then(|t| t.as_table())
+                .ok_or_else(|| anyhow::anyhow!("plant template: no [two_mass] table"))?;
+            out.push_str("\n# ---- two-mass model (thesis 2.33) ----\n[two_mass]\n");
+            section(&mut out, TWO_MASS, two_mass, &[])?;
+        }
+    }
+    Ok(out)
+}
+
+/// Run `beltune plant template`.
+pub fn run(args: TemplateArgs) -> anyhow::Result<()> {
+    let plant = beltune::model::builtin(&args.plant, args.payload)?;
+    let text = template(&plant, &args.plant)?;
+    match &args.out {
+        Some(path) => {
+            super::util::write_atomic(path, text.as_bytes())?;
+            eprintln!("wrote {}", path.display());
+        }
+        None => print!("{text}"),
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use beltune::model::rigs::BUILTIN_NAMES;
+
+    /// Relative difference allowed after the 12-digit print: 5e-12 of rounding,
+    /// with margin.
+    const REL_TOL: f64 = 1e-11;
+
+    fn close(a: &toml::Value, b: &toml::Value, path: &str) {
+        match (a, b) {
+            (toml::Value::Table(x), toml::Value::Table(y)) => {
+                assert_eq!(
+                    x.keys().collect::<Vec<_>>(),
+                    y.keys().collect::<Vec<_>>(),
+                    "{path}"
+                );
+                for (k, v) in x {
+                    close(v, &y[k], &format!("{path}.{k}"));
+                }
+            }
+            (toml::Value::Float(x), toml::Value::Float(y)) => {
+                assert!(
+                    (x - y).abs() <= REL_TOL * x.abs().max(y.abs()),
+                    "{path}: {x} vs {y}"
+                );
+            }
+            _ => assert_eq!(a, b, "{path}"),
+        }
+    }
+
+    /// Every built-in plant: the template parses back to the same plant (to
+    /// the printed precision) and every key carries a comment.
+    #[test]
+    fn the_template_reads_back_as_the_plant_it_was_made_from() {
+        for name in BUILTIN_NAMES {
+            let plant = beltune::model::builtin(name, None).unwrap();
+            let text = template(&plant, name).unwrap();
+            let back: Plant =
+                toml::from_str(&text).unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
+            back.validate().unwrap();
+            close(
+                &toml::Value::try_from(&plant).unwrap(),
+                &toml::Value::try_from(&back).unwrap(),
+                name,
+            );
+            for line in text.lines() {
+                assert!(line.chars().count() <= term::WIDTH, "{name}: {line}");
+            }
+            // Each `key = value` line follows a comment line.
+            let lines: Vec<&str> = text.lines().collect();
+            for (i, l) in lines.iter().enumerate() {
+                if l.contains(" = ") && !l.starts_with('#') && !l.starts_with("kind") {
+                    assert!(
+                        lines[i - 1].starts_with("# "),
+                        "{name}: `{l}` has no comment"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn floats_stay_floats_in_toml() {
+        assert_eq!(toml_float(1.0), "1.0");
+        assert_eq!(toml_float(0.0), "0.0");
+        assert_eq!(toml_float(4.5e-5), "4.5e-5");
+        assert_eq!(
+            toml_float(0.078 / (2.0 * std::f64::consts::PI)),
+            "0.0124140855612"
+        );
+    }
+}
