@@ -247,7 +247,8 @@ fn json_summary_has_the_documented_keys_and_the_run_s_numbers() {
         .iter()
         .map(|f| PathBuf::from(f.as_str().unwrap()))
         .collect();
-    assert_eq!(files.len(), 3);
+    // the three result files and the report's data files (frf, loops, moves)
+    assert_eq!(files.len(), 6);
     assert!(files.iter().all(|f| f.is_file()), "{files:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -348,7 +349,14 @@ fn a_forced_safety_stop_is_3_and_leaves_a_diagnostic() {
     assert_eq!(code(&o), 0, "{}", text(&o.stderr));
     assert_eq!(
         files_in(&out),
-        ["commissioning.json", "controller.toml", "report.html"]
+        [
+            "commissioning.json",
+            "controller.toml",
+            "frf.csv",
+            "loops.csv",
+            "moves.csv",
+            "report.html"
+        ]
     );
     assert!(!diag.exists());
     std::fs::remove_dir_all(&dir).unwrap();
@@ -485,7 +493,14 @@ fn limits_not_met_is_5_with_the_results_written() {
     );
     assert_eq!(
         files_in(&out),
-        ["commissioning.json", "controller.toml", "report.html"]
+        [
+            "commissioning.json",
+            "controller.toml",
+            "frf.csv",
+            "loops.csv",
+            "moves.csv",
+            "report.html"
+        ]
     );
     // The same run passes once the limit is what it achieved (a technician's own limit).
     let achieved = c["value_m"].as_f64().unwrap() * 1.01;
