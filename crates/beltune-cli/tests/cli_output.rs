@@ -465,14 +465,18 @@ fn an_infeasible_design_is_4() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Status 5: `sim-c` (Table A.13, a stiff light axis) commissions, but its
-/// validation move misses 1 mm: the results are written, the summary says
-/// so, the command says which limit.
+/// Status 5: egc70 commissions, but its validation move (about 0.64 mm) misses
+/// a technician's own limit of 0.2 mm: the results are written, the summary
+/// says so, the command says which limit. (`sim-c` used to miss the thesis'
+/// 1 mm; since issue 12 it validates with the fastest move it can do.)
 #[test]
 fn limits_not_met_is_5_with_the_results_written() {
     let dir = temp_dir("limits");
     let out = dir.join("out");
-    let o = commission(&out, &["--plant", "sim-c", "--quiet", "--json"]);
+    let o = commission(
+        &out,
+        &["--quiet", "--json", "--max-tracking-error", "0.0002"],
+    );
     assert_eq!(code(&o), 5, "{}", text(&o.stderr));
     let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(s["status"], "limits_not_met");
@@ -481,7 +485,7 @@ fn limits_not_met_is_5_with_the_results_written() {
     let c = &s["verdict"]["checks"][0];
     assert_eq!(c["name"], "max_tracking_error");
     assert_eq!(c["passed"], false);
-    assert!(c["value_m"].as_f64().unwrap() >= 1e-3);
+    assert!(c["value_m"].as_f64().unwrap() >= 2e-4);
     assert_eq!(
         c["value_m"],
         s["validation"]["max_tracking_error_nonlinear_m"]
@@ -506,13 +510,7 @@ fn limits_not_met_is_5_with_the_results_written() {
     let achieved = c["value_m"].as_f64().unwrap() * 1.01;
     let o = commission(
         &dir.join("out2"),
-        &[
-            "--plant",
-            "sim-c",
-            "--quiet",
-            "--max-tracking-error",
-            &achieved.to_string(),
-        ],
+        &["--quiet", "--max-tracking-error", &achieved.to_string()],
     );
     assert_eq!(code(&o), 0, "{}", text(&o.stderr));
     std::fs::remove_dir_all(&dir).unwrap();
