@@ -24,6 +24,27 @@ fn measured() -> PathBuf {
     p
 }
 
+/// `beltune identify` on the bench recording: 20 periods of 2500 samples, the
+/// first discarded, free inertia, current units.
+fn identify_measured() -> std::process::Command {
+    let mut c = bin();
+    c.args(["identify", "--csv"]).arg(measured()).args([
+        "--time",
+        "t_s",
+        "--input",
+        "iq_ref_A",
+        "--output",
+        "theta_motor_rad",
+        "--period-samples",
+        "2500",
+        "--skip-periods",
+        "1",
+        "--free-inertia",
+        "--current-units",
+    ]);
+    c
+}
+
 /// Run, expect failure as bad input (exit status 2) with ONE stderr line
 /// containing all `needles`.
 fn expect_error(args: &[&str], needles: &[&str]) {
@@ -42,26 +63,8 @@ fn identify_measured_bench_writes_model_and_frf() {
     let dir = tmpdir("measured");
     let json = dir.join("model.json");
     let frf = dir.join("frf.csv");
-    let out = bin()
-        .args(["identify", "--csv"])
-        .arg(measured())
-        .args([
-            "--time",
-            "t_s",
-            "--input",
-            "iq_ref_A",
-            "--output",
-            "theta_motor_rad",
-            "--period-samples",
-            "2500",
-            "--skip-periods",
-            "1",
-            "--free-inertia",
-            "--current-units",
-            "--actual-torque",
-            "iq_meas_A",
-            "--json",
-        ])
+    let out = identify_measured()
+        .args(["--actual-torque", "iq_meas_A", "--json"])
         .arg(&json)
         .arg("--frf-csv")
         .arg(&frf)
@@ -284,23 +287,7 @@ fn friction_from_a_recorded_motion() {
 fn identify_into_a_closed_pipe_ends_quietly_issue_11() {
     use std::os::unix::process::ExitStatusExt;
     use std::process::Stdio;
-    let mut child = bin()
-        .args(["identify", "--csv"])
-        .arg(measured())
-        .args([
-            "--time",
-            "t_s",
-            "--input",
-            "iq_ref_A",
-            "--output",
-            "theta_motor_rad",
-            "--period-samples",
-            "2500",
-            "--skip-periods",
-            "1",
-            "--free-inertia",
-            "--current-units",
-        ])
+    let mut child = identify_measured()
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
