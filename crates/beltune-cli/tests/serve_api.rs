@@ -5,6 +5,7 @@
 //! seam, so they can prove that a refused request never reaches the design; the
 //! design tests use the real library backend.
 
+use beltune::design::robust::{design_identified, DesignRule};
 use beltune_cli::serve;
 
 use serve::api::{
@@ -344,11 +345,31 @@ const JSON_REL_TOL: f64 = 1e-12;
 const MARGIN_TOL_DEG: f64 = 0.01;
 
 /// The design input built without the server: the built-in commissioning's.
-fn egc70_input() -> DesignInput {
-    // The page's default model (issue 16): what the commissioning of the built-in
-    // axis with the defaults of `beltune commission` identifies.
+/// The library's design of the page's default model (issue 16: what the
+/// commissioning of the built-in axis identifies) for `knobs`, by the
+/// commissioning's rule with exactly these knobs (issue 12).
+fn egc70_design(knobs: &DesignKnobs) -> beltune::Result<bdesign::ControllerDesign> {
     let (_, run) = serve::library::builtin_commissioning().unwrap();
-    run.design.input
+    let input = DesignInput {
+        model: run.fit.params,
+        ..run.design.input
+    };
+    design_identified(
+        &input,
+        input.friction.map(|f| f.viscous_nm_s_per_rad),
+        run.identified.m_c_sigma,
+        run.identified.c_sigma,
+        knobs,
+        DesignRule::Knobs,
+    )
+    .map(|r| r.design)
+}
+
+/// The knobs the robust rule chooses for the page's default model (issue 12:
+/// the page's defaults, what `beltune commission` delivers).
+fn egc70_defaults() -> DesignKnobs {
+    let (_, run) = serve::library::builtin_commissioning().unwrap();
+    run.design.knobs
 }
 
 fn close(a: f64, b: f64) -> bool {
@@ -372,9 +393,10 @@ fn valid_request_returns_the_library_design_with_consistent_plot_data() {
     let knobs = DesignKnobs {
         pm_velocity_deg: 55.0,
         prefilter: bdesign::PrefilterKind::Notch,
-        ..DesignKnobs::default()
+        filter_attenuation_db: None,
+        ..egc70_defaults()
     };
-    let d = bdesign::design(&egc70_input(), &knobs).unwrap();
+    let d = egc70_design(&knobs).unwrap();
     for (name, got, want) in [
         ("k_p", r.gains.k_p, d.k_p),
         ("k_i", r.gains.k_i, d.k_i),
@@ -524,7 +546,7 @@ fn empty_request_gives_the_design_defaults_and_dynamics_maps_to_the_documented_m
     let (status, body) = post_json(s.addr, "/api/design", "{}");
     assert_eq!(status, 200, "{body}");
     let r: DesignResponse = serde_json::from_str(&body).unwrap();
-    let d = bdesign::design(&egc70_input(), &DesignKnobs::default()).unwrap();
+    let d = egc70_design(&egc70_defaults()).unwrap();
     assert!(close(r.gains.k_p, d.k_p) && close(r.gains.k_i, d.k_i) && close(r.gains.k_pp, d.k_pp));
     assert_eq!(r.knobs.prefilter, PrefilterKind::Butterworth);
     assert_eq!(
@@ -573,7 +595,7 @@ fn infeasible_setting_is_422_with_the_library_reason() {
     let s = start(library(), "infeasible-lib");
     let mut found = 0;
     for json in EDGE_SETTINGS {
-        let lib = bdesign::design(&egc70_input(), &knobs_of(json));
+        let lib = egc70_design(&knobs_of(json));
         let (status, body) = post_json(s.addr, "/api/design", json);
         match lib {
             Ok(d) => {
@@ -613,9 +635,9 @@ fn save_writes_controller_toml_with_the_design() {
     let toml: toml::Value = toml::from_str(&text).unwrap();
     let knobs = DesignKnobs {
         pm_position_deg: 75.0,
-        ..DesignKnobs::default()
+        ..egc70_defaults()
     };
-    let d = bdesign::design(&egc70_input(), &knobs).unwrap();
+    let d = egc70_design(&knobs).unwrap();
     let gains = &toml["gains"];
     for (key, want) in [
         ("k_p_nm_s_per_rad", d.k_p),
@@ -719,7 +741,18 @@ fn commissioning_folder_model_is_designed_and_simulated() {
         viscous_nm_s_per_rad: 0.00253,
         coulomb_nm: 0.125,
     });
-    let d = bdesign::design(&input, &DesignKnobs::default()).unwrap();
+    // The commissioning's rule (issue 12) on the folder's fit and friction;
+    // the file gives no uncertainties (NaN: 5 %).
+    let d = design_identified(
+        &input,
+        Some(0.00253),
+        f64::NAN,
+        f64::NAN,
+        &DesignKnobs::default(),
+        DesignRule::Robust,
+    )
+    .unwrap()
+    .design;
     // i_t in the file is 78 mm / 2 pi to 17 digits, as in thesis_table_a4()
     const I_T_ROUNDING_REL: f64 = 1e-9;
     for (got, want) in [

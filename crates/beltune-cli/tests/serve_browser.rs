@@ -31,7 +31,8 @@ const WAIT: Duration = Duration::from_secs(60);
 const REL_TOL: f64 = 1e-12;
 /// Key presses on the slider (step 0.5 deg): 60 -> 55 deg.
 const LEFT_PRESSES: usize = 10;
-const PM_AFTER_DEG: f64 = 55.0;
+/// The robust rule's nominal 50 deg for egc70 (issue 12), 10 steps of 0.5 deg down.
+const PM_AFTER_DEG: f64 = 45.0;
 /// A setting the design library refuses for egc70 (checked below against the
 /// library): the slider's lower end, 20 deg velocity phase margin.
 const INFEASIBLE_PM_VELOCITY_DEG: f64 = 20.0;
@@ -63,9 +64,35 @@ fn free_port() -> u16 {
 
 fn egc70_input() -> DesignInput {
     // The page's default model (issue 16): what the commissioning of the built-in
-    // axis with the defaults of `beltune commission` identifies.
+    // axis with the defaults of `beltune commission` identifies (the fit).
     let (_, run) = serve::library::builtin_commissioning().unwrap();
-    run.design.input
+    DesignInput {
+        model: run.fit.params,
+        ..run.design.input
+    }
+}
+
+/// The page's defaults: the knobs the robust rule chose (issue 12).
+fn egc70_defaults() -> DesignKnobs {
+    let (_, run) = serve::library::builtin_commissioning().unwrap();
+    run.design.knobs
+}
+
+/// The library's design of `input` with exactly `knobs`, by the
+/// commissioning's rule (issue 12; the folder gives no uncertainties).
+fn lib_design(
+    input: &DesignInput,
+    knobs: &DesignKnobs,
+) -> beltune::Result<bdesign::ControllerDesign> {
+    beltune::design::robust::design_identified(
+        input,
+        input.friction.map(|f| f.viscous_nm_s_per_rad),
+        f64::NAN,
+        f64::NAN,
+        knobs,
+        beltune::design::robust::DesignRule::Knobs,
+    )
+    .map(|r| r.design)
 }
 
 /// `input` as a `beltune design --model` TOML file (`{:?}` prints the shortest
@@ -93,13 +120,23 @@ fn write_model_toml(input: &DesignInput, path: &Path) {
 
 /// Run `beltune design --model MODEL --pm-velocity PM --json OUT`: its JSON (the
 /// summary keys at the top level), or the one-line error on stderr.
-fn beltune_design(model: &Path, pm_velocity_deg: f64, out: &Path) -> Result<Value, String> {
+/// `beltune design` with the page's knobs `k` (every knob given, so that the
+/// command designs with exactly these knobs, as the page does).
+fn beltune_design(model: &Path, k: &DesignKnobs, out: &Path) -> Result<Value, String> {
     let o = Command::new(env!("CARGO_BIN_EXE_beltune"))
         .arg("design")
         .arg("--model")
         .arg(model)
         .arg("--pm-velocity")
-        .arg(pm_velocity_deg.to_string())
+        .arg(k.pm_velocity_deg.to_string())
+        .arg("--pm-position")
+        .arg(k.pm_position_deg.to_string())
+        .arg("--resonance-suppression-db")
+        .arg(k.resonance_suppression_db.to_string())
+        .arg("--prefilter")
+        .arg(format!("{:?}", k.prefilter).to_lowercase())
+        .arg("--filter-attenuation-db")
+        .arg(k.attenuation_db().to_string())
         .arg("--json")
         .arg(out)
         .output()
@@ -310,7 +347,8 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         c.goto(&format!("http://{addr}/")).await.unwrap();
         let seq0 = wait_render(&c, 0).await;
         let input = egc70_input();
-        let d0 = bdesign::design(&input, &DesignKnobs::default()).unwrap();
+        let defaults = egc70_defaults();
+        let d0 = lib_design(&input, &defaults).unwrap();
         check_against(&c, &d0).await;
         let path0 = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "d").await;
         let points: usize = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "data-points")
@@ -338,20 +376,17 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
             .parse()
             .unwrap();
         assert_eq!(value, PM_AFTER_DEG);
-        let d1 = bdesign::design(
-            &input,
-            &DesignKnobs {
-                pm_velocity_deg: PM_AFTER_DEG,
-                ..DesignKnobs::default()
-            },
-        )
-        .unwrap();
+        let k1 = DesignKnobs {
+            pm_velocity_deg: PM_AFTER_DEG,
+            ..defaults
+        };
+        let d1 = lib_design(&input, &k1).unwrap();
         assert!(d1.k_p != d0.k_p, "the design did not change");
         check_against(&c, &d1).await;
         // ... and what `beltune design` prints for the same knobs
         let model_toml = root_dir.join("egc70-model.toml");
         write_model_toml(&input, &model_toml);
-        let cli = beltune_design(&model_toml, PM_AFTER_DEG, &root_dir.join("design.json"))
+        let cli = beltune_design(&model_toml, &k1, &root_dir.join("design.json"))
             .expect("beltune design failed");
         for (id, key) in [
             ("k_p", "k_p"),
@@ -403,11 +438,11 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         );
 
         // Infeasible: the velocity phase margin at the slider's lower end (Home key).
-        let lib = bdesign::design(
+        let lib = lib_design(
             &input,
             &DesignKnobs {
                 pm_velocity_deg: INFEASIBLE_PM_VELOCITY_DEG,
-                ..DesignKnobs::default()
+                ..defaults
             },
         );
         let reason = lib.expect_err("the infeasible setting is feasible for the library").to_string();

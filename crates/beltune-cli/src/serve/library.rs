@@ -210,6 +210,8 @@ pub struct LibraryTuner {
     friction: FrictionResult,
     /// `m_c` and `c` one-sigma uncertainties of the identification.
     sigmas: (f64, f64),
+    /// The knobs the robust rule chose for the model (the page's defaults).
+    defaults: DesignKnobs,
     nominal_payload_kg: f64,
     move_plant: MovePlant,
     /// Torque limit written to controller.toml and used in the move: the
@@ -250,8 +252,23 @@ impl LibraryTuner {
             relative_residual: 0.0,
             holding_torque_nm: f.holding_torque_nm.unwrap_or(0.0),
         };
+        let sigmas = (model.m_c_sigma, model.c_sigma);
+        // The page's defaults are the robust rule's choice for this model
+        // (what `beltune commission` delivers); a knob the user sets
+        // overrides that choice, the others keep it.
+        let defaults = design_identified(
+            &input,
+            input.friction.map(|f| f.viscous_nm_s_per_rad),
+            sigmas.0,
+            sigmas.1,
+            &DesignKnobs::default(),
+            DesignRule::Robust,
+        )
+        .map(|r| r.design.knobs)
+        .unwrap_or_default();
         Ok(LibraryTuner {
-            sigmas: (model.m_c_sigma, model.c_sigma),
+            sigmas,
+            defaults,
             model,
             input,
             friction,
@@ -289,7 +306,7 @@ impl LibraryTuner {
                 "built-in {name} commissioned at start-up ({} kg payload, seed {BUILTIN_SEED})",
                 rigs::EGC70_DEFAULT_PAYLOAD_KG
             ),
-            params: run.design.input.model,
+            params: run.fit.params,
             dead_time_s: run.design.input.dead_time_s,
             friction: Some(FrictionTotals {
                 viscous_nm_s_per_rad: run.friction.viscous_nm_s_per_rad,
@@ -302,7 +319,10 @@ impl LibraryTuner {
             json: Some(json),
             m_c_sigma: run.identified.m_c_sigma,
             c_sigma: run.identified.c_sigma,
-            input: Some(run.design.input),
+            input: Some(DesignInput {
+                model: run.fit.params,
+                ..run.design.input
+            }),
             torque_max_nm: None,
         };
         let mut tuner = LibraryTuner::new(model)?;
@@ -312,14 +332,22 @@ impl LibraryTuner {
         Ok(tuner)
     }
 
-    /// What the design library receives for `knobs` (defaults from
-    /// [`DesignKnobs::default`], the one-knob mapping from [`Dynamics`]).
+    /// What the design library receives for `knobs`: the robust rule's
+    /// choice for the model ([`Self::default_knobs`]) with every knob the
+    /// request sets replaced (a new prefilter kind takes its own default
+    /// attenuation unless one is given), the one-knob mapping from
+    /// [`Dynamics`].
     pub fn design_knobs(&self, knobs: &Knobs) -> Result<DesignKnobs, TuneError> {
-        let mut k = DesignKnobs::default();
+        let mut k = self.defaults;
         if let Some(p) = knobs.prefilter {
+            if to_design_kind(p) != k.prefilter {
+                k.filter_attenuation_db = None;
+            }
             k.prefilter = to_design_kind(p);
         }
-        k.filter_attenuation_db = knobs.filter_attenuation_db;
+        if knobs.filter_attenuation_db.is_some() {
+            k.filter_attenuation_db = knobs.filter_attenuation_db;
+        }
         if let Some(x) = knobs.dynamics {
             let d = Dynamics::new(x).map_err(|e| TuneError::Infeasible(e.to_string()))?;
             return Ok(d.knobs(&k));
@@ -336,33 +364,27 @@ impl LibraryTuner {
         Ok(k)
     }
 
-    /// The design for `knobs`, by the commissioning's rule
-    /// ([`beltune::design::robust::design_identified`]): without an expert
-    /// knob the robust rule (what `beltune commission` delivers for the same
-    /// model), with one the thesis' conditions for exactly those knobs. Every
-    /// library error is caused by the knobs (the model was validated at
-    /// start-up), so all are [`TuneError::Infeasible`] with the library's
-    /// message.
+    /// The knobs of an empty request: the robust rule's choice for the model.
+    pub fn default_knobs(&self) -> DesignKnobs {
+        self.defaults
+    }
+
+    /// The design for `knobs` ([`Self::design_knobs`]) with the thesis'
+    /// conditions on the commissioning's design model
+    /// ([`beltune::design::robust::design_identified`], [`DesignRule::Knobs`]):
+    /// an empty request gives exactly what `beltune commission` delivers for
+    /// the same model. Every library error is caused by the knobs (the model
+    /// was validated at start-up), so all are [`TuneError::Infeasible`] with
+    /// the library's message.
     pub fn design(&self, knobs: &Knobs) -> Result<ControllerDesign, TuneError> {
         let k = self.design_knobs(knobs)?;
-        let explicit = knobs.prefilter.is_some()
-            || knobs.filter_attenuation_db.is_some()
-            || knobs.dynamics.is_some()
-            || knobs.pm_velocity_deg.is_some()
-            || knobs.pm_position_deg.is_some()
-            || knobs.resonance_suppression_db.is_some();
-        let rule = if explicit {
-            DesignRule::Knobs
-        } else {
-            DesignRule::Robust
-        };
         design_identified(
             &self.input,
             self.input.friction.map(|f| f.viscous_nm_s_per_rad),
             self.sigmas.0,
             self.sigmas.1,
             &k,
-            rule,
+            DesignRule::Knobs,
         )
         .map(|r| r.design)
         .map_err(|e| TuneError::Infeasible(e.to_string()))
@@ -519,7 +541,7 @@ impl Tuner for LibraryTuner {
     }
 
     fn defaults(&self) -> EffectiveKnobs {
-        let k = DesignKnobs::default();
+        let k = self.defaults;
         EffectiveKnobs {
             prefilter: from_design_kind(k.prefilter),
             pm_velocity_deg: k.pm_velocity_deg,
