@@ -19,6 +19,10 @@ pub struct ServeStats {
     pub cycles: u64,
     /// Watchdog expiries.
     pub watchdog_expiries: u64,
+    /// SYNC0 cycles in OP that found no new outputs (the master's frame
+    /// came after the SYNC0 it was meant for: the drive applied the previous
+    /// torque once more, as a real drive does).
+    pub cycles_without_new_outputs: u64,
 }
 
 /// Nanoseconds of the monotonic clock.
@@ -126,13 +130,14 @@ pub fn serve(
         if frame.len() < 14 || frame[6] & 0x02 != 0 {
             continue;
         }
+        let cycles = drive.firmware.cycles();
+        let faults = drive.faults();
+        if faults.take(&faults.drop_requests, cycles) {
+            continue;
+        }
         if drive.process_frame(frame) {
             frames += 1;
-            let drop = drive
-                .faults()
-                .drop_frames
-                .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1))
-                .is_ok();
+            let drop = faults.take(&faults.drop_frames, cycles);
             if drop {
                 continue;
             }
@@ -154,5 +159,6 @@ pub fn serve(
         frames,
         cycles: s.cycles,
         watchdog_expiries: s.watchdog_expiries,
+        cycles_without_new_outputs: s.cycles_without_new_outputs,
     })
 }
