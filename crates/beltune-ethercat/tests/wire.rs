@@ -69,7 +69,11 @@ fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
         "the motor turned: {} counts",
         m.motor_counts - start
     );
-    eprintln!("300 cycles of 1 ms in {:.3} s", t0.elapsed().as_secs_f64());
+    let (exchanges, missed) = axis.cycle_counts();
+    eprintln!(
+        "300 cycles of 1 ms in {:.3} s; {exchanges} exchanges, {missed} SYNC0 cycles missed",
+        t0.elapsed().as_secs_f64()
+    );
     let t1 = std::time::Instant::now();
     let st = axis.quick_stop().unwrap();
     eprintln!("quick stop {st:?} in {:.3} s", t1.elapsed().as_secs_f64());
