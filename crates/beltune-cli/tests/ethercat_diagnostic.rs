@@ -176,12 +176,12 @@ fn frames_lost_on_the_bus_end_with_the_safety_stop_diagnostic() {
 
 #[test]
 fn the_drives_watchdog_ends_with_the_safety_stop_diagnostic() {
-    // the drive hears nothing for 150 cycles (a master that stops sending);
+    // the drive hears nothing for 120 cycles (a master that stops sending);
     // this master bridges that many lost frames, so that it sees what the
     // drive did meanwhile: its SM watchdog (100 ms) removed the torque
     let (err, dir) = commission_with(
         "watchdog",
-        |f| f.drop_requests.store(150, Ordering::Relaxed),
+        |f| f.drop_requests.store(120, Ordering::Relaxed),
         |m| m.max_lost_frames = 200,
     );
     let json = check_diagnostic(&err, &dir, "drive_fault");

@@ -67,6 +67,9 @@ pub struct Faults {
     /// Requests to drop before they reach the drive (a master that stops
     /// sending: the drive's SM watchdog runs out), counted down per frame.
     pub drop_requests: AtomicU32,
+    /// Answers to hold back until the next frame arrives (on the wire: a late
+    /// answer, after the master's frame timeout), counted down per frame.
+    pub late_answers: AtomicU32,
     /// The faults above take effect once the drive has run this many cycles
     /// (0: at once), so that a test can aim at a stage of a commissioning.
     pub after_cycles: AtomicU64,

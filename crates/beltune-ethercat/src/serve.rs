@@ -104,6 +104,7 @@ pub fn serve(
     let t0 = monotonic_ns();
     // the drive's local clock starts at 1 s (it has been on for a while)
     let local = |now: u64| now - t0 + 1_000_000_000;
+    let mut held: Option<Vec<u8>> = None;
     while !stop.load(Ordering::Relaxed) {
         let mut from: libc::sockaddr_ll = unsafe { std::mem::zeroed() };
         let mut len = std::mem::size_of::<libc::sockaddr_ll>() as libc::socklen_t;
@@ -141,17 +142,28 @@ pub fn serve(
             if drop {
                 continue;
             }
-            // SAFETY: sending our buffer on our socket to the interface it came from.
-            unsafe {
-                libc::sendto(
-                    sock.0,
-                    frame.as_ptr() as *const libc::c_void,
-                    frame.len(),
-                    0,
-                    &from as *const _ as *const libc::sockaddr,
-                    len,
-                );
+            let send = |bytes: &[u8]| {
+                // SAFETY: sending a buffer we own on our socket to the interface it came from.
+                unsafe {
+                    libc::sendto(
+                        sock.0,
+                        bytes.as_ptr() as *const libc::c_void,
+                        bytes.len(),
+                        0,
+                        &from as *const _ as *const libc::sockaddr,
+                        len,
+                    );
+                }
+            };
+            // a held-back answer goes out late, before the answer to this frame
+            if let Some(old) = held.take() {
+                send(&old);
             }
+            if faults.take(&faults.late_answers, cycles) {
+                held = Some(frame.to_vec());
+                continue;
+            }
+            send(frame);
         }
     }
     let s = drive.esc.stats();

@@ -23,11 +23,13 @@ fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
     };
     let stop = Arc::new(AtomicBool::new(false));
     let (ns, drive_if, stop2) = (net.ns.clone(), net.drive_if.clone(), Arc::clone(&stop));
+    let (faults_tx, drive_faults) = std::sync::mpsc::channel();
     let server = std::thread::spawn(move || -> Result<(State, u64), String> {
         beltune_ethercat::netns::enter(&ns)?;
         let plant = rigs::builtin("egc70", None).unwrap();
         let mut drive =
             VirtualDrive::new(&plant, DriveConfig::default()).map_err(|e| e.to_string())?;
+        let _ = faults_tx.send(drive.faults());
         let stats = beltune_ethercat::serve::serve(&drive_if, &mut drive, &stop2)
             .map_err(|e| e.to_string())?;
         Ok((drive.firmware.state(), stats.frames))
@@ -58,6 +60,12 @@ fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
     assert_eq!(axis.identity().name, "beltune virtual servo");
     // distributed clocks over the veth pair: SYNC0 configured and running
     assert!(axis.identity().dc, "SYNC0 in use on the wire");
+    // issue 14: one late answer (sent after the master's frame timeout, before
+    // the answer to the next frame) is one lost frame, bridged; before, it
+    // aborted every exchange after it (each answer came after its exchange
+    // had been given up)
+    let faults = drive_faults.recv().unwrap();
+    faults.late_answers.store(1, Ordering::Relaxed);
     let start = axis.last().motor_counts;
     let mut m = axis.last();
     let t0 = std::time::Instant::now();
@@ -73,6 +81,12 @@ fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
     eprintln!(
         "300 cycles of 1 ms in {:.3} s; {exchanges} exchanges, {missed} SYNC0 cycles missed",
         t0.elapsed().as_secs_f64()
+    );
+    assert_eq!(faults.late_answers.load(Ordering::Relaxed), 0, "held back");
+    assert_eq!(
+        axis.transport().stray_frames(),
+        1,
+        "the late answer was dropped"
     );
     let t1 = std::time::Instant::now();
     let st = axis.quick_stop().unwrap();

@@ -43,6 +43,8 @@ pub const QUICK_STOP_MAX_LOST: u32 = 50;
 pub const DEVICE_NAME: u16 = 0x1008;
 /// Longest device name read, bytes.
 pub const DEVICE_NAME_MAX: usize = 128;
+/// Shortest frame timeout of a transport in simulated time (in-process), s.
+pub const SIMULATED_FRAME_TIMEOUT_S: f64 = 50e-3;
 /// The frame storage a caller owns for one axis (about 18 KiB).
 pub type Storage = PduStorage<MAX_FRAMES, MAX_PDU_DATA>;
 
@@ -204,10 +206,18 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
             reason: "already in use by another axis".into(),
         })?;
         let mut transport = make_transport(tx, rx)?;
+        // A transport in simulated time answers at once; its frame timeout
+        // only detects injected losses, and a wall-clock one shorter than a
+        // shared host's scheduling gaps would fail the start-up at random.
+        let frame_timeout_s = if transport.real_time() {
+            cfg.frame_timeout_s.max(1e-4)
+        } else {
+            cfg.frame_timeout_s.max(SIMULATED_FRAME_TIMEOUT_S)
+        };
         let maindevice = MainDevice::new(
             pdu_loop,
             Timeouts {
-                pdu: Duration::from_secs_f64(cfg.frame_timeout_s.max(1e-4)),
+                pdu: Duration::from_secs_f64(frame_timeout_s),
                 state_transition: Duration::from_secs(5),
                 ..Timeouts::default()
             },
