@@ -34,6 +34,14 @@ pub fn set_realtime_priority(priority: u8) -> Result<(), Error> {
     Ok(())
 }
 
+/// Put the calling thread back under normal scheduling (`SCHED_OTHER`),
+/// e.g. once the bus is closed and only files are written.
+pub fn set_normal() {
+    let param = libc::sched_param { sched_priority: 0 };
+    // SAFETY: plain libc call on the calling thread; dropping a priority needs no rights.
+    unsafe { libc::sched_setscheduler(0, libc::SCHED_OTHER, &param) };
+}
+
 /// The calling thread's scheduling policy and priority (`SCHED_FIFO` = 1).
 pub fn current_policy() -> (i32, i32) {
     let mut param = libc::sched_param { sched_priority: 0 };
@@ -68,6 +76,8 @@ mod tests {
             }
             let me = current_policy();
             let child = std::thread::spawn(current_policy).join().unwrap();
+            set_normal();
+            assert_eq!(current_policy(), (libc::SCHED_OTHER, 0), "back to normal");
             Ok((me, child))
         })
         .join()

@@ -798,6 +798,10 @@ fn run_ethercat(
     let _ = axis.stop_drive();
     let (exchanges, missed) = axis.cycle_counts();
     drop(axis);
+    if args.realtime_priority.is_some() {
+        // the bus is closed: the report is no real-time work
+        beltune_ethercat::sched::set_normal();
+    }
     if !args.quiet && id.dc {
         // a late exchange makes the drive apply the previous torque again
         let line = format!(
