@@ -138,7 +138,14 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
     ("Safety", &["travel_window", "following_error_max"]),
     (
         "EtherCAT drive",
-        &["ethercat", "subdevice", "cycle_us", "frame_timeout_ms"],
+        &[
+            "ethercat",
+            "subdevice",
+            "cycle_us",
+            "frame_timeout_ms",
+            "realtime_priority",
+            "no_dc",
+        ],
     ),
     (
         "Design",
