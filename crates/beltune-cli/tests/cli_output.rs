@@ -352,7 +352,9 @@ fn a_forced_safety_stop_is_3_and_leaves_a_diagnostic() {
         [
             "commissioning.json",
             "controller.toml",
+            "excitation.csv",
             "frf.csv",
+            "friction.csv",
             "loops.csv",
             "moves.csv",
             "report.html"
@@ -500,7 +502,9 @@ fn limits_not_met_is_5_with_the_results_written() {
         [
             "commissioning.json",
             "controller.toml",
+            "excitation.csv",
             "frf.csv",
+            "friction.csv",
             "loops.csv",
             "moves.csv",
             "report.html"

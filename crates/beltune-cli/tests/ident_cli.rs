@@ -1,11 +1,9 @@
 //! End-to-end tests of `beltune identify` and `beltune friction` on CSV files.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_beltune"))
-}
+use common::bench::{self, bin, measured};
+use std::path::{Path, PathBuf};
 
 fn tmpdir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("beltune-ident-cli-{}-{tag}", std::process::id()));
@@ -13,30 +11,13 @@ fn tmpdir(tag: &str) -> PathBuf {
     d
 }
 
-fn measured() -> PathBuf {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../data/twomass-bench/multisine-a.csv.gz");
-    assert!(
-        p.exists(),
-        "measured data missing: {} (it ships in the repository, data/twomass-bench)",
-        p.display()
-    );
-    p
-}
-
 /// `beltune identify` on the bench recording: 20 periods of 2500 samples, the
 /// first discarded, free inertia, current units.
 fn identify_measured() -> std::process::Command {
-    let mut c = bin();
-    c.args(["identify", "--csv"]).arg(measured()).args([
+    let mut c = bench::on_record("identify");
+    c.args([
         "--time",
         "t_s",
-        "--input",
-        "iq_ref_A",
-        "--output",
-        "theta_motor_rad",
-        "--period-samples",
-        "2500",
         "--skip-periods",
         "1",
         "--free-inertia",

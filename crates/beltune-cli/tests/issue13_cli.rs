@@ -3,26 +3,18 @@
 //! belongs to the model-file schema, issue 15; item 1 and 13 are in
 //! `serve_limits.rs`), plus the output history of issue 16 item 4.
 
+mod common;
+
+use common::bench::{self, bin, measured};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_beltune"))
-}
 
 fn tmpdir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("beltune-i13-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn measured() -> PathBuf {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../data/twomass-bench/multisine-a.csv.gz");
-    assert!(p.exists(), "measured data missing: {}", p.display());
-    p
 }
 
 /// Run with a deadline: a hang is a test failure, not a stuck suite.
@@ -118,17 +110,8 @@ fn commission_recorded(out: Option<&Path>) -> Command {
 
 /// [`commission_recorded`] without `--torque-limit`.
 fn commission_recorded_without_limit(out: Option<&Path>) -> Command {
-    let mut c = bin();
-    c.args(["commission", "--quiet", "--csv"])
-        .arg(measured())
-        .args([
-            "--input",
-            "iq_ref_A",
-            "--output",
-            "theta_motor_rad",
-            "--period-samples",
-            "2500",
-        ]);
+    let mut c = bench::on_record("commission");
+    c.arg("--quiet");
     if let Some(out) = out {
         c.arg("--out").arg(out);
     }

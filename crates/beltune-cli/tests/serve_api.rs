@@ -5,15 +5,15 @@
 //! seam, so they can prove that a refused request never reaches the design; the
 //! design tests use the real library backend.
 
+mod common;
+
 use beltune_cli::serve;
 
+use common::http::{self, error_message, Server};
 use serve::api::{
-    DefaultAttenuation, DesignResponse, EffectiveKnobs, ErrorBody, Knobs, PrefilterKind,
-    MAX_BODY_BYTES,
+    DefaultAttenuation, DesignResponse, EffectiveKnobs, Knobs, PrefilterKind, MAX_BODY_BYTES,
 };
 use serve::tuner::{ModelSummary, TuneError, Tuner};
-use serve::AppState;
-use std::io::{Read, Write};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -28,31 +28,13 @@ const DOUBLE_INFEASIBLE_ABOVE_DEG: f64 = 85.0;
 
 impl Tuner for CountingTuner {
     fn model(&self) -> ModelSummary {
-        ModelSummary {
-            source: "test double".into(),
-            f_r_hz: 107.0,
-            f_z_hz: 19.6,
-            nominal_payload_kg: 11.2,
-            measured_frf: None,
-            commissioned: None,
-        }
+        http::double_model()
     }
     fn defaults(&self) -> EffectiveKnobs {
-        EffectiveKnobs {
-            prefilter: PrefilterKind::Butterworth,
-            pm_velocity_deg: 60.0,
-            pm_position_deg: 80.0,
-            resonance_suppression_db: -10.0,
-            filter_attenuation_db: -3.0,
-            dynamics: None,
-            payload_kg: 11.2,
-        }
+        http::double_defaults()
     }
     fn default_attenuation(&self) -> DefaultAttenuation {
-        DefaultAttenuation {
-            butterworth: -3.0,
-            notch: -6.0,
-        }
+        http::double_attenuation()
     }
     fn tune(&self, knobs: &Knobs) -> Result<DesignResponse, TuneError> {
         self.calls.fetch_add(1, Ordering::SeqCst);
@@ -72,42 +54,9 @@ impl Tuner for CountingTuner {
     }
 }
 
-struct Server {
-    addr: SocketAddr,
-    dir: PathBuf,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
-
-/// Start the server on its own runtime in a background thread (it lives until
-/// the test process ends) and return its address.
+/// Start `tuner` behind the server (see [`http::start`]).
 fn start(tuner: Arc<dyn Tuner>, tag: &str) -> Server {
-    let dir = std::env::temp_dir().join(format!("beltune-serve-api-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let state = AppState {
-        tuner,
-        save_dir: dir.clone(),
-        loopback_only: true,
-    };
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let rt = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(1)
-            .enable_all()
-            .build()
-            .unwrap();
-        rt.block_on(async move {
-            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-            tx.send(listener.local_addr().unwrap()).unwrap();
-            serve::serve(listener, state).await.unwrap();
-        });
-    });
-    let addr = rx.recv().unwrap();
-    Server { addr, dir }
+    http::start(tuner, &format!("api-{tag}"), 1)
 }
 
 /// One HTTP/1.1 request with `Connection: close`; returns (status, body).
@@ -130,30 +79,11 @@ fn http_host(
     content_type: Option<&str>,
     body: &[u8],
 ) -> (u16, String) {
-    let mut stream = std::net::TcpStream::connect(addr).unwrap();
-    let mut head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\nContent-Length: {}\r\n",
-        body.len()
-    );
+    let mut headers = format!("Host: {host}\r\n");
     if let Some(ct) = content_type {
-        head.push_str(&format!("Content-Type: {ct}\r\n"));
+        headers.push_str(&format!("Content-Type: {ct}\r\n"));
     }
-    head.push_str("\r\n");
-    stream.write_all(head.as_bytes()).unwrap();
-    // The server may answer (413) and stop reading before the whole body is sent.
-    let _ = stream.write_all(body);
-    let mut raw = Vec::new();
-    let _ = stream.read_to_end(&mut raw);
-    let text = String::from_utf8_lossy(&raw).into_owned();
-    let (head, body) = text
-        .split_once("\r\n\r\n")
-        .unwrap_or_else(|| panic!("no HTTP response: {text:?}"));
-    let status: u16 = head
-        .split_whitespace()
-        .nth(1)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("bad status line: {head}"));
-    (status, body.to_string())
+    http::request(addr, method, path, &headers, body)
 }
 
 fn post_json(addr: SocketAddr, path: &str, body: &str) -> (u16, String) {
@@ -164,14 +94,6 @@ fn post_json(addr: SocketAddr, path: &str, body: &str) -> (u16, String) {
         Some("application/json"),
         body.as_bytes(),
     )
-}
-
-fn error_message(status: u16, body: &str) -> String {
-    let e: ErrorBody = serde_json::from_str(body).unwrap_or_else(|err| {
-        panic!("status {status}: body is not {{\"error\"}} JSON ({err}): {body}")
-    });
-    assert!(!e.error.is_empty(), "empty error message");
-    e.error
 }
 
 fn counting() -> Arc<CountingTuner> {
@@ -842,25 +764,7 @@ fn save_reproduces_the_controller_toml_of_beltune_commission() {
     );
     let original = std::fs::read_to_string(dir.join(serve::CONTROLLER_FILE)).unwrap();
     let model = serve::library::load_commissioning(&dir).unwrap();
-    let state = AppState {
-        tuner: Arc::new(LibraryTuner::new(model).unwrap()),
-        save_dir: dir.clone(),
-        loopback_only: true,
-    };
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let rt = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(1)
-            .enable_all()
-            .build()
-            .unwrap();
-        rt.block_on(async move {
-            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-            tx.send(listener.local_addr().unwrap()).unwrap();
-            serve::serve(listener, state).await.unwrap();
-        });
-    });
-    let addr = rx.recv().unwrap();
+    let addr = http::start_in(Arc::new(LibraryTuner::new(model).unwrap()), &dir, 1);
     let (status, body) = post_json(addr, "/api/save", "{}");
     assert_eq!(status, 200, "{body}");
     let resp: serve::api::SaveResponse = serde_json::from_str(&body).unwrap();

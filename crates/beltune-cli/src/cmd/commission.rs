@@ -27,7 +27,7 @@ use beltune::procedure::outputs::{
     build_report, commissioning_json, controller_toml, data_files, recorded_data_files,
     recorded_outputs,
 };
-use beltune::procedure::outputs::{write_outputs_with_data, OutputTarget};
+use beltune::procedure::outputs::{write_outputs_with_data, AxisRecord, OutputTarget};
 use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
 use beltune::provenance::Provenance;
@@ -645,7 +645,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let name = args.plant.clone().unwrap_or_else(|| "egc70".to_string());
     let provenance = Provenance::of_this_process(Some(args.seed.unwrap_or(1)));
-    let json = commissioning_json(&run, &name, Some(truth.clone()), provenance.clone());
+    let axis_record = AxisRecord::simulated(&name, &plant, start_position, args.seed.unwrap_or(1));
+    let json = commissioning_json(
+        &run,
+        &name,
+        Some(truth.clone()),
+        axis_record,
+        provenance.clone(),
+    );
     let toml = controller_toml(
         &run.design,
         &run.friction,
@@ -747,7 +754,10 @@ fn run_ethercat(
         args.subdevice, id.name
     );
     let provenance = Provenance::of_this_process(None);
-    let json = commissioning_json(&run, &name, None, provenance.clone());
+    let axis_record = AxisRecord::Ethercat {
+        source: name.clone(),
+    };
+    let json = commissioning_json(&run, &name, None, axis_record, provenance.clone());
     let toml = controller_toml(
         &run.design,
         &run.friction,
