@@ -290,3 +290,47 @@ fn identify_into_a_closed_pipe_ends_quietly_issue_11() {
 fn libc_sigpipe() -> i32 {
     13
 }
+
+/// Issue 16: data that cannot be fitted (here a record without a resonance:
+/// the output is the input, scaled) is bad input, exit status 2, with the
+/// reason; not status 1 (an internal failure).
+#[test]
+fn a_record_that_cannot_be_fitted_is_bad_input_issue_16() {
+    let dir = tmpdir("unfittable");
+    // a periodic +-1 sequence of 256 samples (a fixed linear congruential
+    // generator), 10 periods, sampled at 10 kHz
+    let mut state: u32 = 12345;
+    let period: Vec<f64> = (0..256)
+        .map(|_| {
+            state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
+            if state >> 31 == 1 {
+                1.0
+            } else {
+                -1.0
+            }
+        })
+        .collect();
+    let mut s = String::from("t_s,u,y\n");
+    for k in 0..2560 {
+        let u = period[k % 256];
+        s.push_str(&format!("{},{u},{}\n", k as f64 * 1e-4, 0.5 * u));
+    }
+    let f = write(&dir, "flat.csv", &s);
+    expect_error(
+        &[
+            "identify",
+            "--csv",
+            &f,
+            "--time",
+            "t_s",
+            "--input",
+            "u",
+            "--output",
+            "y",
+            "--period-samples",
+            "256",
+        ],
+        &["fit failed", "resonance"],
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

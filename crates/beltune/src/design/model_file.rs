@@ -469,13 +469,37 @@ impl ModelFile {
                 friction,
             }
         };
-        file.design_input(None)?.validate()?;
-        if let Some(t) = file.identified.torque_max_nm {
-            crate::error::require_positive("torque_max_nm", t)?;
-        }
-        if let Some(ts) = file.identified.ts_s {
-            crate::error::require_positive("ts_s", ts)?;
-        }
+        let checked = (|| -> Result<()> {
+            file.design_input(None)?.validate()?;
+            if let Some(t) = file.identified.torque_max_nm {
+                crate::error::require_positive("torque_max_nm", t)?;
+            }
+            if let Some(ts) = file.identified.ts_s {
+                crate::error::require_positive("ts_s", ts)?;
+            }
+            Ok(())
+        })();
+        // The file's name and its own spelling of the key (current units:
+        // `torque_max_a`), not the library's (issue 13 item 14).
+        checked.map_err(|e| match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                reason,
+            } => {
+                let value = crate::error::short_number(value);
+                let key = match file.identified.units {
+                    ModelUnits::Current => crate::units::current_key(&name).unwrap_or(name),
+                    ModelUnits::Torque => name,
+                };
+                perr(if key == "ts_s" && file.identified.ts_s.is_none() {
+                    format!("at the default sampling time {value} s: {reason}")
+                } else {
+                    format!("`{key}` = {value}: {reason}")
+                })
+            }
+            e => e,
+        })?;
         Ok(file)
     }
 
@@ -657,6 +681,14 @@ mod tests {
         let e = ModelFile::parse(newer, "n.json").unwrap_err();
         assert!(e.to_string().contains("newer"), "{e}");
         let lim = TOML.to_string() + "torque_max_nm = -3\n";
-        assert!(ModelFile::parse(&lim, "x.toml").is_err());
+        let e = ModelFile::parse(&lim, "x.toml").unwrap_err().to_string();
+        assert!(e.starts_with("x.toml: `torque_max_nm` = -3"), "{e}");
+        // the file's own spelling of the key in current units (issue 13 item 14)
+        let lim = TOML.to_string() + "units = \"current\"\ntorque_max_a = -3\n";
+        let e = ModelFile::parse(&lim, "x.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("`torque_max_a` = -3") && !e.contains("_nm"),
+            "{e}"
+        );
     }
 }
