@@ -275,7 +275,7 @@ impl LibraryTuner {
                 plant,
                 ..
             }) => (
-                MovePlant::Simulated(name.clone(), Box::new(plant.clone())),
+                MovePlant::Simulated(name.clone(), plant.clone()),
                 payload_kg.unwrap_or(0.0),
             ),
             _ => (MovePlant::Identified, 0.0),

@@ -73,7 +73,7 @@ pub enum AxisRecord {
         /// Noise seed of the simulation.
         seed: u64,
         /// Every parameter of the simulated plant (payload and tilt included).
-        plant: crate::model::rigs::Plant,
+        plant: Box<crate::model::rigs::Plant>,
     },
     /// Recorded data (CSV): no simulator truth.
     Recorded {
@@ -104,7 +104,7 @@ impl AxisRecord {
             payload_kg,
             start_position_m,
             seed,
-            plant: plant.clone(),
+            plant: Box::new(plant.clone()),
         }
     }
 }
