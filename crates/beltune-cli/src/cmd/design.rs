@@ -62,10 +62,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         model.design_ts_s(args.ts),
         &format!("{}: the sampling time ts_s", args.model.display()),
     )?;
-    let input = model.design_input(args.ts)?;
     let knobs = args.knobs.knobs()?;
-    let d = design::design(&input, &knobs)
-        .map_err(|e| super::util::in_flag_words(e.into(), &super::util::KNOB_FLAGS))?;
+    let d = model
+        .design(args.ts, &knobs, args.knobs.rule())
+        .map_err(|e| super::util::in_flag_words(e.into(), &super::util::KNOB_FLAGS))?
+        .design;
     if !model.identified.dead_time_measured {
         println!(
             "dead time:  not measured; {} ms assumed (thesis 3.30)",

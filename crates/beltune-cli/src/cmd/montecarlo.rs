@@ -63,7 +63,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?);
     let ranges = Ranges::default();
     let cfg = CommissioningConfig {
-        robust_design: !args.thesis_design,
+        design_rule: if args.thesis_design {
+            beltune::design::robust::DesignRule::Thesis
+        } else {
+            beltune::design::robust::DesignRule::Robust
+        },
         ..CommissioningConfig::default()
     };
     let first = args.first;

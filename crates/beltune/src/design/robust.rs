@@ -232,6 +232,56 @@ pub fn robust_design(
     })
 }
 
+/// Which rule turns an identified model into a controller.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DesignRule {
+    /// [`robust_design`] on the [`design_model`] (the commissioning's default):
+    /// prefilter and nominal margins chosen for the guarantee.
+    #[default]
+    Robust,
+    /// The thesis' conditions (4.1)-(4.14) with exactly the given knobs, on
+    /// the [`design_model`] (an expert's choice; the guarantee is evaluated).
+    Knobs,
+    /// The thesis' design with the given knobs on the fit as identified
+    /// (friction lumped into damping), for comparison.
+    Thesis,
+}
+
+/// The design for an identified model: `input.model` is the fit as
+/// identified, `viscous_nm_s_per_rad` the viscous friction the
+/// constant-velocity runs measured (`None` before or without them: 0, the
+/// conservative pure integrator), `m_c_sigma_kg`, `c_sigma_n_per_m` the fit's
+/// one-sigma uncertainties (NaN: 5 %). The commissioning, `beltune design`
+/// and the tuning page all call this, so they agree for the same model.
+pub fn design_identified(
+    input: &DesignInput,
+    viscous_nm_s_per_rad: Option<f64>,
+    m_c_sigma_kg: f64,
+    c_sigma_n_per_m: f64,
+    knobs: &DesignKnobs,
+    rule: DesignRule,
+) -> Result<RobustDesign> {
+    let model = design_model(&input.model, viscous_nm_s_per_rad.unwrap_or(0.0));
+    let on_model = DesignInput { model, ..*input };
+    let d = match rule {
+        DesignRule::Robust => {
+            return robust_design(&on_model, knobs, m_c_sigma_kg, c_sigma_n_per_m)
+        }
+        DesignRule::Knobs => design(&on_model, knobs)?,
+        DesignRule::Thesis => design(input, knobs)?,
+    };
+    let guaranteed = guaranteed_margins(&d, &model, m_c_sigma_kg, c_sigma_n_per_m)?;
+    Ok(RobustDesign {
+        meets_guarantee: guaranteed.velocity_phase_margin_deg >= GUARANTEED_PHASE_MARGIN_DEG
+            && guaranteed.position_phase_margin_deg >= GUARANTEED_POSITION_PHASE_MARGIN_DEG,
+        design: d,
+        guaranteed,
+        candidates_designed: 1,
+        candidates_checked: 1,
+    })
+}
+
 /// Width of the uncertainty box in standard deviations of the fit.
 pub const UNCERTAINTY_SIGMAS: f64 = 2.0;
 

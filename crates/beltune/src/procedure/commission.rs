@@ -26,6 +26,7 @@ use super::runner::Runner;
 use super::safety::StopCapability;
 use super::stages::{self, Stages};
 use super::validation::{MoveResult, MoveSpec};
+use crate::design::robust::DesignRule;
 use crate::design::{ControllerDesign, DesignKnobs, FrictionParams};
 use crate::ident::dead_time::DeadTime;
 use crate::ident::etfe::Frf;
@@ -256,11 +257,14 @@ pub struct CommissioningConfig {
     pub validation: MoveSpec,
     /// Largest following error allowed in closed-loop stages, m.
     pub following_error_max_m: f64,
-    /// The design rule for lightly damped axes ([`crate::design::robust`],
-    /// issue 12, the default): friction separated from damping, the prefilter
-    /// chosen for margins that hold over the identification's uncertainty.
-    /// Off: the thesis' design (4.1)-(4.14) on the fit as identified.
-    pub robust_design: bool,
+    /// How the controller is designed from the identified model
+    /// ([`crate::design::robust`]): by default the robust rule for lightly
+    /// damped axes (issue 12: friction separated from damping, prefilter and
+    /// nominal margins chosen for margins that hold over the
+    /// identification's uncertainty); [`DesignRule::Knobs`] uses exactly
+    /// [`Self::knobs`]; [`DesignRule::Thesis`] the thesis' design on the fit as
+    /// identified.
+    pub design_rule: DesignRule,
 }
 
 impl Default for CommissioningConfig {
@@ -273,7 +277,7 @@ impl Default for CommissioningConfig {
             friction_run_m: 0.1,
             validation: MoveSpec::default(),
             following_error_max_m: 0.05,
-            robust_design: true,
+            design_rule: DesignRule::Robust,
         }
     }
 }
@@ -483,11 +487,11 @@ pub fn commission(
             &designed.design.input,
             cfg,
             &ident.fit,
-            fr.result.viscous_nm_s_per_rad,
+            Some(fr.result.viscous_nm_s_per_rad),
         )
     })?;
     let guaranteed = robust.guaranteed;
-    let tried = if cfg.robust_design {
+    let tried = if cfg.design_rule == DesignRule::Robust {
         format!(
             "{} candidate designs, {} checked over the uncertainty{}",
             robust.candidates_designed,
@@ -498,6 +502,8 @@ pub fn commission(
                 "; none meets the guarantee, the most robust kept"
             }
         )
+    } else if cfg.design_rule == DesignRule::Knobs {
+        "the configured knobs on the design model".into()
     } else {
         "the thesis design on the fit as identified".into()
     };

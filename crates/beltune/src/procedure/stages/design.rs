@@ -4,8 +4,8 @@
 
 use super::super::commission::{cascade_from_design, CommissioningConfig};
 use super::Stages;
-use crate::design::robust::{design_model, robust_design, RobustDesign};
-use crate::design::{design, ControllerDesign, DesignInput};
+use crate::design::robust::{design_identified, RobustDesign};
+use crate::design::{ControllerDesign, DesignInput};
 use crate::ident::fit::TwoMassFit;
 use crate::Result;
 use beltune_rt::control::CascadeConfig;
@@ -40,7 +40,7 @@ pub fn design_stage(
         ts_s: ts,
         friction: None,
     };
-    let des = st.compute(|| design_rule(&input, cfg, fit, 0.0))?.design;
+    let des = st.compute(|| design_rule(&input, cfg, fit, None))?.design;
     let feedback = cascade_from_design(&des, torque_max_nm, holding_nm)?;
     st.runner.set_stop_controller(feedback);
     let line = format!(
@@ -62,39 +62,30 @@ pub fn design_stage(
 }
 
 /// The configured design rule on `fit` with the measured viscous friction
-/// `viscous_nm_s_per_rad` (N m s/rad at the motor): the robust design on the
-/// design model ([`crate::design::robust`], the default), or with
-/// [`CommissioningConfig::robust_design`] off the thesis' design (4.1)-(4.14)
-/// on the fit as identified (its guaranteed margins still evaluated).
+/// `viscous_nm_s_per_rad` (N m s/rad at the motor; `None` before the friction
+/// runs): [`crate::design::robust::design_identified`] with
+/// [`CommissioningConfig::design_rule`].
 pub fn design_rule(
     input: &DesignInput,
     cfg: &CommissioningConfig,
     fit: &TwoMassFit,
-    viscous_nm_s_per_rad: f64,
+    viscous_nm_s_per_rad: Option<f64>,
 ) -> Result<RobustDesign> {
     let (m_c_sigma, c_sigma) = fit
         .uncertainty
         .map(|u| (u.m_c, u.c))
         .unwrap_or((f64::NAN, f64::NAN));
-    let model = design_model(&fit.params, viscous_nm_s_per_rad);
-    if cfg.robust_design {
-        let input = DesignInput { model, ..*input };
-        return robust_design(&input, &cfg.knobs, m_c_sigma, c_sigma);
-    }
+    let rule = cfg.design_rule;
     let input = DesignInput {
         model: fit.params,
         ..*input
     };
-    let d = design(&input, &cfg.knobs)?;
-    let guaranteed = crate::design::robust::guaranteed_margins(&d, &model, m_c_sigma, c_sigma)?;
-    Ok(RobustDesign {
-        meets_guarantee: guaranteed.velocity_phase_margin_deg
-            >= crate::design::robust::GUARANTEED_PHASE_MARGIN_DEG
-            && guaranteed.position_phase_margin_deg
-                >= crate::design::robust::GUARANTEED_POSITION_PHASE_MARGIN_DEG,
-        design: d,
-        guaranteed,
-        candidates_designed: 1,
-        candidates_checked: 1,
-    })
+    design_identified(
+        &input,
+        viscous_nm_s_per_rad,
+        m_c_sigma,
+        c_sigma,
+        &cfg.knobs,
+        rule,
+    )
 }
