@@ -149,6 +149,7 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
             "resonance_suppression_db",
             "filter_attenuation_db",
             "dynamics",
+            "thesis_design",
         ],
     ),
     (

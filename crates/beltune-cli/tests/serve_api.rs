@@ -256,6 +256,7 @@ fn page_and_assets_are_embedded_and_self_contained() {
 
 // ---------- the real backend: beltune::design on the built-in egc70 ----------
 
+use beltune::design::robust::{design_identified, DesignRule};
 use beltune::design::{self as bdesign, DesignInput, DesignKnobs, FrictionParams};
 use serve::library::{LibraryTuner, PLOT_POINTS};
 
@@ -266,6 +267,14 @@ const JSON_REL_TOL: f64 = 1e-12;
 const MARGIN_TOL_DEG: f64 = 0.01;
 
 /// The design input built without the server: the built-in commissioning's.
+fn from_kind(k: bdesign::PrefilterKind) -> PrefilterKind {
+    match k {
+        bdesign::PrefilterKind::Butterworth => PrefilterKind::Butterworth,
+        bdesign::PrefilterKind::Notch => PrefilterKind::Notch,
+        bdesign::PrefilterKind::None => PrefilterKind::None,
+    }
+}
+
 fn egc70_input() -> DesignInput {
     // The page's default model (issue 16): what the commissioning of the built-in
     // axis with the defaults of `beltune commission` identifies.
@@ -446,9 +455,24 @@ fn empty_request_gives_the_design_defaults_and_dynamics_maps_to_the_documented_m
     let (status, body) = post_json(s.addr, "/api/design", "{}");
     assert_eq!(status, 200, "{body}");
     let r: DesignResponse = serde_json::from_str(&body).unwrap();
-    let d = bdesign::design(&egc70_input(), &DesignKnobs::default()).unwrap();
+    // without expert knobs: the commissioning's design rule on the identified model
+    let (_, run) = serve::library::builtin_commissioning().unwrap();
+    let input = DesignInput {
+        model: run.fit.params,
+        ..run.design.input
+    };
+    let d = design_identified(
+        &input,
+        input.friction.map(|f| f.viscous_nm_s_per_rad),
+        run.identified.m_c_sigma,
+        run.identified.c_sigma,
+        &DesignKnobs::default(),
+        DesignRule::Robust,
+    )
+    .unwrap()
+    .design;
     assert!(close(r.gains.k_p, d.k_p) && close(r.gains.k_i, d.k_i) && close(r.gains.k_pp, d.k_pp));
-    assert_eq!(r.knobs.prefilter, PrefilterKind::Butterworth);
+    assert_eq!(r.knobs.prefilter, from_kind(d.knobs.prefilter));
     assert_eq!(
         r.knobs.payload_kg,
         beltune::model::rigs::EGC70_DEFAULT_PAYLOAD_KG
@@ -641,7 +665,17 @@ fn commissioning_folder_model_is_designed_and_simulated() {
         viscous_nm_s_per_rad: 0.00253,
         coulomb_nm: 0.125,
     });
-    let d = bdesign::design(&input, &DesignKnobs::default()).unwrap();
+    // the design rule; the file has no fit uncertainty (NaN: 5 % assumed)
+    let d = design_identified(
+        &input,
+        Some(0.00253),
+        f64::NAN,
+        f64::NAN,
+        &DesignKnobs::default(),
+        DesignRule::Robust,
+    )
+    .unwrap()
+    .design;
     // i_t in the file is 78 mm / 2 pi to 17 digits, as in thesis_table_a4()
     const I_T_ROUNDING_REL: f64 = 1e-9;
     for (got, want) in [

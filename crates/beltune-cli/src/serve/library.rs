@@ -256,6 +256,9 @@ pub struct LibraryTuner {
     friction: FrictionResult,
     /// `m_c` and `c` one-sigma uncertainties of the identification.
     sigmas: (f64, f64),
+    /// The knobs the design rule chooses without expert knobs (the page's
+    /// defaults: a request that only repeats the rule's prefilter is the rule's design).
+    rule_knobs: DesignKnobs,
     nominal_payload_kg: f64,
     move_plant: MovePlant,
     /// Torque limit written to controller.toml and used in the move: the
@@ -309,15 +312,21 @@ impl LibraryTuner {
             relative_residual: 0.0,
             holding_torque_nm: f.holding_torque_nm.unwrap_or(0.0),
         };
-        Ok(LibraryTuner {
+        let mut tuner = LibraryTuner {
             sigmas: (model.m_c_sigma, model.c_sigma),
+            rule_knobs: DesignKnobs::default(),
             model,
             input,
             friction,
             nominal_payload_kg,
             move_plant,
             torque_max_nm,
-        })
+        };
+        tuner.rule_knobs = tuner
+            .design(&Knobs::default())
+            .map_err(|e| anyhow::anyhow!("the design rule on {}: {e}", tuner.model.source))?
+            .knobs;
+        Ok(tuner)
     }
 
     /// Tuner for the built-in egc70 axis: the model [`builtin_commissioning`]
@@ -352,7 +361,10 @@ impl LibraryTuner {
                 "built-in {name} commissioned at start-up ({} kg payload, seed {BUILTIN_SEED})",
                 rigs::EGC70_DEFAULT_PAYLOAD_KG
             ),
-            params: run.design.input.model,
+            // the identified model: the design rule derives its design model
+            // from it (design::robust::design_model), as the commissioning did;
+            // `run.design.input.model` is that derived model already
+            params: run.fit.params,
             dead_time_s: run.design.input.dead_time_s,
             friction: Some(FrictionTotals {
                 viscous_nm_s_per_rad: run.friction.viscous_nm_s_per_rad,
@@ -365,7 +377,10 @@ impl LibraryTuner {
             json: Some(json),
             m_c_sigma: run.identified.m_c_sigma,
             c_sigma: run.identified.c_sigma,
-            input: Some(run.design.input),
+            input: Some(DesignInput {
+                model: run.fit.params,
+                ..run.design.input
+            }),
             torque_max_nm: Some(plant.info().torque_max_nm),
             units: ModelUnits::Torque,
             axis: Some(axis),
@@ -408,7 +423,9 @@ impl LibraryTuner {
     /// message.
     pub fn design(&self, knobs: &Knobs) -> Result<ControllerDesign, TuneError> {
         let k = self.design_knobs(knobs)?;
-        let explicit = knobs.prefilter.is_some()
+        let explicit = knobs
+            .prefilter
+            .is_some_and(|p| to_design_kind(p) != self.rule_knobs.prefilter)
             || knobs.filter_attenuation_db.is_some()
             || knobs.dynamics.is_some()
             || knobs.pm_velocity_deg.is_some()
@@ -617,7 +634,7 @@ impl Tuner for LibraryTuner {
     }
 
     fn defaults(&self) -> EffectiveKnobs {
-        let k = DesignKnobs::default();
+        let k = self.rule_knobs;
         EffectiveKnobs {
             prefilter: from_design_kind(k.prefilter),
             pm_velocity_deg: k.pm_velocity_deg,
