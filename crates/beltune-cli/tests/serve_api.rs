@@ -473,6 +473,8 @@ fn empty_request_gives_the_design_defaults_and_dynamics_maps_to_the_documented_m
     .design;
     assert!(close(r.gains.k_p, d.k_p) && close(r.gains.k_i, d.k_i) && close(r.gains.k_pp, d.k_pp));
     assert_eq!(r.knobs.prefilter, from_kind(d.knobs.prefilter));
+    // (the knobs the rule chose are echoed; /api/info shows the thesis defaults
+    // the expert sliders start from)
     assert_eq!(
         r.knobs.payload_kg,
         beltune::model::rigs::EGC70_DEFAULT_PAYLOAD_KG

@@ -256,9 +256,6 @@ pub struct LibraryTuner {
     friction: FrictionResult,
     /// `m_c` and `c` one-sigma uncertainties of the identification.
     sigmas: (f64, f64),
-    /// The knobs the design rule chooses without expert knobs (the page's
-    /// defaults: a request that only repeats the rule's prefilter is the rule's design).
-    rule_knobs: DesignKnobs,
     nominal_payload_kg: f64,
     move_plant: MovePlant,
     /// Torque limit written to controller.toml and used in the move: the
@@ -312,21 +309,15 @@ impl LibraryTuner {
             relative_residual: 0.0,
             holding_torque_nm: f.holding_torque_nm.unwrap_or(0.0),
         };
-        let mut tuner = LibraryTuner {
+        Ok(LibraryTuner {
             sigmas: (model.m_c_sigma, model.c_sigma),
-            rule_knobs: DesignKnobs::default(),
             model,
             input,
             friction,
             nominal_payload_kg,
             move_plant,
             torque_max_nm,
-        };
-        tuner.rule_knobs = tuner
-            .design(&Knobs::default())
-            .map_err(|e| anyhow::anyhow!("the design rule on {}: {e}", tuner.model.source))?
-            .knobs;
-        Ok(tuner)
+        })
     }
 
     /// Tuner for the built-in egc70 axis: the model [`builtin_commissioning`]
@@ -423,9 +414,10 @@ impl LibraryTuner {
     /// message.
     pub fn design(&self, knobs: &Knobs) -> Result<ControllerDesign, TuneError> {
         let k = self.design_knobs(knobs)?;
+        // the page always sends its prefilter: the default one is no expert knob
         let explicit = knobs
             .prefilter
-            .is_some_and(|p| to_design_kind(p) != self.rule_knobs.prefilter)
+            .is_some_and(|p| to_design_kind(p) != DesignKnobs::default().prefilter)
             || knobs.filter_attenuation_db.is_some()
             || knobs.dynamics.is_some()
             || knobs.pm_velocity_deg.is_some()
@@ -634,7 +626,7 @@ impl Tuner for LibraryTuner {
     }
 
     fn defaults(&self) -> EffectiveKnobs {
-        let k = self.rule_knobs;
+        let k = DesignKnobs::default();
         EffectiveKnobs {
             prefilter: from_design_kind(k.prefilter),
             pm_velocity_deg: k.pm_velocity_deg,
