@@ -15,7 +15,7 @@ pub const EXIT_STATUSES: [(i32, &str); 7] = [
     ),
     (
         ExitStatus::BadInput as i32,
-        "bad input: an unknown flag, a value out of range, a malformed file",
+        "bad input: a bad flag or value, a malformed file, data that cannot be fitted",
     ),
     (
         ExitStatus::SafetyStop as i32,

@@ -12,6 +12,7 @@
 
 use beltune_cli::serve;
 
+use beltune::design::robust::{design_identified, DesignRule};
 use beltune::design::{self as bdesign, DesignInput, DesignKnobs};
 use fantoccini::{Client, ClientBuilder, Locator};
 use serde_json::{json, Value};
@@ -29,10 +30,10 @@ const CHROMIUM: &str = "/usr/bin/chromium";
 const WAIT: Duration = Duration::from_secs(60);
 /// JSON round-trips f64 exactly and the page keeps the full value in data-value.
 const REL_TOL: f64 = 1e-12;
-/// Key presses on the slider (step 0.5 deg): 60 -> 55 deg.
+/// Key presses on the slider (step 0.5 deg): 5 deg below where it starts.
 const LEFT_PRESSES: usize = 10;
-/// The robust rule's nominal 50 deg for egc70 (issue 12), 10 steps of 0.5 deg down.
-const PM_AFTER_DEG: f64 = 45.0;
+/// How far the slider moves the velocity phase margin, deg (0.5 deg steps).
+const PM_STEP_DEG: f64 = 5.0;
 /// A setting the design library refuses for egc70 (checked below against the
 /// library): the slider's lower end, 20 deg velocity phase margin.
 const INFEASIBLE_PM_VELOCITY_DEG: f64 = 20.0;
@@ -64,35 +65,9 @@ fn free_port() -> u16 {
 
 fn egc70_input() -> DesignInput {
     // The page's default model (issue 16): what the commissioning of the built-in
-    // axis with the defaults of `beltune commission` identifies (the fit).
+    // axis with the defaults of `beltune commission` identifies.
     let (_, run) = serve::library::builtin_commissioning().unwrap();
-    DesignInput {
-        model: run.fit.params,
-        ..run.design.input
-    }
-}
-
-/// The page's defaults: the knobs the robust rule chose (issue 12).
-fn egc70_defaults() -> DesignKnobs {
-    let (_, run) = serve::library::builtin_commissioning().unwrap();
-    run.design.knobs
-}
-
-/// The library's design of `input` with exactly `knobs`, by the
-/// commissioning's rule (issue 12; the folder gives no uncertainties).
-fn lib_design(
-    input: &DesignInput,
-    knobs: &DesignKnobs,
-) -> beltune::Result<bdesign::ControllerDesign> {
-    beltune::design::robust::design_identified(
-        input,
-        input.friction.map(|f| f.viscous_nm_s_per_rad),
-        f64::NAN,
-        f64::NAN,
-        knobs,
-        beltune::design::robust::DesignRule::Knobs,
-    )
-    .map(|r| r.design)
+    run.design.input
 }
 
 /// `input` as a `beltune design --model` TOML file (`{:?}` prints the shortest
@@ -120,23 +95,13 @@ fn write_model_toml(input: &DesignInput, path: &Path) {
 
 /// Run `beltune design --model MODEL --pm-velocity PM --json OUT`: its JSON (the
 /// summary keys at the top level), or the one-line error on stderr.
-/// `beltune design` with the page's knobs `k` (every knob given, so that the
-/// command designs with exactly these knobs, as the page does).
-fn beltune_design(model: &Path, k: &DesignKnobs, out: &Path) -> Result<Value, String> {
+fn beltune_design(model: &Path, pm_velocity_deg: f64, out: &Path) -> Result<Value, String> {
     let o = Command::new(env!("CARGO_BIN_EXE_beltune"))
         .arg("design")
         .arg("--model")
         .arg(model)
         .arg("--pm-velocity")
-        .arg(k.pm_velocity_deg.to_string())
-        .arg("--pm-position")
-        .arg(k.pm_position_deg.to_string())
-        .arg("--resonance-suppression-db")
-        .arg(k.resonance_suppression_db.to_string())
-        .arg("--prefilter")
-        .arg(format!("{:?}", k.prefilter).to_lowercase())
-        .arg("--filter-attenuation-db")
-        .arg(k.attenuation_db().to_string())
+        .arg(pm_velocity_deg.to_string())
         .arg("--json")
         .arg(out)
         .output()
@@ -347,8 +312,23 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         c.goto(&format!("http://{addr}/")).await.unwrap();
         let seq0 = wait_render(&c, 0).await;
         let input = egc70_input();
-        let defaults = egc70_defaults();
-        let d0 = lib_design(&input, &defaults).unwrap();
+        // the page's defaults: the commissioning's design rule on the identified model
+        let d0 = {
+            let (_, run) = serve::library::builtin_commissioning().unwrap();
+            design_identified(
+                &DesignInput {
+                    model: run.fit.params,
+                    ..run.design.input
+                },
+                run.design.input.friction.map(|f| f.viscous_nm_s_per_rad),
+                run.identified.m_c_sigma,
+                run.identified.c_sigma,
+                &DesignKnobs::default(),
+                DesignRule::Robust,
+            )
+            .unwrap()
+            .design
+        };
         check_against(&c, &d0).await;
         let path0 = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "d").await;
         let points: usize = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "data-points")
@@ -375,18 +355,23 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
             .unwrap()
             .parse()
             .unwrap();
-        assert_eq!(value, PM_AFTER_DEG);
-        let k1 = DesignKnobs {
-            pm_velocity_deg: PM_AFTER_DEG,
-            ..defaults
-        };
-        let d1 = lib_design(&input, &k1).unwrap();
+        // the slider starts at the knobs the design rule chose
+        let pm_after_deg = d0.knobs.pm_velocity_deg - PM_STEP_DEG;
+        assert_eq!(value, pm_after_deg);
+        let d1 = bdesign::design(
+            &input,
+            &DesignKnobs {
+                pm_velocity_deg: pm_after_deg,
+                ..DesignKnobs::default()
+            },
+        )
+        .unwrap();
         assert!(d1.k_p != d0.k_p, "the design did not change");
         check_against(&c, &d1).await;
         // ... and what `beltune design` prints for the same knobs
         let model_toml = root_dir.join("egc70-model.toml");
         write_model_toml(&input, &model_toml);
-        let cli = beltune_design(&model_toml, &k1, &root_dir.join("design.json"))
+        let cli = beltune_design(&model_toml, pm_after_deg, &root_dir.join("design.json"))
             .expect("beltune design failed");
         for (id, key) in [
             ("k_p", "k_p"),
@@ -408,7 +393,7 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         }
         // The move numbers and traces are the server's (deterministic, seeded simulation).
         let knobs = serve::api::DesignRequest {
-            pm_velocity_deg: Some(PM_AFTER_DEG),
+            pm_velocity_deg: Some(pm_after_deg),
             ..Default::default()
         }
         .validate()
@@ -438,11 +423,11 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         );
 
         // Infeasible: the velocity phase margin at the slider's lower end (Home key).
-        let lib = lib_design(
+        let lib = bdesign::design(
             &input,
             &DesignKnobs {
                 pm_velocity_deg: INFEASIBLE_PM_VELOCITY_DEG,
-                ..defaults
+                ..DesignKnobs::default()
             },
         );
         let reason = lib.expect_err("the infeasible setting is feasible for the library").to_string();

@@ -27,7 +27,7 @@ use beltune::procedure::outputs::{
     build_report, commissioning_json, controller_toml, data_files, recorded_data_files,
     recorded_outputs,
 };
-use beltune::procedure::outputs::{write_outputs_with_data, OutputTarget};
+use beltune::procedure::outputs::{write_outputs_with_data, AxisRecord, OutputTarget};
 use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
 use beltune::provenance::Provenance;
@@ -699,7 +699,14 @@ fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
     };
     let name = args.plant.clone().unwrap_or_else(|| "egc70".to_string());
     let provenance = Provenance::of_this_process(Some(args.seed.unwrap_or(1)));
-    let json = commissioning_json(&run, &name, Some(truth.clone()), provenance.clone());
+    let axis_record = AxisRecord::simulated(&name, &plant, start_position, args.seed.unwrap_or(1));
+    let json = commissioning_json(
+        &run,
+        &name,
+        Some(truth.clone()),
+        axis_record,
+        provenance.clone(),
+    );
     let toml = controller_toml(
         &run.design,
         &run.friction,
@@ -815,7 +822,10 @@ fn run_ethercat(
     let run = run.map_err(|e| stopped(e, &mut progress, args))?;
     let name = format!("{label} SubDevice {} ({})", args.subdevice, id.name);
     let provenance = Provenance::of_this_process(None);
-    let json = commissioning_json(&run, &name, None, provenance.clone());
+    let axis_record = AxisRecord::Ethercat {
+        source: name.clone(),
+    };
+    let json = commissioning_json(&run, &name, None, axis_record, provenance.clone());
     let toml = controller_toml(
         &run.design,
         &run.friction,
