@@ -47,8 +47,6 @@ fn toml_model_gives_json_with_the_required_keys() {
             model.to_str().unwrap(),
             "--prefilter",
             prefilter,
-            // Tables A.6/A.7 are the thesis' design on the model as given.
-            "--thesis-design",
             "--json",
             out_path.to_str().unwrap(),
         ]);
