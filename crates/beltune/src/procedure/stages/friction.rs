@@ -201,7 +201,7 @@ pub fn constant_velocity_point_with_inertia(
     };
     let window = ring_period.unwrap_or((MOMENTUM_WINDOW_S / ts).round() as usize);
     let torque_nm = match inertia.filter(|j| j.is_finite() && *j > 0.0) {
-        Some(j) if window >= 2 && 2 * window < used.len() => {
+        Some(j) if window >= 2 && 2 * window <= used.len() => {
             let w_a = (angle(window) - angle(0)) / (time(window) - time(0));
             let w_b = (angle(last) - angle(last - window)) / (time(last) - time(last - window));
             let (a, b) = (window / 2, last - window / 2);
