@@ -39,7 +39,7 @@ pub struct FrfFeatures {
 /// Errors ([`Error::FitFailed`]): fewer than 5 usable lines, no interior
 /// maximum (resonance) or no interior minimum below it (antiresonance).
 pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
-    let idx = frf.usable_indices();
+    let idx = feature_lines(frf);
     if idx.len() < 5 {
         return Err(Error::FitFailed {
             reason: format!(
@@ -48,24 +48,34 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
             ),
         });
     }
-    let comp: Vec<f64> = idx
+    let raw: Vec<f64> = idx
         .iter()
         .map(|&i| frf.response[i].norm() * frf.omega_rad_s(i).powi(2))
         .collect();
+    // A running median over neighbouring lines: a single noisy line (the
+    // encoder's quantization against a weak input) is not a resonance
+    // (issue 12: sim-a's "resonance" at 613 Hz next to the PRBS null).
+    let comp = running_median(&raw, MEDIAN_HALF_WIDTH);
     // resonance: the largest interior local maximum of |G| w^2
     let peak = (1..idx.len() - 1)
-        .filter(|&k| comp[k] >= comp[k - 1] && comp[k] >= comp[k + 1])
+        .filter(|&k| comp[k] > comp[k - 1] && comp[k] >= comp[k + 1])
         .max_by(|&a, &b| comp[a].total_cmp(&comp[b]))
         .ok_or_else(|| Error::FitFailed {
             reason: "no resonance peak inside the usable band".into(),
         })?;
     // antiresonance: the deepest interior local minimum below the resonance
     let dip = (1..peak)
-        .filter(|&k| comp[k] <= comp[k - 1] && comp[k] <= comp[k + 1])
+        .filter(|&k| comp[k] < comp[k - 1] && comp[k] <= comp[k + 1])
         .min_by(|&a, &b| comp[a].total_cmp(&comp[b]))
         .ok_or_else(|| Error::FitFailed {
             reason: "no antiresonance dip below the resonance inside the usable band".into(),
         })?;
+    // The antiresonance is low in frequency where the response is strong: its
+    // sharp dip is refined on the raw lines next to the smoothed minimum.
+    let dip = (dip.saturating_sub(MEDIAN_HALF_WIDTH).max(1)
+        ..(dip + MEDIAN_HALF_WIDTH + 1).min(peak))
+        .min_by(|&a, &b| raw[a].total_cmp(&raw[b]))
+        .unwrap_or(dip);
     let f = |k: usize| frf.freq_hz[idx[k]];
     let resonance_hz = parabolic_vertex(
         [f(peak - 1), f(peak), f(peak + 1)],
@@ -73,7 +83,7 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
     );
     let antiresonance_hz = parabolic_vertex(
         [f(dip - 1), f(dip), f(dip + 1)],
-        [comp[dip - 1].ln(), comp[dip].ln(), comp[dip + 1].ln()],
+        [raw[dip - 1].ln(), raw[dip].ln(), raw[dip + 1].ln()],
     );
 
     // rigid-body asymptote from the lines below 0.7 f_z (at least those below f_z)
@@ -82,7 +92,7 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
     let estimate = |k: usize| {
         let w = frf.omega_rad_s(idx[k]);
         let shape = (1.0 - (w / wz).powi(2)).abs() / (1.0 - (w / wr).powi(2)).abs();
-        shape / comp[k]
+        shape / raw[k]
     };
     let mut low: Vec<f64> = (0..dip)
         .filter(|&k| f(k) < 0.7 * antiresonance_hz)
@@ -101,11 +111,43 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
     Ok(FrfFeatures {
         resonance_hz,
         antiresonance_hz,
-        resonance_magnitude: frf.response[idx[peak]].norm(),
+        resonance_magnitude: comp[peak] / frf.omega_rad_s(idx[peak]).powi(2),
         antiresonance_magnitude: frf.response[idx[dip]].norm(),
         rigid_inertia,
         asymptote_lines: low.len(),
     })
+}
+
+/// Half width (in lines) of the running median of the compensated magnitude.
+const MEDIAN_HALF_WIDTH: usize = 2;
+
+/// Lines whose input power is more than this far below the strongest line
+/// are left out of the features: there the response is mostly measurement
+/// noise (a PRBS has its spectral null at the clock frequency), dB.
+pub const FEATURE_EXCITATION_FLOOR_DB: f64 = -15.0;
+
+/// The usable lines with an input power within [`FEATURE_EXCITATION_FLOOR_DB`]
+/// of the strongest usable line.
+pub fn feature_lines(frf: &Frf) -> Vec<usize> {
+    let idx = frf.usable_indices();
+    let max = idx.iter().map(|&i| frf.input_power[i]).fold(0.0, f64::max);
+    let floor = max * 10f64.powf(FEATURE_EXCITATION_FLOOR_DB / 10.0);
+    idx.into_iter()
+        .filter(|&i| frf.input_power[i] >= floor)
+        .collect()
+}
+
+/// Median of `x[k - h ..= k + h]` (clipped at the ends) for every `k`.
+pub(crate) fn running_median(x: &[f64], h: usize) -> Vec<f64> {
+    (0..x.len())
+        .map(|k| {
+            let lo = k.saturating_sub(h);
+            let hi = (k + h + 1).min(x.len());
+            let mut w: Vec<f64> = x[lo..hi].to_vec();
+            w.sort_by(f64::total_cmp);
+            w[w.len() / 2]
+        })
+        .collect()
 }
 
 /// Abscissa of the vertex of the parabola through three points; the middle

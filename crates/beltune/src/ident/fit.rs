@@ -172,21 +172,34 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
 
     let omega: Vec<f64> = lines.iter().map(|&i| frf.omega_rad_s(i)).collect();
     let measured_db: Vec<f64> = lines.iter().map(|&i| frf.magnitude_db(i)).collect();
-    let mut q0 = vec![start.m_c.ln(), start.c.ln(), start.d_m.ln(), start.d_c.ln()];
+    let weight = coherence_weights(frf, &lines);
+    let mut p0 = vec![start.m_c, start.c, start.d_m, start.d_c];
+    let mut range = vec![
+        MASS_STIFFNESS_RANGE,
+        MASS_STIFFNESS_RANGE,
+        DAMPING_RANGE,
+        DAMPING_RANGE,
+    ];
     if free {
-        q0.push(start.theta_e.ln());
+        p0.push(start.theta_e);
+        range.push(MASS_STIFFNESS_RANGE);
     }
     if fit_d {
         // start the belt damping at a tenth of the cart damping
-        q0.push((0.1 * start.d_c).ln());
+        p0.push(0.1 * start.d_c);
+        range.push(DAMPING_RANGE);
     }
+    let n_q = p0.len();
     let problem = LogMagnitudeProblem {
         omega,
         measured_db,
+        weight,
+        p0,
+        half_width: range.iter().map(|r: &f64| r.ln()).collect(),
         fixed: start,
         free,
         model: cfg.model,
-        q: DVector::from_vec(q0),
+        q: DVector::zeros(n_q),
     };
     let (solved, report) = LevenbergMarquardt::new()
         .with_patience(400)
@@ -200,6 +213,18 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
         });
     }
     let params = solved.to_params(&solved.q);
+    if let Some(k) = solved
+        .at_bound(&[0, 1])
+        .or(if free { solved.at_bound(&[4]) } else { None })
+    {
+        let name = ["m_c", "c", "d_m", "d_c", "theta_e"][k];
+        return Err(Error::FitFailed {
+            reason: format!(
+                "the fit ran to the edge of its range: `{name}` went a factor {MASS_STIFFNESS_RANGE} away from the value the FRF's resonance and antiresonance give (start m_c {:.4e}, c {:.4e}, theta_e {:.4e}); the measured FRF does not show one two-mass resonance inside the band (check the excitation band, its amplitude and the data-sheet inertia)",
+                start.m_c, start.c, start.theta_e
+            ),
+        });
+    }
     if let Err(e) = params.validate() {
         return Err(Error::FitFailed {
             reason: format!("the fitted model is not physical ({e})"),
@@ -212,7 +237,13 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
         })?;
     let n = r.len();
     let sum_sq = r.norm_squared();
-    let fit_rms_db = (sum_sq / n as f64).sqrt();
+    let fit_rms_db = (r
+        .iter()
+        .zip(&solved.weight)
+        .map(|(x, w)| (x / w).powi(2))
+        .sum::<f64>()
+        / n as f64)
+        .sqrt();
     let uncertainty = solved.jacobian_mat().and_then(|j| {
         let s2 = sum_sq / (n - n_params) as f64;
         // pseudo-inverse: a damping driven to its positivity bound (ln p -> -inf)
@@ -220,7 +251,7 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
         let jtj = j.transpose() * &j;
         let scale = jtj.diagonal().max();
         let cov = jtj.pseudo_inverse(1e-12 * scale).ok()? * s2;
-        let sig = |k: usize| cov[(k, k)].max(0.0).sqrt();
+        let sig = |k: usize| cov[(k, k)].max(0.0).sqrt() * solved.dlnp_dq(k);
         Some(ParamUncertainty {
             m_c: params.m_c * sig(0),
             c: params.c * sig(1),
@@ -268,12 +299,23 @@ pub fn start_values(f: &FrfFeatures, theta_e: Option<f64>, i_t: f64) -> Result<T
             ),
         });
     }
-    let theta_e = theta_e.unwrap_or(f.rigid_inertia / r2);
-    let kappa = r2 - 1.0;
+    // With the data-sheet Theta_e, the inertia ratio comes from the rigid-body
+    // asymptote (many lines, well excited), not from the resonance peak (one
+    // noisy line near the top of the band; issue 12).
+    let (theta_e, kappa) = match theta_e {
+        Some(t) if f.rigid_inertia > t * (1.0 + MIN_INERTIA_RATIO) => {
+            (t, f.rigid_inertia / t - 1.0)
+        }
+        Some(t) => (t, r2 - 1.0),
+        None => (f.rigid_inertia / r2, r2 - 1.0),
+    };
     let it2 = i_t * i_t;
     let m_c = kappa * theta_e / it2;
     let c = m_c * wz * wz;
     let d_c = (f.antiresonance_magnitude * c * wz * it2 * m_c).max(1e-9 * c / wz);
+    // the resonance of the start model (equal to the measured one when the
+    // inertia ratio came from the resonance)
+    let wr = wz * (1.0 + kappa).sqrt();
     let d_r = kappa * c / (wr.powi(3) * f.resonance_magnitude);
     let d_m_raw = (d_r - theta_e * d_c) / (it2 * m_c);
     let d_m = if d_m_raw > 0.0 {
@@ -296,6 +338,18 @@ pub fn start_values(f: &FrfFeatures, theta_e: Option<f64>, i_t: f64) -> Result<T
     Ok(p)
 }
 
+/// Smallest inertia ratio `kappa` taken from the rigid-body asymptote for the
+/// start values (below it the asymptote cannot tell the cart from the motor).
+const MIN_INERTIA_RATIO: f64 = 0.05;
+
+/// How far (as a factor of the start value) the fitted inertias and the belt
+/// stiffness may go: the start values come from the FRF's own features, so
+/// an optimum further away is not the two-mass resonance of the data but a
+/// degenerate one (a rigid belt, a vanishing cart; issue 12).
+pub const MASS_STIFFNESS_RANGE: f64 = 10.0;
+/// The same for the damping coefficients (which may legitimately be tiny).
+pub const DAMPING_RANGE: f64 = 1e4;
+
 /// `20 log10 |G(j w; p)|` of the fitted model structure.
 pub fn model_magnitude_db(p: &TwoMassParams, model: FitModel, w_rad_s: f64) -> f64 {
     let g = model.tf(p);
@@ -303,9 +357,18 @@ pub fn model_magnitude_db(p: &TwoMassParams, model: FitModel, w_rad_s: f64) -> f
 }
 
 /// The residuals (3.33) as a `levenberg-marquardt` problem in `q = ln p`.
+///
+/// Each parameter is `p = p0 exp(h tanh(q / h))`: positive, within a factor
+/// `e^h` of its start value `p0`, smooth in the unconstrained `q`.
 struct LogMagnitudeProblem {
     omega: Vec<f64>,
     measured_db: Vec<f64>,
+    /// Weight of each line's dB residual (mean square 1).
+    weight: Vec<f64>,
+    /// Start values, in the order of `q`.
+    p0: Vec<f64>,
+    /// `h` of each parameter (ln of its range factor).
+    half_width: Vec<f64>,
     /// Holds `theta_e` (when not free) and `i_t`.
     fixed: TwoMassParams,
     free: bool,
@@ -314,19 +377,37 @@ struct LogMagnitudeProblem {
 }
 
 impl LogMagnitudeProblem {
+    fn value(&self, q: &DVector<f64>, k: usize) -> f64 {
+        let h = self.half_width[k];
+        self.p0[k] * (h * (q[k] / h).tanh()).exp()
+    }
+
+    /// `d ln p / d q` of parameter `k` at the current `q`.
+    fn dlnp_dq(&self, k: usize) -> f64 {
+        let t = (self.q[k] / self.half_width[k]).tanh();
+        1.0 - t * t
+    }
+
+    /// The first of `ks` within 1 % (in ln p) of the edge of its range.
+    fn at_bound(&self, ks: &[usize]) -> Option<usize> {
+        ks.iter()
+            .copied()
+            .find(|&k| (self.q[k] / self.half_width[k]).tanh().abs() > 0.99)
+    }
+
     fn to_params(&self, q: &DVector<f64>) -> TwoMassParams {
         TwoMassParams {
-            m_c: q[0].exp(),
-            c: q[1].exp(),
-            d_m: q[2].exp(),
-            d_c: q[3].exp(),
+            m_c: self.value(q, 0),
+            c: self.value(q, 1),
+            d_m: self.value(q, 2),
+            d_c: self.value(q, 3),
             theta_e: if self.free {
-                q[4].exp()
+                self.value(q, 4)
             } else {
                 self.fixed.theta_e
             },
             d: if self.model == FitModel::WithBeltDamping {
-                q[q.len() - 1].exp()
+                self.value(q, q.len() - 1)
             } else {
                 0.0
             },
@@ -339,10 +420,14 @@ impl LogMagnitudeProblem {
         let g = self.model.tf(&p);
         let r = DVector::from_iterator(
             self.omega.len(),
-            self.omega.iter().zip(&self.measured_db).map(|(&w, &m)| {
-                let h: C64 = g.freq_response(w);
-                m - 20.0 * h.norm().log10()
-            }),
+            self.omega
+                .iter()
+                .zip(&self.measured_db)
+                .zip(&self.weight)
+                .map(|((&w, &m), &wt)| {
+                    let h: C64 = g.freq_response(w);
+                    wt * (m - 20.0 * h.norm().log10())
+                }),
         );
         r.iter().all(|x| x.is_finite()).then_some(r)
     }
@@ -384,6 +469,38 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for LogMagnitudeProblem {
     fn jacobian(&self) -> Option<DMatrix<f64>> {
         self.jacobian_mat()
     }
+}
+
+/// Noise-to-signal floor of the coherence weighting: lines better than this
+/// count as equal (the model's own error, about 0.3 dB, dominates there).
+const NOISE_RATIO_FLOOR: f64 = 1e-3;
+
+/// Weights of the fitted `lines` from the coherence: the variance of an
+/// averaged ETFE line is proportional to `(1 - gamma^2) / gamma^2`, so a line
+/// weighs `1 / sqrt(rho + floor)` with that noise-to-signal ratio `rho`,
+/// taken as the running median over neighbouring usable lines (the coherence
+/// of few averaged periods scatters line by line). Mean square 1.
+fn coherence_weights(frf: &Frf, lines: &[usize]) -> Vec<f64> {
+    let usable = frf.usable_indices();
+    let rho: Vec<f64> = usable
+        .iter()
+        .map(|&i| {
+            let g = frf.coherence[i].clamp(1e-6, 1.0);
+            (1.0 - g) / g
+        })
+        .collect();
+    let smooth = super::features::running_median(&rho, 3);
+    let w: Vec<f64> = lines
+        .iter()
+        .map(|i| {
+            let k = usable.binary_search(i).unwrap_or(0);
+            1.0 / (smooth[k] + NOISE_RATIO_FLOOR).sqrt()
+        })
+        .collect();
+    let ms = (w.iter().map(|x| x * x).sum::<f64>() / w.len().max(1) as f64).sqrt();
+    w.into_iter()
+        .map(|x| x / ms.max(f64::MIN_POSITIVE))
+        .collect()
 }
 
 /// Why Levenberg-Marquardt stopped, in words (not a Debug dump).
@@ -470,7 +587,7 @@ mod tests {
             let truth = sim_set(name, 0.0);
             let fit = identify(&truth);
             let p = fit.params;
-            println!("{name}: {p:?} rms {} dB", fit.fit_rms_db);
+            println!("{name}: {p:?} rms {} dB {:?}", fit.fit_rms_db, fit.features);
             assert!(rel(p.m_c, truth.m_c) < TOL, "{name} m_c {}", p.m_c);
             assert!(rel(p.c, truth.c) < TOL, "{name} c {}", p.c);
             assert!(rel(p.d_m, truth.d_m) < TOL, "{name} d_m {}", p.d_m);
@@ -505,6 +622,45 @@ mod tests {
         assert!(rel(fit.start.m_c, truth.m_c) < 0.2, "{:?}", fit.start);
         assert!(rel(fit.start.c, truth.c) < 0.2, "{:?}", fit.start);
         assert!(rel(fit.start.d_c, truth.d_c) < 0.6, "{:?}", fit.start);
+    }
+
+    /// Issue 12: a fit that cannot be done is a typed error that says so,
+    /// never a "physical" model with a vanishing cart. Here the data sheet's
+    /// `Theta_e` is 30 times the truth: no two-mass model with that motor
+    /// inertia has the measured high-frequency asymptote, and the fit must not
+    /// escape to a rigid belt (`m_c -> 0`, which it did before the bounds).
+    #[test]
+    fn an_impossible_fit_is_a_typed_error_issue_12() {
+        let truth = sim_set("sim-a", 0.0);
+        let ts = 100e-6;
+        let u = prbs(11, 2, 0.3, 4);
+        let (phi, _) = simulate_two_mass(&truth, &u, ts);
+        let frf = etfe(
+            &u,
+            &phi,
+            &EtfeConfig {
+                ts_s: ts,
+                period_samples: 4094,
+                skip_periods: 1,
+                band_hz: Some((1.0, 1000.0)),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let r = fit_two_mass(
+            &frf,
+            &FitConfig {
+                theta_e: Some(30.0 * truth.theta_e),
+                i_t: truth.i_t,
+                ..Default::default()
+            },
+        );
+        match r {
+            Err(Error::FitFailed { reason }) => {
+                assert!(reason.contains("edge of its range"), "{reason}")
+            }
+            other => panic!("expected a typed fit failure, got {other:?}"),
+        }
     }
 
     #[test]

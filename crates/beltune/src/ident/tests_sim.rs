@@ -268,3 +268,93 @@ fn egc70_friction_from_a_recorded_motion() {
     assert!(rel(r.viscous, truth.viscous_nm_s_per_rad) < TOL, "{r:?}");
     assert!(rel(r.coulomb, truth.coulomb_nm) < TOL, "{r:?}");
 }
+
+/// Issue 12: the commissioning's PRBS (order 9, clock 16 = 1.6 ms, the band
+/// up to the clock frequency 625 Hz, where the PRBS has its spectral null) on
+/// `sim-a` with the simulator's encoder and noise. The lines next to the null
+/// carry almost no input, so their response is the encoder's noise, and one
+/// of them (613 Hz) was taken for the resonance; the start values then had a
+/// 219 kg cart and the fit ran into a rigid belt (`m_c` 1e-20 kg, "f_r
+/// 7.7e11 Hz"). Now the features skip weak lines and median-smooth, and the
+/// fit weighs the lines by their coherence: f_z and m_c within 2 % and 5 %
+/// of the truth (the tolerances of issue 12's table).
+#[test]
+fn prbs_null_in_the_band_is_not_a_resonance_issue_12() {
+    let plant = builtin("sim-a", None).unwrap();
+    let mut axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
+    let truth = axis.linearized_truth();
+    // the amplitude the commissioning chose for sim-a (A_PRBS 0.372 N m)
+    let u = prbs(9, 16, 0.372, 3);
+    let rec = run_open_loop(&mut axis, &u);
+    let frf = etfe(
+        &rec.command,
+        &rec.angle,
+        &EtfeConfig {
+            ts_s: rec.ts,
+            period_samples: 511 * 16,
+            skip_periods: 1,
+            band_hz: Some((3.0, 625.0)),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let fit = fit_two_mass(
+        &frf,
+        &FitConfig {
+            theta_e: Some(truth.theta_e),
+            i_t: truth.i_t,
+            n_log_lines: 60,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    println!("{:?}\n{:?}", fit.features, fit.params);
+    assert!(
+        rel(fit.features.resonance_hz, truth.f_r_hz()) < 0.1,
+        "resonance feature {} Hz, truth {} Hz",
+        fit.features.resonance_hz,
+        truth.f_r_hz()
+    );
+    assert!(rel(fit.f_z_hz, truth.f_z_hz()) < 0.02, "f_z {}", fit.f_z_hz);
+    assert!(
+        rel(fit.params.m_c, truth.m_c) < 0.05,
+        "m_c {}",
+        fit.params.m_c
+    );
+    assert!(rel(fit.f_r_hz, truth.f_r_hz()) < 0.1, "f_r {}", fit.f_r_hz);
+}
+
+/// Issue 15: the same record without a data-sheet inertia (`Theta_e` fitted
+/// too, as `identify`/`commission --csv` do without `--inertia`) diverged to
+/// `Theta_e -> 0` (f_r ~1e88 Hz); now f_r and f_z within 5 % and 2 %.
+#[test]
+fn prbs_record_without_data_sheet_inertia_issue_15() {
+    let plant = builtin("sim-a", None).unwrap();
+    let mut axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
+    let truth = axis.linearized_truth();
+    let u = prbs(9, 16, 1.2, 4);
+    let rec = run_open_loop(&mut axis, &u);
+    let frf = etfe(
+        &rec.command,
+        &rec.angle,
+        &EtfeConfig {
+            ts_s: rec.ts,
+            period_samples: 511 * 16,
+            skip_periods: 1,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let fit = fit_two_mass(
+        &frf,
+        &FitConfig {
+            theta_e: None,
+            i_t: truth.i_t,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    println!("{:?}\n{:?}", fit.features, fit.params);
+    assert!(rel(fit.f_z_hz, truth.f_z_hz()) < 0.02, "f_z {}", fit.f_z_hz);
+    assert!(rel(fit.f_r_hz, truth.f_r_hz()) < 0.05, "f_r {}", fit.f_r_hz);
+}

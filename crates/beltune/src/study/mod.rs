@@ -213,6 +213,48 @@ fn velocity_margin_on(design: &ControllerDesign, truth: &crate::model::TwoMassPa
     }
 }
 
+/// What an identification of the simulated axis can see, from the simulator's
+/// own (three-mass) physics, at one cart position.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct IdentificationTruth {
+    /// Antiresonance of the torque -> motor angle response, Hz: the motor
+    /// held still, cart and end pulley oscillating on the belt (the lowest
+    /// undamped mode of the three-mass model (2.20) linearized with the
+    /// motor locked).
+    pub f_z_hz: f64,
+    /// Cart mass a two-mass model with the data-sheet `Theta_e` must have to
+    /// carry the axis' rigid-body inertia: `m_c + Theta_r / r^2` (the end
+    /// pulley turns with the belt and is not in the data sheet's `Theta_e`), kg.
+    pub m_c_kg: f64,
+}
+
+/// The truth the identification is compared with (issue 12).
+///
+/// The two-mass linearization [`crate::model::PhysicalParams::linearize`]
+/// neglects the end-pulley inertia (thesis 2.1.4); the simulator does not.
+/// With egc70's end pulley (0.15 kg at the belt) that puts the two-mass `f_z`
+/// up to 5 % and `m_c` up to 13 % away from what the simulated axis shows on
+/// a light cart, more than the accuracy the study measures.
+pub fn identification_truth(
+    p: &crate::model::PhysicalParams,
+    xi_m: f64,
+) -> crate::Result<IdentificationTruth> {
+    let lin = crate::model::three_mass::ThreeMass::new(p)?.linearize(xi_m);
+    // states (2.18): 0/1 motor, 2/3 end pulley, 4/5 cart; with the motor
+    // locked the positions 2 and 4 obey x'' = K x (K = -M^-1 stiffness)
+    let k = nalgebra::Matrix2::new(lin.a[(3, 2)], lin.a[(3, 4)], lin.a[(5, 2)], lin.a[(5, 4)]);
+    let w2 = k
+        .complex_eigenvalues()
+        .iter()
+        .map(|l| -l.re)
+        .fold(f64::INFINITY, f64::min);
+    let r = p.r_m;
+    Ok(IdentificationTruth {
+        f_z_hz: w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
+        m_c_kg: p.m_c() + p.theta_end_pulley_kg_m2 / (r * r),
+    })
+}
+
 /// Commission plant `index` of the study seeded `seed` with `cfg`.
 pub fn run_plant(
     seed: u64,
@@ -266,8 +308,9 @@ pub fn run_plant(
             out.true_velocity_phase_margin_deg = Some(velocity_margin_on(&run.design, &truth));
             out.guaranteed_velocity_phase_margin_deg =
                 Some(run.verdict.guaranteed.velocity_phase_margin_deg);
-            out.f_z_error = Some(rel(run.identified.f_z_hz, truth.f_z_hz()));
-            out.m_c_error = Some(rel(run.identified.m_c, truth.m_c));
+            let seen = identification_truth(&g.params, run.identification_position_m)?;
+            out.f_z_error = Some(rel(run.identified.f_z_hz, seen.f_z_hz));
+            out.m_c_error = Some(rel(run.identified.m_c, seen.m_c_kg));
             let c_true = plant.friction_totals().coulomb_nm;
             out.coulomb_error = Some(rel(run.friction.coulomb_nm, c_true));
             out.static_error_m = Some(run.validation.nonlinear.static_error_m);
@@ -319,6 +362,28 @@ pub fn classify(o: &Outcome) -> Class {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The identification truth reduces to the two-mass linearization when
+    /// the end pulley has no inertia, and sits below its `f_z` otherwise
+    /// (the end pulley adds to the oscillating mass).
+    #[test]
+    fn identification_truth_is_the_two_mass_one_without_end_pulley_issue_12() {
+        let mut p = crate::model::rigs::egc70_params(0.0);
+        let xi = p.stroke_m - 0.05;
+        let with = identification_truth(&p, xi).unwrap();
+        let two = p.linearize(xi).unwrap();
+        assert!(with.f_z_hz < two.f_z_hz(), "{with:?} vs {}", two.f_z_hz());
+        assert!(with.m_c_kg > two.m_c);
+        p.theta_end_pulley_kg_m2 = 1e-12;
+        let without = identification_truth(&p, xi).unwrap();
+        let two = p.linearize(xi).unwrap();
+        assert!(
+            (without.f_z_hz / two.f_z_hz() - 1.0).abs() < 1e-3,
+            "{without:?} vs {}",
+            two.f_z_hz()
+        );
+        assert!((without.m_c_kg / two.m_c - 1.0).abs() < 1e-6);
+    }
 
     #[test]
     fn the_generator_is_seeded_and_stays_in_its_ranges() {
