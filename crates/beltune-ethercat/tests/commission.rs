@@ -7,7 +7,7 @@
 use beltune::model::rigs::{self, Plant};
 use beltune::procedure::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
 use beltune::procedure::NoProgress;
-use beltune::sim::{SimAxis, SimConfig};
+use beltune::sim::SimConfig;
 use beltune_ethercat::drive::{DriveConfig, VirtualDrive};
 use beltune_ethercat::master::inprocess::InProcess;
 use beltune_ethercat::master::{EthercatAxis, MasterConfig, Storage};
