@@ -537,7 +537,7 @@ pub fn commission(
 
     // ---- 8. validation ----
     let val = stages::validation_moves::validation_moves(
-        &mut st, &feedback, &ident.fit, &fr.result, n_t, holding, datasheet, cfg,
+        &mut st, &feedback, &boot_hold, &ident.fit, &fr.result, n_t, holding, datasheet, cfg,
     )?;
     let verdict = super::acceptance::judge(
         &val.validation.nonlinear,

@@ -440,15 +440,15 @@ impl<'a> Runner<'a> {
         let p = self.position_m();
         // Brake with what the axis has in this direction (gravity, issue 12),
         // never harder than the configured stop limits.
-        let a_stop = self
-            .supervisor
-            .capability()
-            .deceleration_for(v)
-            .min(self.stop_limits.a_max.min(-self.stop_limits.a_min));
+        let a_stop = stop_deceleration(
+            self.supervisor.capability(),
+            self.supervisor.limits(),
+            self.stop_limits.a_max.min(-self.stop_limits.a_min),
+            p,
+            v,
+        );
         let jerk = super::safety::STOP_JERK_PER_DECELERATION * a_stop;
-        // Braking distance of a jerk-limited stop from (v, a = 0): the ramp to
-        // the deceleration adds `|v| a / (2 j)` to `v^2 / (2 a)`.
-        let rest = p + v.signum() * (v * v / (2.0 * a_stop) + v.abs() * a_stop / (2.0 * jerk));
+        let rest = p + v.signum() * stop_distance_m(v, a_stop);
         let limits = Limits {
             position_min: f64::NEG_INFINITY,
             position_max: f64::INFINITY,
@@ -492,6 +492,51 @@ impl<'a> Runner<'a> {
         }
         Ok(self.position_m())
     }
+}
+
+/// Braking distance of a jerk-limited stop from `(v, a = 0)` with the
+/// deceleration `a` and the jerk [`super::safety::STOP_JERK_PER_DECELERATION`]
+/// times it: the ramp adds `|v| a / (2 j)` to `v^2 / (2 a)`, m.
+fn stop_distance_m(velocity_m_s: f64, deceleration_m_s2: f64) -> f64 {
+    let v = velocity_m_s.abs();
+    v * v / (2.0 * deceleration_m_s2) + v / (2.0 * super::safety::STOP_JERK_PER_DECELERATION)
+}
+
+/// The deceleration of a stop from `position_m` at `velocity_m_s`: the
+/// planned one of the direction (at most `configured_m_s2`, the stop
+/// limits); if that stop would end closer than
+/// [`super::safety::STOP_EDGE_MARGIN_M`] to the window's edge (or beyond
+/// it), as much more as it takes to stop there, up to the capability's
+/// reserve (issue 12: the look-ahead trips when the planned stop would end
+/// outside, so a stop with the planned deceleration always did).
+fn stop_deceleration(
+    capability: &super::safety::StopCapability,
+    limits: &SafetyLimits,
+    configured_m_s2: f64,
+    position_m: f64,
+    velocity_m_s: f64,
+) -> f64 {
+    let v = velocity_m_s;
+    let planned = capability.deceleration_for(v).min(configured_m_s2);
+    if v == 0.0 {
+        return planned;
+    }
+    let edge = if v > 0.0 {
+        limits.travel_max_m - super::safety::STOP_EDGE_MARGIN_M
+    } else {
+        limits.travel_min_m + super::safety::STOP_EDGE_MARGIN_M
+    };
+    let room = (edge - position_m) * v.signum();
+    if stop_distance_m(v, planned) <= room {
+        return planned;
+    }
+    let reserve = capability.reserve_deceleration_for(v).max(planned);
+    // v^2 / (2 a) + |v| / (2 k) <= room
+    let braking_room = room - v.abs() / (2.0 * super::safety::STOP_JERK_PER_DECELERATION);
+    if braking_room <= 0.0 {
+        return reserve;
+    }
+    (v * v / (2.0 * braking_room)).clamp(planned, reserve)
 }
 
 #[cfg(test)]

@@ -38,13 +38,14 @@ pub fn take_axis(
     boot.torque_offset_nm = first_hold;
     st.runner.set_stop_controller(boot);
     // The first holding torque is gravity (and friction): the stops brake
-    // with what is left of the torque in each direction (issue 12).
-    st.runner.set_stop_capability(StopCapability::from_axis(
+    // with what is left of the torque in each direction (issue 12). It is
+    // known only within the friction band, so it does not refuse the axis:
+    // the holding-torque stage does, on gravity measured without friction.
+    st.runner.set_stop_capability(StopCapability::provisional(
         torque_max_nm,
         datasheet.rigid_inertia(),
         datasheet.i_t_m,
         first_hold,
-        0.0,
     )?)?;
     let line = format!(
         "held at {:.1} mm (sag {:.2} mm) with {first_hold:+.3} N m",
