@@ -392,14 +392,23 @@ pub fn commission(
     let boot = taken.bootstrap;
     let id_pos = taken.identification_position_m;
 
-    // ---- 3. holding torque ----
+    // ---- 3. holding torque and friction where the axis was taken, the
+    // bootstrap fitted to the friction, the move to the worst case ----
+    let center = stages::holding_torque::run_center_m(st.runner.position_m(), datasheet);
     let held = stages::holding_torque::holding_torque_stage(
-        &mut st, &boot, id_pos, datasheet, torque_max,
+        &mut st, &boot, center, datasheet, torque_max,
     )?;
     let holding = held.holding_nm;
-    let mut boot_hold = boot;
+    let mut boot_hold = super::bootstrap::bootstrap_with_friction(
+        datasheet.rigid_inertia(),
+        datasheet.i_t_m,
+        ts,
+        torque_max,
+        held.viscous_nm_s_per_rad,
+    )?;
     boot_hold.torque_offset_nm = holding;
     st.runner.set_stop_controller(boot_hold);
+    stages::take_axis::move_to_worst_case(&mut st, &boot_hold, id_pos, datasheet)?;
 
     // ---- 4. excitation amplitude ----
     let ex = &cfg.excitation;

@@ -435,8 +435,7 @@ impl<'a> Runner<'a> {
     /// during the stop (it is the reaction), but the torque stays limited.
     pub fn stop(&mut self) -> Result<f64> {
         let ts = self.info.ts_s;
-        let v = self.supervised_velocity_m_s();
-        let v = if v.is_finite() { v } else { 0.0 };
+        let v = stop_start_velocity(self.supervised_velocity_m_s(), self.rigid_velocity_m_s);
         let p = self.position_m();
         // Brake with what the axis has in this direction (gravity, issue 12),
         // never harder than the configured stop limits.
@@ -464,7 +463,17 @@ impl<'a> Runner<'a> {
             acceleration: 0.0,
         };
         let traj = Trajectory::plan(&start, &State::at_rest(rest), &limits)?;
-        let mut ctrl = CascadeController::new(self.stop_controller)?;
+        // A designed cascade comes without feedforward (the validation adds
+        // it): the stop's deceleration is fed forward with the inertia the
+        // capability was computed for, so that the feedback does not have to
+        // build the braking torque from a growing error (issue 12: a heavy
+        // cart braking downhill overshot its stop by 20 mm).
+        let mut config = self.stop_controller;
+        let inertia = self.supervisor.capability().inertia_kg_m2;
+        if !config.feedforward.terms.inertia && inertia > 0.0 {
+            config.feedforward = beltune_rt::control::Feedforward::linear(inertia, 0.0);
+        }
+        let mut ctrl = CascadeController::new(config)?;
         ctrl.reset_to(self.motor_angle_rad());
         let n = ((traj.duration_s() + STOP_SETTLE_S) / ts).ceil() as u64;
         let limit = self.info.torque_max_nm;
@@ -492,6 +501,23 @@ impl<'a> Runner<'a> {
         }
         Ok(self.position_m())
     }
+}
+
+/// The velocity a stop starts its trajectory from: the supervised estimate,
+/// but never beyond the rigid-body estimate in magnitude, and zero when the
+/// two disagree in sign. Issue 12: a chattering closed loop on a coarse
+/// encoder showed 0.5 m/s spikes in the fast estimate while the cart crept
+/// at 0.02 m/s; the stop planned from the spike drove the axis 58 mm on,
+/// out of the window. A real motion shows in both (the rigid estimate lags
+/// a hard acceleration by its 20 ms window: the stop then starts slower
+/// and its controller brakes the difference).
+fn stop_start_velocity(supervised_m_s: f64, rigid_m_s: f64) -> f64 {
+    if !(supervised_m_s.is_finite() && rigid_m_s.is_finite())
+        || supervised_m_s * rigid_m_s <= 0.0
+    {
+        return 0.0;
+    }
+    supervised_m_s.signum() * supervised_m_s.abs().min(rigid_m_s.abs())
 }
 
 /// Braking distance of a jerk-limited stop from `(v, a = 0)` with the

@@ -180,6 +180,11 @@ pub struct StopCapability {
     /// Reserve deceleration towards -x, m/s^2 (see above).
     #[serde(default)]
     pub reserve_deceleration_negative_m_s2: f64,
+    /// Rigid-body inertia the decelerations were computed for, kg m^2 (0:
+    /// unknown). The stop feeds its deceleration forward with it when the
+    /// stop controller has no inertia feedforward of its own.
+    #[serde(default)]
+    pub inertia_kg_m2: f64,
 }
 
 /// Fraction of the torque limit a stop may use (the rest is margin for the
@@ -218,6 +223,7 @@ impl StopCapability {
             reaction_time_s: STOP_LATENCY_S + 0.5 / STOP_JERK_PER_DECELERATION,
             reserve_deceleration_positive_m_s2: deceleration_m_s2,
             reserve_deceleration_negative_m_s2: deceleration_m_s2,
+            inertia_kg_m2: 0.0,
         }
     }
 
@@ -250,6 +256,7 @@ impl StopCapability {
                     deceleration_negative_m_s2: neg,
                     reserve_deceleration_positive_m_s2: pos,
                     reserve_deceleration_negative_m_s2: neg,
+                    inertia_kg_m2,
                     ..StopCapability::symmetric(1.0)
                 })
             }
@@ -303,6 +310,7 @@ impl StopCapability {
             deceleration_negative_m_s2: a(neg),
             reserve_deceleration_positive_m_s2: reserve(total + holding_nm + friction),
             reserve_deceleration_negative_m_s2: reserve(total - holding_nm + friction),
+            inertia_kg_m2,
             ..StopCapability::symmetric(1.0)
         })
     }
@@ -351,6 +359,7 @@ impl StopCapability {
             "stop reserve deceleration (-x) [m/s^2]",
             self.reserve_deceleration_negative_m_s2,
         )?;
+        crate::error::require_non_negative("stop inertia [kg m^2]", self.inertia_kg_m2)?;
         if self.reaction_time_s < 0.0 {
             return Err(Error::invalid(
                 "stop reaction time [s]",
