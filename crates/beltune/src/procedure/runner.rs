@@ -715,6 +715,51 @@ mod tests {
         assert!((v - 0.3).abs() < 1e-9, "{v}");
     }
 
+    /// Issue 12 (stops ending outside the window): the look-ahead trips when
+    /// the planned stop would end outside, so a stop with the planned
+    /// deceleration always did; it brakes with the reserve to end
+    /// STOP_EDGE_MARGIN_M inside instead, and with the planned one where
+    /// there is room.
+    #[test]
+    fn a_stop_near_the_edge_brakes_with_its_reserve_issue_12() {
+        use crate::procedure::safety::{StopCapability, STOP_EDGE_MARGIN_M};
+        let cap = StopCapability::from_axis(3.1, 2e-3, 0.0124, 0.3, 0.0).unwrap();
+        let limits = SafetyLimits {
+            travel_min_m: -0.01,
+            travel_max_m: 0.57,
+            torque_max_nm: 3.1,
+            velocity_max_m_s: 2.5,
+            following_error_max_m: 0.05,
+        };
+        let planned = cap.deceleration_negative_m_s2;
+        assert!(cap.reserve_deceleration_negative_m_s2 > planned);
+        // plenty of room: the planned deceleration
+        assert_eq!(stop_deceleration(&cap, &limits, 100.0, 0.3, -0.5), planned);
+        // downhill towards the lower edge, the planned stop ends outside
+        let (p, v) = (0.015, -0.5);
+        assert!(p - stop_distance_m(v, planned) < limits.travel_min_m + STOP_EDGE_MARGIN_M);
+        let a = stop_deceleration(&cap, &limits, 100.0, p, v);
+        assert!(a > planned && a <= cap.reserve_deceleration_negative_m_s2);
+        let rest = p - stop_distance_m(v, a);
+        assert!(
+            (rest - (limits.travel_min_m + STOP_EDGE_MARGIN_M)).abs() < 1e-9,
+            "rest {rest}"
+        );
+        // beyond the reserve: all of it
+        let a = stop_deceleration(&cap, &limits, 100.0, -0.005, -2.0);
+        assert_eq!(a, cap.reserve_deceleration_negative_m_s2);
+    }
+
+    /// Issue 12: a 0.5 m/s spike of the fast estimate over a creeping cart
+    /// starts no stop trajectory at 0.5 m/s; a real motion does.
+    #[test]
+    fn a_stop_starts_from_a_confirmed_velocity_issue_12() {
+        assert_eq!(stop_start_velocity(0.5, 0.02), 0.02);
+        assert_eq!(stop_start_velocity(-0.5, -0.6), -0.5);
+        assert_eq!(stop_start_velocity(0.5, -0.01), 0.0);
+        assert_eq!(stop_start_velocity(f64::NAN, 0.3), 0.0);
+    }
+
     /// Keeps the record a safety stop hands over.
     #[derive(Default)]
     struct Recorder(Option<SafetyStopRecord>);

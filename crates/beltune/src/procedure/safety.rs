@@ -592,6 +592,29 @@ mod tests {
         assert!(StopCapability::from_axis(t_max, j, i_t, f64::NAN, 0.0).is_err());
     }
 
+    /// Issue 12: the first hold (gravity plus the static friction a sagging
+    /// load meets) refuses no axis; the braking torque it leaves is assumed,
+    /// at least PROVISIONAL_MIN_FRACTION of the limit.
+    #[test]
+    fn a_provisional_capability_refuses_nothing_issue_12() {
+        let (t_max, j, i_t) = (3.1, 3e-3, 0.0124);
+        let first_hold = 2.4; // from_axis refuses: 0.9 * 3.1 - 2.4 < 0.15 * 3.1
+        assert!(StopCapability::from_axis(t_max, j, i_t, first_hold, 0.0).is_err());
+        let c = StopCapability::provisional(t_max, j, i_t, first_hold).unwrap();
+        let weak = (STOP_COMMAND_FRACTION * t_max - first_hold) * i_t / j;
+        assert!((c.deceleration_negative_m_s2 - weak).abs() < 1e-12, "{c:?}");
+        assert!(c.deceleration_positive_m_s2 > c.deceleration_negative_m_s2);
+        let c = StopCapability::provisional(t_max, j, i_t, 3.05).unwrap();
+        let floor = PROVISIONAL_MIN_FRACTION * t_max * i_t / j;
+        assert!((c.deceleration_negative_m_s2 - floor).abs() < 1e-12);
+        // where from_axis accepts, the same capability
+        assert_eq!(
+            StopCapability::provisional(t_max, j, i_t, 0.5).unwrap(),
+            StopCapability::from_axis(t_max, j, i_t, 0.5, 0.0).unwrap()
+        );
+        assert!(StopCapability::provisional(t_max, j, i_t, f64::NAN).is_err());
+    }
+
     #[test]
     fn inconsistent_limits_are_rejected() {
         let mut l = limits();
