@@ -2,9 +2,12 @@
 //! reporting progress and one log line:
 //!
 //! 1. plausibility of the data-sheet values;
-//! 2. take the axis (hold it while the integrator carries the load) and move
-//!    to the identification position (cart farthest from the motor, thesis 2.2);
-//! 3. holding torque (thesis chapter 7), friction-free from a slow run up and down;
+//! 2. take the axis (hold it while the integrator carries the load);
+//! 3. holding torque (thesis chapter 7), friction-free from slow runs up and
+//!    down at two speeds where the axis was taken, which also separate
+//!    Coulomb from viscous friction; the bootstrap controller is fitted to
+//!    the friction, then moves the axis to the identification position (cart
+//!    farthest from the motor, thesis 2.2);
 //! 4. excitation amplitude from small values upwards until the motion clears
 //!    friction and noise (thesis 3.4);
 //! 5. open-loop PRBS identification with averaging, coherence, dead time and

@@ -126,19 +126,15 @@ pub fn plan_validation_move(
     })
 }
 
-/// Limits of the unmeasured return to the validation start: the positioning
-/// limits of `ds`, never beyond the validation move's `planned` limits, the
+/// Limits of the unmeasured return to the validation start inside the
+/// window of `ds`: the validation move's `planned` limits with the
 /// acceleration at most half the stop deceleration `stop_deceleration_m_s2`
 /// (so that the look-ahead, which assumes the stop's deceleration after a
 /// reaction time, never trips on the return's own braking).
 pub fn return_limits(planned: &Limits, ds: &DataSheet, stop_deceleration_m_s2: f64) -> Limits {
-    let pos = super::super::commission::positioning_limits(ds);
-    let a = pos
-        .a_max
-        .min(planned.a_max)
-        .min(0.5 * stop_deceleration_m_s2);
-    let v = pos.v_max.min(planned.v_max);
-    let j = pos.j_max.min(planned.j_max);
+    let a = planned.a_max.min(0.5 * stop_deceleration_m_s2);
+    let v = planned.v_max;
+    let j = planned.j_max;
     Limits {
         v_max: v,
         v_min: -v,
@@ -209,8 +205,8 @@ pub fn validation_moves(
     };
     // The unmeasured return to the start runs under the positioning
     // controller (the bootstrap cascade of stages 2-5, which moved the axis
-    // safely before) at the positioning limits, never faster than the move
-    // and braking with at most half the stop deceleration, to a point 15 mm
+    // safely before) with the move's limits, braking with at most half the
+    // stop deceleration, to a point 15 mm
     // inside the window from which it creeps to the start
     // ([`super::super::validation::run_move`]). Issue 12: under the designed
     // feedback without feedforward, a loop that is poorly damped on the real
