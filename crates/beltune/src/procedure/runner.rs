@@ -312,12 +312,26 @@ impl<'a> Runner<'a> {
             f64::NAN
         };
         self.open_loop = following_error_m.is_none();
-        if let Err(v) = self.supervisor.check(
-            self.position_m(),
-            self.supervised_velocity_m_s(),
-            torque,
-            following_error_m,
-        ) {
+        // In closed loop the fast estimate, where the rigid-body estimate
+        // confirms it (issue 12: a chattering loop on a coarse encoder shows
+        // 0.5 m/s spikes over a creeping cart, which tripped the look-ahead);
+        // where the smaller rigid-body estimate is judged, the look-ahead
+        // adds its lag.
+        let (velocity, lag) = if self.open_loop {
+            (self.rigid_velocity_m_s, 0.0)
+        } else {
+            let v = stop_start_velocity(self.velocity_m_s, self.rigid_velocity_m_s);
+            let lag = if v.abs() < self.velocity_m_s.abs() {
+                RIGID_VELOCITY_WINDOW_S
+            } else {
+                0.0
+            };
+            (v, lag)
+        };
+        if let Err(v) =
+            self.supervisor
+                .check_lagged(self.position_m(), velocity, lag, torque, following_error_m)
+        {
             return Err(self.stop_after(v, torque, following_error_m));
         }
         self.raw_step(torque, following_error_m)

@@ -429,6 +429,20 @@ impl SafetySupervisor {
         torque_command_nm: f64,
         following_error_m: Option<f64>,
     ) -> std::result::Result<(), Violation> {
+        self.check_lagged(position_m, velocity_m_s, 0.0, torque_command_nm, following_error_m)
+    }
+
+    /// [`SafetySupervisor::check`] for a velocity estimate that lags the
+    /// axis by `velocity_lag_s` (a smoothed estimate): the look-ahead adds
+    /// the distance the axis covers meanwhile.
+    pub fn check_lagged(
+        &self,
+        position_m: f64,
+        velocity_m_s: f64,
+        velocity_lag_s: f64,
+        torque_command_nm: f64,
+        following_error_m: Option<f64>,
+    ) -> std::result::Result<(), Violation> {
         let l = &self.limits;
         if !(position_m.is_finite() && velocity_m_s.is_finite() && torque_command_nm.is_finite()) {
             return Err(Violation::NonFinite);
@@ -451,6 +465,7 @@ impl SafetySupervisor {
                         / (2.0 * self.capability.deceleration_for(velocity_m_s))
             }
         };
+        let distance = distance + velocity_m_s.abs() * velocity_lag_s.max(0.0);
         let stop = position_m + velocity_m_s.signum() * distance;
         if stop < l.travel_min_m || stop > l.travel_max_m {
             return Err(Violation::TravelAhead {
@@ -613,6 +628,19 @@ mod tests {
             StopCapability::from_axis(t_max, j, i_t, 0.5, 0.0).unwrap()
         );
         assert!(StopCapability::provisional(t_max, j, i_t, f64::NAN).is_err());
+    }
+
+    /// A lagging (smoothed) velocity estimate: the look-ahead adds the
+    /// distance covered during the lag.
+    #[test]
+    fn a_lagging_velocity_adds_its_distance_issue_12() {
+        let s = SafetySupervisor::with_capability(limits(), instant(10.0)).unwrap();
+        // 0.449 m at 0.99 m/s stops at 0.498 m; 20 ms of lag add 19.8 mm
+        assert!(s.check_lagged(0.449, 0.99, 0.0, 0.0, Some(0.0)).is_ok());
+        assert!(matches!(
+            s.check_lagged(0.449, 0.99, 0.02, 0.0, Some(0.0)),
+            Err(Violation::TravelAhead { .. })
+        ));
     }
 
     #[test]
