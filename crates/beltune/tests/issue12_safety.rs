@@ -10,7 +10,13 @@ use beltune::sim::{SimAxis, SimConfig};
 use beltune::study::{run_plant, Outcome, Ranges};
 
 fn plant(index: u64) -> Outcome {
-    run_plant(12, index, &Ranges::default(), &CommissioningConfig::default()).unwrap()
+    run_plant(
+        12,
+        index,
+        &Ranges::default(),
+        &CommissioningConfig::default(),
+    )
+    .unwrap()
 }
 
 /// Plants #24 and #38 (15.7 and 16.1 kg, tilt +12 / +29 deg) ended "during
@@ -23,7 +29,11 @@ fn the_validation_return_ends_in_no_travel_stop_issue_12() {
     for index in [24, 38] {
         let o = plant(index);
         assert!(!o.travel_violation, "#{index}: {:?}", o.travel_excess_m);
-        assert!(!o.message.contains("travel window"), "#{index}: {}", o.message);
+        assert!(
+            !o.message.contains("travel window"),
+            "#{index}: {}",
+            o.message
+        );
     }
 }
 
@@ -68,11 +78,21 @@ fn commission_sim_c(seed: u64, noise: MeasurementNoise) -> (Vec<f64>, Vec<f64>, 
     )
     .unwrap();
     let ds = DataSheet::for_plant(&plant, start, None);
-    let run = commission(&mut axis, &ds, &CommissioningConfig::default(), &mut NoProgress)
-        .unwrap_or_else(|e| panic!("sim-c: {e}"));
+    let run = commission(
+        &mut axis,
+        &ds,
+        &CommissioningConfig::default(),
+        &mut NoProgress,
+    )
+    .unwrap_or_else(|e| panic!("sim-c: {e}"));
     (
         run.excitation.position_m,
-        run.moves[2].record.samples.iter().map(|s| s.torque_actual_nm).collect(),
+        run.moves[2]
+            .record
+            .samples
+            .iter()
+            .map(|s| s.torque_actual_nm)
+            .collect(),
         run.validation.nonlinear.max_tracking_error_m,
     )
 }

@@ -75,7 +75,8 @@ pub fn bootstrap_with_friction(
     let j = require_positive("rigid inertia [kg m^2]", j_kg_m2)?;
     require_positive("i_t [m/rad]", i_t_m)?;
     require_positive("torque limit [N m]", torque_max_nm)?;
-    let d = crate::error::require_non_negative("viscous friction [N m s/rad]", viscous_nm_s_per_rad)?;
+    let d =
+        crate::error::require_non_negative("viscous friction [N m s/rad]", viscous_nm_s_per_rad)?;
     let w_c = bootstrap_crossover_rad_s(j, i_t_m, torque_max_nm);
     let k_p = j * w_c;
     let gains = CascadeGains::new(w_c / 5.0, k_p, k_p * (w_c / 4.0 + d / j));
@@ -114,7 +115,8 @@ mod tests {
             },
         )?;
         let (j, i_t) = (truth.rigid_inertia(), truth.i_t);
-        let ctrl = bootstrap_with_friction(j, i_t, info.ts_s, info.torque_max_nm, viscous_nm_s_per_rad)?;
+        let ctrl =
+            bootstrap_with_friction(j, i_t, info.ts_s, info.torque_max_nm, viscous_nm_s_per_rad)?;
         let limits = Limits {
             v_max: 0.5,
             v_min: -0.5,

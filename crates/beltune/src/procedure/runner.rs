@@ -328,10 +328,13 @@ impl<'a> Runner<'a> {
             };
             (v, lag)
         };
-        if let Err(v) =
-            self.supervisor
-                .check_lagged(self.position_m(), velocity, lag, torque, following_error_m)
-        {
+        if let Err(v) = self.supervisor.check_lagged(
+            self.position_m(),
+            velocity,
+            lag,
+            torque,
+            following_error_m,
+        ) {
             return Err(self.stop_after(v, torque, following_error_m));
         }
         self.raw_step(torque, following_error_m)
@@ -526,9 +529,7 @@ impl<'a> Runner<'a> {
 /// a hard acceleration by its 20 ms window: the stop then starts slower
 /// and its controller brakes the difference).
 fn stop_start_velocity(supervised_m_s: f64, rigid_m_s: f64) -> f64 {
-    if !(supervised_m_s.is_finite() && rigid_m_s.is_finite())
-        || supervised_m_s * rigid_m_s <= 0.0
-    {
+    if !(supervised_m_s.is_finite() && rigid_m_s.is_finite()) || supervised_m_s * rigid_m_s <= 0.0 {
         return 0.0;
     }
     supervised_m_s.signum() * supervised_m_s.abs().min(rigid_m_s.abs())

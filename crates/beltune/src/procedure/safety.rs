@@ -429,7 +429,13 @@ impl SafetySupervisor {
         torque_command_nm: f64,
         following_error_m: Option<f64>,
     ) -> std::result::Result<(), Violation> {
-        self.check_lagged(position_m, velocity_m_s, 0.0, torque_command_nm, following_error_m)
+        self.check_lagged(
+            position_m,
+            velocity_m_s,
+            0.0,
+            torque_command_nm,
+            following_error_m,
+        )
     }
 
     /// [`SafetySupervisor::check`] for a velocity estimate that lags the

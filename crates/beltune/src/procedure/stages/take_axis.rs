@@ -79,7 +79,13 @@ pub fn move_to_worst_case(
     datasheet: &DataSheet,
 ) -> Result<()> {
     st.start("move to worst-case position", 0);
-    move_to(st.runner, ctrl, id_pos_m, &positioning_limits(datasheet), 0.1)?;
+    move_to(
+        st.runner,
+        ctrl,
+        id_pos_m,
+        &positioning_limits(datasheet),
+        0.1,
+    )?;
     let line = format!(
         "at {:.1} mm (cart far from the motor: longest belt segment, lowest resonance)",
         st.runner.position_m() * 1e3
