@@ -426,7 +426,7 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
         _ => None,
     };
     let started = Instant::now();
-    let run = commission_recorded(id, friction, knobs, 2e-3)?;
+    let run = commission_recorded(id, friction, knobs, args.knobs.rule(), 2e-3)?;
     let source = csv.display().to_string();
     let provenance = Provenance::of_this_process(None);
     let (json, report) = recorded_outputs(&run, &source, torque_limit, provenance.clone())?;
@@ -617,6 +617,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let ds = DataSheet::for_plant(&plant, start_position, args.travel_window);
     let mut cfg = CommissioningConfig {
         knobs: args.knobs.knobs()?,
+        design_rule: args.knobs.rule(),
         ..CommissioningConfig::default()
     };
     cfg.excitation.fixed_amplitude_nm = args.excitation_amplitude;

@@ -55,9 +55,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let model = ModelFile::load(&args.model)?;
     check_ts(model.design_ts_s(args.ts), "the model's ts_s")?;
-    let input = model.design_input(args.ts)?;
     let knobs = args.knobs.knobs()?;
-    let d = design::design(&input, &knobs)?;
+    let d = model.design(args.ts, &knobs, args.knobs.rule())?.design;
     if !model.identified.dead_time_measured {
         println!(
             "dead time:  not measured; {} ms assumed (thesis 3.30)",

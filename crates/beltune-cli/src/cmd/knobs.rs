@@ -3,14 +3,16 @@
 //! Precedence: defaults (thesis: Butterworth, 60 deg / 80 deg, -10 dB), then
 //! `--dynamics` (one-knob mode), then the explicit expert flags.
 
+use beltune::design::robust::DesignRule;
 use beltune::design::{DesignKnobs, Dynamics, PrefilterKind};
 
 /// Design knobs (thesis 4.2-4.3) and the one-knob mode.
 #[derive(clap::Args, Clone, Debug)]
 pub struct KnobArgs {
-    /// Prefilter in the velocity loop: butterworth, notch or none.
-    #[arg(long, default_value = "butterworth")]
-    pub prefilter: String,
+    /// Prefilter in the velocity loop: butterworth, notch or none (default: chosen by the
+    /// robust design rule, which starts from butterworth).
+    #[arg(long)]
+    pub prefilter: Option<String>,
     /// Velocity-loop phase margin in degrees (default 60, or from --dynamics).
     #[arg(long, allow_negative_numbers = true)]
     pub pm_velocity: Option<f64>,
@@ -26,12 +28,16 @@ pub struct KnobArgs {
     /// One-knob mode: conservative, standard, dynamic, or a number in [0, 1].
     #[arg(long, allow_hyphen_values = true)]
     pub dynamics: Option<String>,
+    /// Design with the thesis' rule on the fit as identified (friction lumped into damping)
+    /// instead of the robust rule, for comparison.
+    #[arg(long)]
+    pub thesis_design: bool,
 }
 
 impl KnobArgs {
     /// The knobs, or one line saying which value is wrong.
     pub fn knobs(&self) -> anyhow::Result<DesignKnobs> {
-        let kind: PrefilterKind = self.prefilter.parse()?;
+        let kind: PrefilterKind = self.prefilter.as_deref().unwrap_or("butterworth").parse()?;
         let mut knobs = DesignKnobs {
             prefilter: kind,
             ..DesignKnobs::default()
@@ -50,5 +56,24 @@ impl KnobArgs {
         }
         knobs.filter_attenuation_db = self.filter_attenuation_db;
         Ok(knobs)
+    }
+
+    /// The design rule: the thesis' with `--thesis-design`, exactly the knobs
+    /// when any knob flag is given, else the robust rule
+    /// ([`beltune::design::robust::DesignRule`]).
+    pub fn rule(&self) -> DesignRule {
+        let explicit = self.prefilter.is_some()
+            || self.pm_velocity.is_some()
+            || self.pm_position.is_some()
+            || self.resonance_suppression_db.is_some()
+            || self.filter_attenuation_db.is_some()
+            || self.dynamics.is_some();
+        if self.thesis_design {
+            DesignRule::Thesis
+        } else if explicit {
+            DesignRule::Knobs
+        } else {
+            DesignRule::Robust
+        }
     }
 }

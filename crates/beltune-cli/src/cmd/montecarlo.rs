@@ -32,9 +32,10 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
-    /// Commission with the robust redesign after the friction runs.
+    /// Commission with the thesis' design on the fit as identified instead of
+    /// the robust design rule (to compare the two).
     #[arg(long)]
-    pub robust: bool,
+    pub thesis_design: bool,
 }
 
 /// Run the subcommand.
@@ -62,7 +63,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?);
     let ranges = Ranges::default();
     let cfg = CommissioningConfig {
-        robust_design: args.robust,
+        design_rule: if args.thesis_design {
+            beltune::design::robust::DesignRule::Thesis
+        } else {
+            beltune::design::robust::DesignRule::Robust
+        },
         ..CommissioningConfig::default()
     };
     let first = args.first;

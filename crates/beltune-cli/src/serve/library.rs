@@ -17,8 +17,9 @@ use super::api::{
     FrfOverlay, Gains, Knobs, LoopMargins, MoveData, PrefilterInfo, PrefilterKind,
 };
 use super::tuner::{ModelSummary, SavedFile, TuneError, Tuner};
+use beltune::design::robust::{design_identified, DesignRule};
 use beltune::design::{
-    self, ControllerDesign, DesignInput, DesignKnobs, Dynamics, FrictionParams, Prefilter,
+    ControllerDesign, DesignInput, DesignKnobs, Dynamics, FrictionParams, Prefilter,
     PrefilterKind as DesignPrefilterKind,
 };
 use beltune::ident::FitModel;
@@ -109,6 +110,10 @@ pub struct DesignModel {
     pub input: Option<DesignInput>,
     /// Torque limit of the drive from the record, N m (`None`: egc70's).
     pub torque_max_nm: Option<f64>,
+    /// One-sigma uncertainty of the identified `m_c`, kg (NaN: unknown, 5 %).
+    pub m_c_sigma: f64,
+    /// One-sigma uncertainty of the identified `c`, N/m (NaN: unknown, 5 %).
+    pub c_sigma: f64,
 }
 
 /// Read `dir/commissioning.json` (and `dir/frf.csv` when present); every
@@ -163,6 +168,8 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         commissioned,
         json: Some(json),
         input: None,
+        m_c_sigma: id.m_c_sigma,
+        c_sigma: id.c_sigma,
         torque_max_nm: id.torque_max_nm,
     })
 }
@@ -201,6 +208,8 @@ pub struct LibraryTuner {
     model: DesignModel,
     input: DesignInput,
     friction: FrictionResult,
+    /// `m_c` and `c` one-sigma uncertainties of the identification.
+    sigmas: (f64, f64),
     nominal_payload_kg: f64,
     move_plant: MovePlant,
     /// Torque limit written to controller.toml and used in the move: the
@@ -242,6 +251,7 @@ impl LibraryTuner {
             holding_torque_nm: f.holding_torque_nm.unwrap_or(0.0),
         };
         Ok(LibraryTuner {
+            sigmas: (model.m_c_sigma, model.c_sigma),
             model,
             input,
             friction,
@@ -290,6 +300,8 @@ impl LibraryTuner {
             frf: Some(lines),
             commissioned: Some(run.validation.nonlinear.clone()),
             json: Some(json),
+            m_c_sigma: run.identified.m_c_sigma,
+            c_sigma: run.identified.c_sigma,
             input: Some(run.design.input),
             torque_max_nm: None,
         };
@@ -324,12 +336,36 @@ impl LibraryTuner {
         Ok(k)
     }
 
-    /// The design for `knobs`. Every library error is caused by the knobs (the
-    /// model was validated at start-up), so all are [`TuneError::Infeasible`]
-    /// with the library's message.
+    /// The design for `knobs`, by the commissioning's rule
+    /// ([`beltune::design::robust::design_identified`]): without an expert
+    /// knob the robust rule (what `beltune commission` delivers for the same
+    /// model), with one the thesis' conditions for exactly those knobs. Every
+    /// library error is caused by the knobs (the model was validated at
+    /// start-up), so all are [`TuneError::Infeasible`] with the library's
+    /// message.
     pub fn design(&self, knobs: &Knobs) -> Result<ControllerDesign, TuneError> {
         let k = self.design_knobs(knobs)?;
-        design::design(&self.input, &k).map_err(|e| TuneError::Infeasible(e.to_string()))
+        let explicit = knobs.prefilter.is_some()
+            || knobs.filter_attenuation_db.is_some()
+            || knobs.dynamics.is_some()
+            || knobs.pm_velocity_deg.is_some()
+            || knobs.pm_position_deg.is_some()
+            || knobs.resonance_suppression_db.is_some();
+        let rule = if explicit {
+            DesignRule::Knobs
+        } else {
+            DesignRule::Robust
+        };
+        design_identified(
+            &self.input,
+            self.input.friction.map(|f| f.viscous_nm_s_per_rad),
+            self.sigmas.0,
+            self.sigmas.1,
+            &k,
+            rule,
+        )
+        .map(|r| r.design)
+        .map_err(|e| TuneError::Infeasible(e.to_string()))
     }
 
     /// The payload the move uses for `knobs`, kg.

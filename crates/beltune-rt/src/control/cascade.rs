@@ -10,6 +10,7 @@
 //! e         = omega_ref - omega_hat               velocity error
 //! e_f       = G_pre(e)                            prefilter (notch / Butterworth), Figure 6.9
 //! tau_FF    = m_e alpha_d + d_v omega_d + tau_c sign(omega_d)    (4.16), refinement (b): sample n_T ahead
+//!             + tau_c h   while omega_d = 0                          refinement (c): Coulomb hold
 //! tau_d     = K_P e_f + K_I x_I[k] + tau_FF + tau_offset
 //! tau       = clamp(tau_d, -tau_max, tau_max)
 //! x_I[k+1]  = (6.25), or the conditional integration (6.26)
@@ -29,13 +30,25 @@
 //! offset (holding torque, e.g. on a tilted axis) is treated like the feedforward
 //! in (6.26). With `K_I = 0` there is no integral action and (6.26) is skipped.
 //!
+//! Refinement (c), the Coulomb hold (issue 12): `sign(omega_d)` drops to 0 when
+//! the trajectory ends, while the axis, a few hundred um short of its target,
+//! sticks; the integrator alone then needs seconds to build the Coulomb torque
+//! from the small standing error (`K_I K_PP e` per second). The hold `h` keeps
+//! the direction of the last motion (`+1`/`-1`) at standstill of the
+//! trajectory as long as the position error `phi_d - phi_m` points that way,
+//! and releases it (`h = 0`) for good when the error reaches zero or changes
+//! sign, until the trajectory moves again. It is a one-shot completion of the
+//! move, not a feedback: with an accurate `tau_c` the axis finishes its move
+//! as if frictionless under the cascade's feedback, and stops at the target
+//! where the hold lets go. It acts only with the Coulomb term switched on.
+//!
 //! [`CascadeController::reset_to`] assumes the axis at rest (`omega_d = 0`); the
 //! desired-velocity low-pass starts from zero.
 //!
 //! Cost per sample: the velocity filter (2 multiplications), the desired-velocity
-//! low-pass (3), two second-order sections (5 each), feedforward (2), position
-//! loop, PI and anti-windup (about 8): about 25 multiplications, no division, no
-//! allocation, no panic. Measured (crate README): 140 instructions, about 80 ns
+//! low-pass (3), two second-order sections (5 each), feedforward (2), Coulomb
+//! hold (1 multiplication, 3 comparisons), position loop, PI and anti-windup
+//! (about 8): about 26 multiplications, no division, no allocation, no panic. Measured (crate README): 140 instructions, about 80 ns
 //! per step in f64 on the development machine (137 instructions in f32).
 
 use super::feedforward::{Feedforward, FeedforwardParams};
@@ -293,6 +306,8 @@ pub struct CascadeController<T = f64> {
     prefilter: Cascade<T, 2>,
     integrator_rad: T,
     inv_k_i: T,
+    /// Direction of the Coulomb hold `h` of refinement (c): +1, -1 or 0.
+    coulomb_hold: T,
 }
 
 impl<T: Real> CascadeController<T> {
@@ -320,6 +335,7 @@ impl<T: Real> CascadeController<T> {
             prefilter: Cascade::new(config.prefilter),
             integrator_rad: T::ZERO,
             inv_k_i: if k_i > T::ZERO { T::ONE / k_i } else { T::ZERO },
+            coulomb_hold: T::ZERO,
         };
         c.reset_to(T::ZERO);
         Ok(c)
@@ -360,6 +376,7 @@ impl<T: Real> CascadeController<T> {
         self.desired_lp.reset();
         self.prefilter.reset();
         self.integrator_rad = T::ZERO;
+        self.coulomb_hold = T::ZERO;
     }
 
     /// As [`Self::reset_to`], with the integrator preloaded so that at zero
@@ -384,6 +401,12 @@ impl<T: Real> CascadeController<T> {
     /// Integrator state `x_I` in rad.
     pub fn integrator_rad(&self) -> T {
         self.integrator_rad
+    }
+
+    /// Direction of the Coulomb hold of refinement (c): `+1`, `-1`, or `0`
+    /// when released.
+    pub fn coulomb_hold(&self) -> T {
+        self.coulomb_hold
     }
 
     /// One sample with the velocity from the velocity filter `G_R` (6.1) of the
@@ -427,9 +450,23 @@ impl<T: Real> CascadeController<T> {
         let omega_ref = g.k_pp_per_s * e_phi + g.k_v * omega_d;
         let e = omega_ref - velocity_estimate_rad_s;
         let e_f = self.prefilter.step(e);
-        let tau_ff = self
+        let mut tau_ff = self
             .ff
             .torque_nm(ff_sample.velocity_rad_s, ff_sample.acceleration_rad_s2);
+        // Refinement (c), the Coulomb hold (module docs).
+        let v_ff = ff_sample.velocity_rad_s;
+        let band = self.ff.coulomb_deadband_rad_s;
+        if v_ff > band {
+            self.coulomb_hold = T::ONE;
+        } else if v_ff < -band {
+            self.coulomb_hold = -T::ONE;
+        } else if self.coulomb_hold != T::ZERO {
+            if e_phi * self.coulomb_hold > T::ZERO {
+                tau_ff = tau_ff + self.coulomb_hold * self.ff.coulomb_nm;
+            } else {
+                self.coulomb_hold = T::ZERO;
+            }
+        }
         let bias = tau_ff + cfg.torque_offset_nm;
         let p_part = g.k_p_nm_s_per_rad * e_f;
         let tau_d = p_part + g.k_i_nm_per_rad * self.integrator_rad + bias;
@@ -545,6 +582,56 @@ mod tests {
         };
         let out = c2.step(&Setpoint::with_preview(sp.now, ahead), 0.0);
         assert!((out.feedforward_nm - 0.6).abs() < 1e-15);
+    }
+
+    /// Refinement (c), issue 12 (static error): after a move in + direction the
+    /// Coulomb term holds `+tau_c` at standstill while the axis is short of
+    /// its target, lets go for good when the error reaches zero, and never
+    /// acts without the Coulomb term.
+    #[test]
+    fn the_coulomb_hold_completes_the_move_and_lets_go_at_the_target_issue_12() {
+        let tau_c = 0.1;
+        let mut cfg = config();
+        cfg.feedforward = Feedforward::nonlinear(0.0, 0.0, tau_c);
+        let mut c = CascadeController::new(cfg).unwrap();
+        let moving = |angle: f64| {
+            Setpoint::at(MotionSample {
+                angle_rad: angle,
+                velocity_rad_s: 1.0,
+                acceleration_rad_s2: 0.0,
+            })
+        };
+        assert_eq!(c.step(&moving(0.0), 0.0).feedforward_nm, tau_c);
+        assert_eq!(c.coulomb_hold(), 1.0);
+        // The trajectory stops at 1 rad, the axis 1 mrad short: hold.
+        let stop = Setpoint::hold(1.0);
+        for _ in 0..10 {
+            assert_eq!(c.step(&stop, 0.999).feedforward_nm, tau_c);
+        }
+        // It reaches the target: released, and stays released even if the
+        // axis then rests short again (no chattering feedback).
+        assert_eq!(c.step(&stop, 1.0).feedforward_nm, 0.0);
+        assert_eq!(c.coulomb_hold(), 0.0);
+        assert_eq!(c.step(&stop, 0.999).feedforward_nm, 0.0);
+        // Overshoot after a move in - direction releases it too.
+        let back = Setpoint::at(MotionSample {
+            angle_rad: 1.0,
+            velocity_rad_s: -1.0,
+            acceleration_rad_s2: 0.0,
+        });
+        assert_eq!(c.step(&back, 1.0).feedforward_nm, -tau_c);
+        assert_eq!(c.step(&Setpoint::hold(0.5), 0.6).feedforward_nm, -tau_c);
+        assert_eq!(c.step(&Setpoint::hold(0.5), 0.4).feedforward_nm, 0.0);
+        // Reset clears it.
+        c.step(&moving(0.0), 0.0);
+        c.reset_to(0.0);
+        assert_eq!(c.coulomb_hold(), 0.0);
+        // Without the Coulomb term nothing is held.
+        let mut lin = config();
+        lin.feedforward = Feedforward::linear(1e-3, 1e-3);
+        let mut c = CascadeController::new(lin).unwrap();
+        c.step(&moving(0.0), 0.0);
+        assert_eq!(c.step(&stop, 0.5).feedforward_nm, 0.0);
     }
 
     #[test]

@@ -6,6 +6,8 @@
 //! - [`feedforward`]: inertia and friction feedforward (4.15)-(4.17),
 //! - [`sampled`]: the coefficients at `T_s` and the stability check of the discretized loops,
 //! - [`dynamics`]: the one-knob mode,
+//! - [`robust`]: the design rule for lightly damped axes (issue 12): friction separated from
+//!   damping, the prefilter chosen for margins that hold over the identification's uncertainty,
 //! - [`model_file`]: reading the identified model (TOML or `beltune identify` JSON).
 //!
 //! Interpretation (docs/thesis-map.md, "The printed controller gains"): the prefilter sits
@@ -20,6 +22,7 @@ pub mod feedforward;
 pub mod model_file;
 pub mod position;
 pub mod prefilter;
+pub mod robust;
 pub mod sampled;
 pub mod velocity;
 

@@ -429,6 +429,27 @@ impl ModelFile {
             friction,
         })
     }
+
+    /// The design for this model at sampling time `ts_s` with `rule`
+    /// ([`crate::design::robust::design_identified`]): the measured viscous
+    /// friction and the fit's uncertainties come from the file, so a
+    /// `commissioning.json` gives the commissioning's own controller.
+    pub fn design(
+        &self,
+        ts_s: Option<f64>,
+        knobs: &super::DesignKnobs,
+        rule: super::robust::DesignRule,
+    ) -> Result<super::robust::RobustDesign> {
+        let input = self.design_input(ts_s)?;
+        super::robust::design_identified(
+            &input,
+            input.friction.map(|f| f.viscous_nm_s_per_rad),
+            self.identified.m_c_sigma,
+            self.identified.c_sigma,
+            knobs,
+            rule,
+        )
+    }
 }
 
 #[cfg(test)]

@@ -68,10 +68,11 @@ fn independent_open_loop(d: &ControllerDesign, w: f64) -> (C64, C64) {
     let s = C64::new(0.0, w);
     let it2 = p.i_t * p.i_t;
     let j = p.theta_e + it2 * p.m_c;
-    let g_lf =
-        (1.0 + p.d_c / p.c * s + p.m_c / p.c * s * s) / (s * (j * s + it2 * (p.d_m + p.d_c)));
-    let g_hf = p.m_c
-        / (p.m_c * p.theta_e * s * s + (it2 * p.m_c * p.d_m + p.theta_e * p.d_c) * s + p.c * j);
+    // (2.40)/(2.41) with the belt damping `d` kept as in (2.38c)/(2.38g).
+    let g_lf = (1.0 + (p.d + p.d_c) / p.c * s + p.m_c / p.c * s * s)
+        / (s * (j * s + it2 * (p.d_m + p.d_c)));
+    let a3 = it2 * p.m_c * (p.d + p.d_m) + p.theta_e * (p.d + p.d_c);
+    let g_hf = p.m_c / (p.m_c * p.theta_e * s * s + a3 * s + p.c * j);
     let g = p.c * j / p.m_c * g_lf * g_hf;
     let pre = match d.prefilter {
         Prefilter::Butterworth { omega_bw_rad_s: b } => {

@@ -25,7 +25,8 @@ pub struct TwoMassParams {
     pub m_c: f64,
     /// `c`: replacement belt stiffness (2.26), N/m.
     pub c: f64,
-    /// `d`: belt damping (2.27), N s/m. Neglected (0) in (2.39)/(2.42).
+    /// `d`: belt damping (2.27), N s/m. Neglected (0) in (2.39); (2.42) keeps it in
+    /// its damping terms ([`Self::tf_high_frequency`]), the thesis' form for `d = 0`.
     #[serde(default)]
     pub d: f64,
     /// `d_m`: motor viscous damping as translational equivalent, N s/m
@@ -71,6 +72,21 @@ impl TwoMassParams {
     /// Rigid-body viscous damping seen by the motor, `i_t^2 (d_m + d_c)` in N m s/rad.
     pub fn rigid_damping(&self) -> f64 {
         self.i_t * self.i_t * (self.d_m + self.d_c)
+    }
+
+    /// Damping of the resonance mode, `a3` of (2.38g):
+    /// `i_t^2 m_c (d + d_m) + Theta_e (d + d_c)` in kg m^2/s (N m s / rad times kg):
+    /// with `Theta_e m_c s^2 + a3 s + c (Theta_e + i_t^2 m_c)` the damping ratio of
+    /// the resonance is `a3 / (2 sqrt(Theta_e m_c c (Theta_e + i_t^2 m_c)))`.
+    pub fn resonance_damping(&self) -> f64 {
+        let it2 = self.i_t * self.i_t;
+        it2 * self.m_c * (self.d + self.d_m) + self.theta_e * (self.d + self.d_c)
+    }
+
+    /// Damping ratio of the resonance mode of (2.41), dimensionless.
+    pub fn resonance_damping_ratio(&self) -> f64 {
+        self.resonance_damping()
+            / (2.0 * (self.theta_e * self.m_c * self.c * self.rigid_inertia()).sqrt())
     }
 
     /// Resonance `w_r = sqrt(c (Theta_e + i_t^2 m_c) / (Theta_e m_c))` (2.44), rad/s.
@@ -133,22 +149,27 @@ impl TwoMassParams {
         TwoMassParams { d: 0.0, ..*self }.tf_torque_to_motor_angle()
     }
 
-    /// Low-frequency (rigid) approximation `G^lf` (2.40).
+    /// Low-frequency (rigid) approximation `G^lf` (2.40). With a belt damping
+    /// `d > 0` the numerator carries `d + d_c` as in (2.38c); `d = 0` is (2.40).
     pub fn tf_low_frequency(&self) -> Tf {
-        let num = Poly::new(vec![1.0, self.d_c / self.c, self.m_c / self.c]);
+        let num = Poly::new(vec![1.0, (self.d + self.d_c) / self.c, self.m_c / self.c]);
         let den = Poly::new(vec![0.0, self.rigid_damping(), self.rigid_inertia()]);
         Tf::new(num, den)
     }
 
-    /// High-frequency approximation `G^hf` (2.41).
+    /// High-frequency approximation `G^hf` (2.41). Its damping term is the
+    /// `a3` of (2.38g), `i_t^2 m_c (d + d_m) + Theta_e (d + d_c)`, which is
+    /// (2.41)'s `i_t^2 m_c d_m + Theta_e d_c` for `d = 0`: a model whose
+    /// resonance is damped by the belt (issue 12: the simulator's truth, or a
+    /// design model whose resonance damping is not the rigid-body friction)
+    /// keeps that damping.
     pub fn tf_high_frequency(&self) -> Tf {
-        let it2 = self.i_t * self.i_t;
-        let num = Poly::new(vec![self.m_c]);
         let den = Poly::new(vec![
             self.c * self.rigid_inertia(),
-            it2 * self.m_c * self.d_m + self.theta_e * self.d_c,
+            self.resonance_damping(),
             self.m_c * self.theta_e,
         ]);
+        let num = Poly::new(vec![self.m_c]);
         Tf::new(num, den)
     }
 

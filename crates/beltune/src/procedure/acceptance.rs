@@ -6,10 +6,9 @@
 //! ([`Verdict::meets_limits`]) and in the CLI's exit status 5.
 
 use super::result::MoveSummary;
-use crate::design::ControllerDesign;
-use crate::lti::margins::margins;
-use crate::model::TwoMassParams;
-use crate::Result;
+pub use crate::design::robust::{
+    guaranteed_margins, margins_on, GuaranteedMargins, MarginsOn, UNCERTAINTY_SIGMAS,
+};
 use serde::{Deserialize, Serialize};
 
 /// Thesis chapter 5: largest cart tracking error with nonlinear feedforward, m.
@@ -19,26 +18,6 @@ pub const MAX_STATIC_ERROR_M: f64 = 100e-6;
 /// Smallest velocity-loop phase margin the commissioning accepts over the
 /// identification's uncertainty, deg.
 pub const MIN_GUARANTEED_PHASE_MARGIN_DEG: f64 = 30.0;
-/// Width of the uncertainty box in standard deviations of the fit.
-pub const UNCERTAINTY_SIGMAS: f64 = 2.0;
-
-/// The margins of the delivered velocity and position loops on the worst model
-/// of the identification's uncertainty box: `m_c` and `c` each at `+-2 sigma`,
-/// and the motor and cart damping `d_m`, `d_c` either as given (the fit's,
-/// bounded by the measured viscous friction) or half of that (the viscous
-/// friction's own uncertainty).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct GuaranteedMargins {
-    /// Smallest velocity-loop phase margin over the box, deg.
-    pub velocity_phase_margin_deg: f64,
-    /// Smallest velocity-loop gain margin over the box, dB.
-    pub velocity_gain_margin_db: f64,
-    /// Smallest position-loop phase margin over the box, deg.
-    pub position_phase_margin_deg: f64,
-    /// Models of the box evaluated.
-    pub models: usize,
-}
-
 /// The outcome of a commissioning against its own limits.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Verdict {
@@ -53,117 +32,6 @@ pub struct Verdict {
     pub guaranteed: GuaranteedMargins,
     /// The validation used a slower move than Table A.8 (the axis cannot do it).
     pub reduced_move: bool,
-}
-
-/// The margins of a controller on a plant other than its design model.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MarginsOn {
-    /// Velocity-loop phase margin, deg: over every gain crossover the
-    /// smallest angular distance of `L` from -180 deg (a lightly damped
-    /// resonance crosses 0 dB too, at any phase); negative when the sampled
-    /// closed loop is unstable.
-    pub velocity_phase_margin_deg: f64,
-    /// Velocity-loop gain margin, dB.
-    pub velocity_gain_margin_db: f64,
-    /// Position-loop phase margin, deg (same rule).
-    pub position_phase_margin_deg: f64,
-    /// Whether both sampled closed loops are stable (poles inside the unit circle).
-    pub stable: bool,
-}
-
-/// Smallest angular distance of `L(j w_c)` from -180 deg over the gain
-/// crossovers `w_c` of `l` on `grid`, deg (NaN without a crossover).
-fn nyquist_phase_margin_deg(l: impl Fn(f64) -> crate::lti::C64, grid: &[f64]) -> Result<f64> {
-    let crossings = crate::lti::margins::gain_crossovers(&l, grid)?;
-    Ok(crossings
-        .iter()
-        .map(|&w| {
-            let a = l(w).arg().to_degrees() + 180.0;
-            let d = a.rem_euclid(360.0);
-            d.min(360.0 - d)
-        })
-        .fold(f64::NAN, f64::min))
-}
-
-/// Margins of `design`'s controller (prefilter, PI, P gains, sampled
-/// controller) on `model` instead of the model it was designed on.
-pub fn margins_on(design: &ControllerDesign, model: &TwoMassParams) -> Result<MarginsOn> {
-    let mut other = design.clone();
-    other.input.model = *model;
-    let grid = crate::design::verification_grid(&other.input)?;
-    let pm_v = nyquist_phase_margin_deg(|w| other.velocity_open_loop(w), &grid)?;
-    let pm_p = nyquist_phase_margin_deg(|w| other.position_open_loop(w), &grid)?;
-    let gm_v = margins(|w| other.velocity_open_loop(w), &grid)
-        .map(|m| m.gain_margin_db)
-        .unwrap_or(f64::NAN);
-    let stable = crate::design::sampled::DiscreteLoops::new(&other.discrete, &other.input)
-        .and_then(|l| crate::design::sampled::check_stability(&l))
-        .is_ok();
-    let sign = if stable { 1.0 } else { -1.0 };
-    Ok(MarginsOn {
-        velocity_phase_margin_deg: sign * pm_v,
-        velocity_gain_margin_db: gm_v,
-        position_phase_margin_deg: sign * pm_p,
-        stable,
-    })
-}
-
-/// The guaranteed margins of `design` over the box around `model` with
-/// one-sigma uncertainties `m_c_sigma_kg`, `c_sigma_n_per_m` (NaN: 5 %).
-pub fn guaranteed_margins(
-    design: &ControllerDesign,
-    model: &TwoMassParams,
-    m_c_sigma_kg: f64,
-    c_sigma_n_per_m: f64,
-) -> Result<GuaranteedMargins> {
-    let sm = if m_c_sigma_kg.is_finite() {
-        m_c_sigma_kg
-    } else {
-        0.05 * model.m_c
-    };
-    let sc = if c_sigma_n_per_m.is_finite() {
-        c_sigma_n_per_m
-    } else {
-        0.05 * model.c
-    };
-    let k = UNCERTAINTY_SIGMAS;
-    let mut out = GuaranteedMargins {
-        velocity_phase_margin_deg: f64::INFINITY,
-        velocity_gain_margin_db: f64::INFINITY,
-        position_phase_margin_deg: f64::INFINITY,
-        models: 0,
-    };
-    for dm in [-1.0, 0.0, 1.0] {
-        for dc in [-1.0, 0.0, 1.0] {
-            for damped in [true, false] {
-                let mut m = *model;
-                m.m_c = (model.m_c + dm * k * sm).max(0.2 * model.m_c);
-                m.c = (model.c + dc * k * sc).max(0.2 * model.c);
-                if !damped {
-                    m.d_m *= 0.5;
-                    m.d_c *= 0.5;
-                }
-                let on = margins_on(design, &m)?;
-                let (pm_v, gm_v, pm_p) = (
-                    on.velocity_phase_margin_deg,
-                    on.velocity_gain_margin_db,
-                    on.position_phase_margin_deg,
-                );
-                let worse = |a: f64, b: f64| {
-                    if a.is_nan() || b.is_nan() {
-                        f64::NAN
-                    } else {
-                        a.min(b)
-                    }
-                };
-                out.velocity_phase_margin_deg = worse(out.velocity_phase_margin_deg, pm_v);
-                out.velocity_gain_margin_db = worse(out.velocity_gain_margin_db, gm_v);
-                out.position_phase_margin_deg = worse(out.position_phase_margin_deg, pm_p);
-                out.models += 1;
-            }
-        }
-    }
-    Ok(out)
 }
 
 /// `x < limit`, false for NaN.

@@ -29,6 +29,7 @@ use super::runner::Runner;
 use super::safety::StopCapability;
 use super::stages::{self, Stages};
 use super::validation::{MoveResult, MoveSpec};
+use crate::design::robust::DesignRule;
 use crate::design::{ControllerDesign, DesignKnobs, FrictionParams};
 use crate::ident::dead_time::DeadTime;
 use crate::ident::etfe::Frf;
@@ -259,11 +260,14 @@ pub struct CommissioningConfig {
     pub validation: MoveSpec,
     /// Largest following error allowed in closed-loop stages, m.
     pub following_error_max_m: f64,
-    /// Replace the thesis design after the friction runs by the robust
-    /// redesign ([`stages::design::robust_design`]): margins that hold on the
-    /// damping the friction runs support, at the price of a slower loop
-    /// (issue 12; off by default: on egc70 it misses the thesis' accuracy).
-    pub robust_design: bool,
+    /// How the controller is designed from the identified model
+    /// ([`crate::design::robust`]): by default the robust rule for lightly
+    /// damped axes (issue 12: friction separated from damping, prefilter and
+    /// nominal margins chosen for margins that hold over the
+    /// identification's uncertainty); [`DesignRule::Knobs`] uses exactly
+    /// [`Self::knobs`]; [`DesignRule::Thesis`] the thesis' design on the fit as
+    /// identified.
+    pub design_rule: DesignRule,
 }
 
 impl Default for CommissioningConfig {
@@ -276,7 +280,7 @@ impl Default for CommissioningConfig {
             friction_run_m: 0.1,
             validation: MoveSpec::default(),
             following_error_max_m: 0.05,
-            robust_design: false,
+            design_rule: DesignRule::Robust,
         }
     }
 }
@@ -489,30 +493,33 @@ pub fn commission(
     // ---- 7b. redesign on the damping the friction runs support (issue 12) ----
     // The FRF's motor and cart damping d_m, d_c lump the Coulomb friction
     // the small-signal excitation meets into viscous damping; the friction
-    // runs measure the real viscous part. A design on the over-damped fit
-    // meets its margins on the fit only.
-    let bounded = stages::design::bound_damping(&p, fr.result.viscous_nm_s_per_rad);
-    let (designed, guaranteed, tried) = if cfg.robust_design {
-        st.compute(|| {
-            stages::design::robust_design(
-                &designed.design,
-                &bounded,
-                ident.identified.m_c_sigma,
-                ident.identified.c_sigma,
-                &cfg.knobs,
-            )
-        })?
+    // runs measure the real viscous part (crate::design::robust).
+    let robust = st.compute(|| {
+        stages::design::design_rule(
+            &designed.design.input,
+            cfg,
+            &ident.fit,
+            Some(fr.result.viscous_nm_s_per_rad),
+        )
+    })?;
+    let guaranteed = robust.guaranteed;
+    let tried = if cfg.design_rule == DesignRule::Robust {
+        format!(
+            "{} candidate designs, {} checked over the uncertainty{}",
+            robust.candidates_designed,
+            robust.candidates_checked,
+            if robust.meets_guarantee {
+                ""
+            } else {
+                "; none meets the guarantee, the most robust kept"
+            }
+        )
+    } else if cfg.design_rule == DesignRule::Knobs {
+        "the configured knobs on the design model".into()
     } else {
-        let g = st.compute(|| {
-            super::acceptance::guaranteed_margins(
-                &designed.design,
-                &bounded,
-                ident.identified.m_c_sigma,
-                ident.identified.c_sigma,
-            )
-        })?;
-        (designed.design, g, "thesis design kept".to_string())
+        "the thesis design on the fit as identified".into()
     };
+    let designed = robust.design;
     let feedback = if designed == des_first {
         feedback
     } else {
@@ -522,13 +529,18 @@ pub fn commission(
     };
     st.start("robust design", 0);
     let robust_line = format!(
-        "{:?} prefilter ({:.1} dB), K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s, velocity loop {:.1} Hz; guaranteed over the uncertainty: velocity {:.1} deg, position {:.1} deg",
-        designed.knobs.prefilter,
+        "{} prefilter ({:.1} dB), K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s, velocity loop {:.1} Hz / {:.1} deg nominal; guaranteed over the uncertainty: velocity {:.1} deg, position {:.1} deg",
+        match designed.knobs.prefilter {
+            crate::design::PrefilterKind::Butterworth => "Butterworth",
+            crate::design::PrefilterKind::Notch => "notch",
+            crate::design::PrefilterKind::None => "no",
+        },
         designed.knobs.attenuation_db(),
         designed.k_p,
         designed.k_i,
         designed.k_pp,
         designed.velocity_margins.crossover_rad_s / (2.0 * std::f64::consts::PI),
+        designed.velocity_margins.phase_margin_deg,
         guaranteed.velocity_phase_margin_deg,
         guaranteed.position_phase_margin_deg
     );

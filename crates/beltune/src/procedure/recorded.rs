@@ -5,7 +5,8 @@
 //! amplitude search, friction runs, validation moves) are skipped and say so.
 
 use super::result::{FrictionResult, IdentifiedModel};
-use crate::design::{design, ControllerDesign, DesignInput, DesignKnobs, FrictionParams};
+use crate::design::robust::{design_identified, DesignRule};
+use crate::design::{ControllerDesign, DesignInput, DesignKnobs, FrictionParams};
 use crate::ident::{MotionFriction, RecordedIdentification};
 use crate::Result;
 use std::time::Instant;
@@ -37,6 +38,7 @@ pub fn commission_recorded(
     identification: RecordedIdentification,
     motion_friction: Option<MotionFriction>,
     knobs: &DesignKnobs,
+    rule: DesignRule,
     t_r_s: f64,
 ) -> Result<RecordedCommissioning> {
     let t0 = Instant::now();
@@ -72,7 +74,19 @@ pub fn commission_recorded(
             coulomb_nm: f.coulomb_nm,
         }),
     };
-    let des = design(&input, knobs)?;
+    let (m_c_sigma, c_sigma) = fit
+        .uncertainty
+        .map(|u| (u.m_c, u.c))
+        .unwrap_or((f64::NAN, f64::NAN));
+    let des = design_identified(
+        &input,
+        friction.as_ref().map(|f| f.viscous_nm_s_per_rad),
+        m_c_sigma,
+        c_sigma,
+        knobs,
+        rule,
+    )?
+    .design;
     let mut identified = IdentifiedModel::from_fit(fit, &identification.frf, dead_time_s, f64::NAN);
     identified.dead_time_measured = identification.dead_time.is_some();
     identified.ts_s = Some(identification.ts_s);
