@@ -17,7 +17,7 @@ use beltune_rt::control::CascadeConfig;
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 
 /// Speeds of the runs (each up and down), m/s.
-const RUN_SPEEDS_M_S: [f64; 2] = [0.12, 0.3];
+const RUN_SPEEDS_M_S: [f64; 2] = [0.15, 0.3];
 /// Half the length of the runs, m (each run is twice this long).
 const RUN_HALF_M: f64 = 0.03;
 /// Distance the runs keep from the window's edges, m (the bootstrap loop
@@ -104,7 +104,7 @@ pub fn holding_torque_stage(
     torque_max_nm: f64,
 ) -> Result<Holding> {
     st.start("holding torque", 0);
-    let pairs = holding_runs(st, ctrl, center_m, ds)?;
+    let pairs = holding_runs(st, ctrl, center_m, ds, torque_max_nm)?;
     let holding = holding_from_runs(&pairs);
     st.runner.set_stop_capability(StopCapability::from_axis(
         torque_max_nm,
@@ -126,17 +126,46 @@ pub fn holding_torque_stage(
     Ok(holding)
 }
 
+/// The runs: the slow pair with `ctrl`, the fast pair with the bootstrap
+/// fitted to the viscous friction the slow pair bounds (all its friction
+/// taken as viscous: `d <= tau_f / w`), so that a heavily damped axis tracks
+/// the fast runs (issue 12: on sim-b the unfitted loop lagged so far that
+/// the fast runs had no constant-velocity part).
 fn holding_runs(
     st: &mut Stages,
     ctrl: &CascadeConfig<f64>,
     center_m: f64,
     ds: &DataSheet,
+    torque_max_nm: f64,
 ) -> Result<Vec<RunPair>> {
     let half = RUN_HALF_M;
+    let ts = st.runner.info().ts_s;
     let runner = &mut *st.runner;
-    move_to(runner, ctrl, center_m - half, &positioning_limits(ds), 0.05)?;
+    let mut ctrl = *ctrl;
     let mut pairs = Vec::with_capacity(RUN_SPEEDS_M_S.len());
     'speeds: for (i, v) in RUN_SPEEDS_M_S.into_iter().enumerate() {
+        if let Some(slow) = pairs.first() {
+            let bound = holding_from_runs(&[*slow]);
+            let w = 0.5 * (slow.up_rad_s - slow.down_rad_s);
+            if w > 0.0 {
+                let offset = ctrl.torque_offset_nm;
+                ctrl = crate::procedure::bootstrap::bootstrap_with_friction(
+                    ds.rigid_inertia(),
+                    ds.i_t_m,
+                    ts,
+                    torque_max_nm,
+                    bound.friction_nm / w,
+                )?;
+                ctrl.torque_offset_nm = offset;
+            }
+        }
+        move_to(
+            runner,
+            &ctrl,
+            center_m - half,
+            &positioning_limits(ds),
+            0.02,
+        )?;
         let limits = Limits {
             v_max: v,
             v_min: -v,
@@ -154,7 +183,7 @@ fn holding_runs(
                 &State::at_rest(target),
                 &limits,
             )?;
-            let rec = track(runner, ctrl, &traj, 0.0, TrackOptions::default())?;
+            let rec = track(runner, &ctrl, &traj, 0.0, TrackOptions::default())?;
             let Some(run) = constant_velocity_point(&rec, v, None) else {
                 if i == 0 {
                     return Err(Error::TooShort {
