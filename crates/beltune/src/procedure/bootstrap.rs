@@ -26,6 +26,9 @@ pub const BOOTSTRAP_CROSSOVER_MAX_HZ: f64 = 10.0;
 pub const FRICTION_GUESS_FRACTION: f64 = 0.05;
 /// Following error the bootstrap loop may show when friction breaks away, m.
 pub const BREAKAWAY_ERROR_M: f64 = 5e-3;
+/// Largest shift of the PI zero by the plant's damping pole `d / J`, as a
+/// fraction of the crossover (see [`bootstrap_with_friction`]).
+pub const BOOTSTRAP_ZERO_MAX: f64 = 0.5;
 /// Velocity-filter time constant `T_R`, s (Table A.4).
 pub const T_R_S: f64 = 2e-3;
 
@@ -79,7 +82,13 @@ pub fn bootstrap_with_friction(
         crate::error::require_non_negative("viscous friction [N m s/rad]", viscous_nm_s_per_rad)?;
     let w_c = bootstrap_crossover_rad_s(j, i_t_m, torque_max_nm);
     let k_p = j * w_c;
-    let gains = CascadeGains::new(w_c / 5.0, k_p, k_p * (w_c / 4.0 + d / j));
+    // The PI zero follows the plant's pole at most up to BOOTSTRAP_ZERO_MAX
+    // times the crossover: an overestimated damping (Coulomb friction taken
+    // for viscous on a light axis) would otherwise put the zero above the
+    // crossover of an undamped plant, `K_P (s + z) / (J s^2)`, with too
+    // little phase left.
+    let zero = w_c / 4.0 + (d / j).min(BOOTSTRAP_ZERO_MAX * w_c);
+    let gains = CascadeGains::new(w_c / 5.0, k_p, k_p * zero);
     let mut cfg = CascadeConfig::new(gains, ts_s, T_R_S, torque_max_nm)?;
     cfg.prefilter = [butterworth_lowpass(4.0 * w_c, ts_s)?, SosCoeffs::IDENTITY];
     cfg.anti_windup = AntiWindup::ConditionalIntegration;

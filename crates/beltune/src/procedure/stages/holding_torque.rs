@@ -144,6 +144,16 @@ fn holding_runs(
     let mut ctrl = *ctrl;
     let mut pairs = Vec::with_capacity(RUN_SPEEDS_M_S.len());
     'speeds: for (i, v) in RUN_SPEEDS_M_S.into_iter().enumerate() {
+        // The faster runs only where the axis can stop from their speed
+        // with room to spare in both directions (issue 12: a heavy cart on
+        // a steep axis brakes downhill with little torque; its look-ahead
+        // stopped the fast run towards the lower edge).
+        let sup = runner.supervisor();
+        let room = (center_m - half - sup.limits().travel_min_m)
+            .min(sup.limits().travel_max_m - center_m - half);
+        if i > 0 && 2.0 * sup.stopping_distance_m(v).max(sup.stopping_distance_m(-v)) > room {
+            break 'speeds;
+        }
         if let Some(slow) = pairs.first() {
             let bound = holding_from_runs(&[*slow]);
             let w = 0.5 * (slow.up_rad_s - slow.down_rad_s);
