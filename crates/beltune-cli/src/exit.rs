@@ -5,7 +5,7 @@
 //! | --- | --- |
 //! | 0 | success |
 //! | 1 | any other error (I/O, an internal failure) |
-//! | 2 | bad input: command line, a file's contents, a parameter out of range |
+//! | 2 | bad input: command line, a file's contents, a parameter out of range, data that cannot be fitted |
 //! | 3 | safety stop: the supervisor stopped the axis during the commissioning, or the axis failed (drive fault, lost frames) and was quick-stopped |
 //! | 4 | infeasible: no controller can be designed, or the axis cannot do what is asked |
 //! | 5 | the commissioning ended with a controller that does not meet its own limits |
@@ -83,7 +83,7 @@ impl std::error::Error for Failure {}
 /// The exit status an error asks for: a [`Failure`] anywhere in its chain
 /// decides; else the kind of the first library error ([`beltune::Error`]):
 /// a safety stop is 3, an infeasible or unstable design 4, malformed or
-/// out-of-range input 2; anything else is 1.
+/// out-of-range input and data that cannot be fitted 2; anything else is 1.
 pub fn status_of(e: &anyhow::Error) -> ExitStatus {
     if let Some(f) = e.downcast_ref::<Failure>() {
         return f.status;
@@ -118,7 +118,8 @@ pub fn library_status(e: &beltune::Error) -> ExitStatus {
         | E::LengthMismatch { .. }
         | E::NoExcitation { .. }
         | E::Csv { .. }
-        | E::Parse { .. } => ExitStatus::BadInput,
+        | E::Parse { .. }
+        | E::FitFailed { .. } => ExitStatus::BadInput,
         E::Rt(rt) => rt_status(rt),
         _ => ExitStatus::Error,
     }

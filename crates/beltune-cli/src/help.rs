@@ -15,7 +15,7 @@ pub const EXIT_STATUSES: [(i32, &str); 7] = [
     ),
     (
         ExitStatus::BadInput as i32,
-        "bad input: an unknown flag, a value out of range, a malformed file",
+        "bad input: a bad flag or value, a malformed file, data that cannot be fitted",
     ),
     (
         ExitStatus::SafetyStop as i32,
@@ -138,7 +138,14 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
     ("Safety", &["travel_window", "following_error_max"]),
     (
         "EtherCAT drive",
-        &["ethercat", "subdevice", "cycle_us", "frame_timeout_ms"],
+        &[
+            "ethercat",
+            "subdevice",
+            "cycle_us",
+            "frame_timeout_ms",
+            "realtime_priority",
+            "no_dc",
+        ],
     ),
     (
         "Design",
@@ -149,6 +156,7 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
             "resonance_suppression_db",
             "filter_attenuation_db",
             "dynamics",
+            "thesis_design",
         ],
     ),
     (

@@ -3,20 +3,31 @@
 //! stop's record for the diagnostic file.
 
 use crate::term;
-use beltune::procedure::runner::SafetyStopRecord;
+use beltune::procedure::runner::{AxisFailureRecord, SafetyStopRecord};
 use beltune::procedure::Progress;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Columns of the stage name in front of a stage line.
 pub const STAGE_WIDTH: usize = 28;
 
-/// What the supervisor reported when it stopped the axis, and in which stage.
+/// What the supervisor reported when it stopped the axis, or what the runner
+/// reported when an exchange with the axis failed, and in which stage.
 #[derive(Clone, Debug)]
 pub struct StopCapture {
     /// The stage that was running.
     pub stage: String,
-    /// The violation, the limits and the last second of samples.
-    pub record: SafetyStopRecord,
+    /// Why the axis stopped, with the limits and the last second of samples.
+    pub cause: StopCause,
+}
+
+/// Why the axis stopped.
+#[derive(Clone, Debug)]
+pub enum StopCause {
+    /// The supervisor stopped it: a limit was violated.
+    Limit(SafetyStopRecord),
+    /// An exchange failed (lost frames, a drive fault, a watchdog); the
+    /// drive was told to quick stop.
+    Axis(AxisFailureRecord),
 }
 
 /// Draws one progress bar per stage and prints the stage's log line when it ends.
@@ -91,9 +102,20 @@ impl Progress for BarProgress {
         if let Some(b) = self.bar.take() {
             b.abandon();
         }
+        // (after a failed exchange during the stop: the violation is the cause)
         self.stop = Some(StopCapture {
             stage: self.stage.clone(),
-            record: record.clone(),
+            cause: StopCause::Limit(record.clone()),
+        });
+    }
+
+    fn exchange_failed(&mut self, record: &AxisFailureRecord) {
+        if let Some(b) = self.bar.take() {
+            b.abandon();
+        }
+        self.stop = Some(StopCapture {
+            stage: self.stage.clone(),
+            cause: StopCause::Axis(record.clone()),
         });
     }
 }

@@ -247,8 +247,9 @@ fn json_summary_has_the_documented_keys_and_the_run_s_numbers() {
         .iter()
         .map(|f| PathBuf::from(f.as_str().unwrap()))
         .collect();
-    // the three result files and the report's data files (frf, loops, moves)
-    assert_eq!(files.len(), 6);
+    // the three result files and the report's data files (frf, loops, moves,
+    // excitation, friction)
+    assert_eq!(files.len(), 8);
     assert!(files.iter().all(|f| f.is_file()), "{files:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -352,7 +353,9 @@ fn a_forced_safety_stop_is_3_and_leaves_a_diagnostic() {
         [
             "commissioning.json",
             "controller.toml",
+            "excitation.csv",
             "frf.csv",
+            "friction.csv",
             "loops.csv",
             "moves.csv",
             "report.html"
@@ -500,7 +503,9 @@ fn limits_not_met_is_5_with_the_results_written() {
         [
             "commissioning.json",
             "controller.toml",
+            "excitation.csv",
             "frf.csv",
+            "friction.csv",
             "loops.csv",
             "moves.csv",
             "report.html"

@@ -55,7 +55,9 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
         [
             "commissioning.json",
             "controller.toml",
+            "excitation.csv",
             "frf.csv",
+            "friction.csv",
             "loops.csv",
             "moves.csv",
             "report.html"

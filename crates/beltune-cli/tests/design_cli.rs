@@ -40,7 +40,9 @@ fn toml_model_gives_json_with_the_required_keys() {
         [("butterworth", "omega_bw", 123.24), ("notch", "d_n", 4.60)]
     {
         let out_path = dir.join(format!("{prefilter}.json"));
+        // Tables A.6/A.7 are the thesis' design on the model as given
         let out = run(&[
+            "--thesis-design",
             "--model",
             model.to_str().unwrap(),
             "--prefilter",

@@ -1,18 +1,18 @@
 //! Issue 14 on the command line: `beltune commission --ethercat IFACE`
-//! against `beltune virtual-drive` on the other end of a veth pair whose drive
-//! end lives in its own network namespace (created and always removed by the
-//! test; skipped with a message where namespaces or veth pairs are
-//! unavailable), and the one-line errors without a raw socket.
+//! against `beltune virtual-drive` (a child process inside a network
+//! namespace, on the other end of a veth pair; both created and always
+//! removed by the test, skipped with a message where namespaces, veth pairs or
+//! real-time scheduling are unavailable), and the one-line errors without a
+//! raw socket.
 
 use beltune::model::rigs::{self, Plant};
 use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::procedure::NoProgress;
 use beltune::sim::{SimAxis, SimConfig};
-use beltune_ethercat::drive::{DriveConfig, VirtualDrive};
+use beltune_ethercat::netns::Netns;
 use std::path::PathBuf;
-use std::process::Command;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::process::{Command, Stdio};
+use std::time::Duration;
 
 fn beltune() -> Command {
     Command::new(env!("CARGO_BIN_EXE_beltune"))
@@ -28,68 +28,68 @@ const STATIC_ERROR_M: f64 = 100e-6;
 const WIRE_ERROR_FACTOR: f64 = 1.25;
 const START_M: f64 = 0.05;
 
-fn ip(args: &[&str]) -> Result<(), String> {
-    let out = Command::new("ip")
-        .args(args)
-        .output()
-        .map_err(|e| format!("ip: {e}"))?;
-    if out.status.success() {
-        Ok(())
-    } else {
-        Err(format!(
-            "ip {}: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr).trim()
-        ))
+/// `beltune virtual-drive` as a child process inside the namespace, its
+/// stderr in a file (no pipe to fill); stopped with SIGTERM (killed if it
+/// does not stop) and reaped on drop, also when the test panics.
+struct DriveProcess {
+    child: std::process::Child,
+    log: PathBuf,
+}
+
+impl DriveProcess {
+    fn spawn(net: &Netns, log: PathBuf, extra: &[&str]) -> Result<DriveProcess, String> {
+        let err = std::fs::File::create(&log).map_err(|e| e.to_string())?;
+        let child = net
+            .command(env!("CARGO_BIN_EXE_beltune"))
+            .args(["virtual-drive", "--interface", &net.drive_if])
+            .args(["--start-position", &START_M.to_string(), "--seed", "1"])
+            .args(extra)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(err)
+            .spawn()
+            .map_err(|e| format!("spawn: {e}"))?;
+        let mut d = DriveProcess { child, log };
+        // ready once it has said so (its socket is bound by then)
+        for _ in 0..200 {
+            if d.stderr().contains("Ctrl-C stops") {
+                return Ok(d);
+            }
+            if let Ok(Some(status)) = d.child.try_wait() {
+                return Err(format!("the drive exited ({status}): {}", d.stderr()));
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        Err(format!("the drive did not start: {}", d.stderr()))
+    }
+
+    fn stderr(&self) -> String {
+        std::fs::read_to_string(&self.log).unwrap_or_default()
+    }
+
+    /// SIGTERM, wait for the exit; its stderr.
+    fn stop(&mut self) -> String {
+        // SAFETY: signalling our own child by its pid (`ip netns exec` execs in place).
+        unsafe { libc::kill(self.child.id() as libc::pid_t, libc::SIGTERM) };
+        for _ in 0..250 {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                return self.stderr();
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        self.stderr()
     }
 }
 
-/// A namespace holding one end of a veth pair; removed on drop (also on panic).
-struct Netns {
-    ns: String,
-    master_if: String,
-    drive_if: String,
-}
-
-impl Netns {
-    fn create() -> Result<Netns, String> {
-        let id = std::process::id() % 100_000;
-        let n = Netns {
-            ns: format!("bt-cli-{id}"),
-            master_if: format!("btcm{id}"),
-            drive_if: format!("btcd{id}"),
-        };
-        ip(&["netns", "add", &n.ns])?;
-        ip(&[
-            "link",
-            "add",
-            &n.master_if,
-            "type",
-            "veth",
-            "peer",
-            "name",
-            &n.drive_if,
-        ])?;
-        ip(&["link", "set", &n.drive_if, "netns", &n.ns])?;
-        ip(&["link", "set", &n.master_if, "up"])?;
-        ip(&["-n", &n.ns, "link", "set", &n.drive_if, "up"])?;
-        Ok(n)
-    }
-}
-
-impl Drop for Netns {
+impl Drop for DriveProcess {
     fn drop(&mut self) {
-        let _ = ip(&["link", "del", &self.master_if]);
-        let _ = ip(&["netns", "del", &self.ns]);
-    }
-}
-
-/// Stops the drive thread when the test ends (also on panic).
-struct StopOnDrop(Arc<AtomicBool>);
-
-impl Drop for StopOnDrop {
-    fn drop(&mut self) {
-        self.0.store(true, Ordering::Relaxed);
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+        let _ = std::fs::remove_file(&self.log);
     }
 }
 
@@ -99,45 +99,37 @@ fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// Issue 14: the full commissioning over a veth pair, `beltune commission
+/// --ethercat` against `beltune virtual-drive` run as a real child process
+/// of the test inside the namespace. An earlier version ran the drive on a
+/// thread of the test because the child "lost frames after 100-2000 cycles":
+/// the cause was in the master, not in the child. One answer later than the
+/// frame timeout (a scheduling gap of the drive or the master on this busy
+/// host) made ethercrab's TX/RX task return `ReceiveFrame`; passing that on
+/// aborted the exchange in flight, whose own answer then came after it had
+/// been given up, and so on: no exchange succeeded any more. The raw-socket
+/// transport now drops such a late answer (one lost frame, bridged); the
+/// wire test of `beltune-ethercat` injects exactly one late answer. Here the
+/// drive runs SM-synchronous (`--no-dc`): one drive cycle per frame, so that
+/// the result does not depend on the host's scheduling; with distributed
+/// clocks this host misses SYNC0 cycles (counted on both sides, see the
+/// README).
 #[test]
-fn commissioning_over_a_veth_pair_against_the_virtual_drive() {
-    let net = match Netns::create() {
+fn issue_14_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_process() {
+    let net = match Netns::create("cli") {
         Ok(n) => n,
         Err(e) => {
             eprintln!("SKIPPED: network namespace with a veth pair unavailable here ({e})");
             return;
         }
     };
-    // the virtual drive on a thread that enters the namespace (SM-synchronous,
-    // no DC: one drive cycle per frame, so that the result does not depend on
-    // the scheduling of a shared test machine)
-    let stop = Arc::new(AtomicBool::new(false));
-    let (ns, drive_if, stop2) = (net.ns.clone(), net.drive_if.clone(), Arc::clone(&stop));
-    let server = std::thread::spawn(move || -> Result<u64, String> {
-        let f = std::fs::File::open(format!("/run/netns/{ns}")).map_err(|e| e.to_string())?;
-        use std::os::fd::AsRawFd;
-        // SAFETY: setns on a namespace descriptor we hold; this thread only.
-        if unsafe { libc::setns(f.as_raw_fd(), libc::CLONE_NEWNET) } != 0 {
-            return Err(std::io::Error::last_os_error().to_string());
-        }
-        let plant = rigs::builtin("egc70", None).unwrap();
-        let cfg = DriveConfig {
-            sim: SimConfig {
-                seed: 1,
-                initial_cart_position_m: Some(START_M),
-                ..SimConfig::default()
-            },
-            distributed_clocks: false,
-            ..DriveConfig::default()
-        };
-        let mut drive = VirtualDrive::new(&plant, cfg).map_err(|e| e.to_string())?;
-        let stats = beltune_ethercat::serve::serve(&drive_if, &mut drive, &stop2)
-            .map_err(|e| e.to_string())?;
-        Ok(stats.frames)
-    });
-    let _stop = StopOnDrop(Arc::clone(&stop));
-    std::thread::sleep(std::time::Duration::from_millis(200));
     let out_dir = temp_dir("ethercat");
+    let mut drive = DriveProcess::spawn(
+        &net,
+        std::env::temp_dir().join(format!("beltune-vd-{}.log", std::process::id())),
+        &["--no-dc"],
+    )
+    .unwrap_or_else(|e| panic!("virtual drive: {e}"));
     let out = beltune()
         .args([
             "commission",
@@ -146,28 +138,36 @@ fn commissioning_over_a_veth_pair_against_the_virtual_drive() {
             "--cycle-us",
             "1000",
         ])
-        // the drive is a process on the same shared (2-core, busy) machine:
-        // its answers can come tens of ms late, which a real drive never does
-        .args(["--frame-timeout-ms", "100"])
-        // the verdict (issue 16) judges the motor-side move of a drive without
-        // load-side encoder, over a bus with late frames: this test checks the
-        // wire path, not the thesis' 1 mm (exit status 5 otherwise)
+        // a real drive answers within microseconds, a process on a shared
+        // host sometimes within milliseconds
+        .args(["--frame-timeout-ms", "20"])
+        // the verdict (issue 16) judges the move over a bus with late
+        // frames: this test checks the wire path, not the thesis' 1 mm
+        // (exit status 5 otherwise)
         .args([
             "--max-tracking-error",
             "0.01",
             "--max-static-error",
             "0.001",
         ])
-        .args(["--start-position", &START_M.to_string(), "--quiet", "--out"])
+        .args(["--start-position", &START_M.to_string(), "--out"])
         .arg(&out_dir)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
-    stop.store(true, Ordering::Relaxed);
-    let frames = server.join().unwrap().unwrap();
+    let drive_log = drive.stop();
+    eprintln!("drive: {}", drive_log.trim());
     assert!(
         out.status.success(),
-        "commission over the wire failed: {stderr} ({frames} frames)"
+        "commission over the wire failed: {stderr}\ndrive: {drive_log}"
+    );
+    assert!(
+        stderr.contains("no distributed clocks"),
+        "SM-synchronous: {stderr}"
+    );
+    assert!(
+        drive_log.contains("stopped:"),
+        "the drive stopped on SIGTERM: {drive_log}"
     );
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("commissioning.json")).unwrap())

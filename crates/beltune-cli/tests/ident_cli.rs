@@ -1,11 +1,9 @@
 //! End-to-end tests of `beltune identify` and `beltune friction` on CSV files.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_beltune"))
-}
+use common::bench::{self, bin, measured};
+use std::path::{Path, PathBuf};
 
 fn tmpdir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("beltune-ident-cli-{}-{tag}", std::process::id()));
@@ -13,30 +11,13 @@ fn tmpdir(tag: &str) -> PathBuf {
     d
 }
 
-fn measured() -> PathBuf {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../data/twomass-bench/multisine-a.csv.gz");
-    assert!(
-        p.exists(),
-        "measured data missing: {} (it ships in the repository, data/twomass-bench)",
-        p.display()
-    );
-    p
-}
-
 /// `beltune identify` on the bench recording: 20 periods of 2500 samples, the
 /// first discarded, free inertia, current units.
 fn identify_measured() -> std::process::Command {
-    let mut c = bin();
-    c.args(["identify", "--csv"]).arg(measured()).args([
+    let mut c = bench::on_record("identify");
+    c.args([
         "--time",
         "t_s",
-        "--input",
-        "iq_ref_A",
-        "--output",
-        "theta_motor_rad",
-        "--period-samples",
-        "2500",
         "--skip-periods",
         "1",
         "--free-inertia",
@@ -308,4 +289,48 @@ fn identify_into_a_closed_pipe_ends_quietly_issue_11() {
 /// SIGPIPE's number on Linux.
 fn libc_sigpipe() -> i32 {
     13
+}
+
+/// Issue 16: data that cannot be fitted (here a record without a resonance:
+/// the output is the input, scaled) is bad input, exit status 2, with the
+/// reason; not status 1 (an internal failure).
+#[test]
+fn a_record_that_cannot_be_fitted_is_bad_input_issue_16() {
+    let dir = tmpdir("unfittable");
+    // a periodic +-1 sequence of 256 samples (a fixed linear congruential
+    // generator), 10 periods, sampled at 10 kHz
+    let mut state: u32 = 12345;
+    let period: Vec<f64> = (0..256)
+        .map(|_| {
+            state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
+            if state >> 31 == 1 {
+                1.0
+            } else {
+                -1.0
+            }
+        })
+        .collect();
+    let mut s = String::from("t_s,u,y\n");
+    for k in 0..2560 {
+        let u = period[k % 256];
+        s.push_str(&format!("{},{u},{}\n", k as f64 * 1e-4, 0.5 * u));
+    }
+    let f = write(&dir, "flat.csv", &s);
+    expect_error(
+        &[
+            "identify",
+            "--csv",
+            &f,
+            "--time",
+            "t_s",
+            "--input",
+            "u",
+            "--output",
+            "y",
+            "--period-samples",
+            "256",
+        ],
+        &["fit failed", "resonance"],
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

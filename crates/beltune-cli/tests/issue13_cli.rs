@@ -3,26 +3,18 @@
 //! belongs to the model-file schema, issue 15; item 1 and 13 are in
 //! `serve_limits.rs`), plus the output history of issue 16 item 4.
 
+mod common;
+
+use common::bench::{self, bin, measured};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_beltune"))
-}
 
 fn tmpdir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("beltune-i13-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn measured() -> PathBuf {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../data/twomass-bench/multisine-a.csv.gz");
-    assert!(p.exists(), "measured data missing: {}", p.display());
-    p
 }
 
 /// Run with a deadline: a hang is a test failure, not a stuck suite.
@@ -118,17 +110,8 @@ fn commission_recorded(out: Option<&Path>) -> Command {
 
 /// [`commission_recorded`] without `--torque-limit`.
 fn commission_recorded_without_limit(out: Option<&Path>) -> Command {
-    let mut c = bin();
-    c.args(["commission", "--quiet", "--csv"])
-        .arg(measured())
-        .args([
-            "--input",
-            "iq_ref_A",
-            "--output",
-            "theta_motor_rad",
-            "--period-samples",
-            "2500",
-        ]);
+    let mut c = bench::on_record("commission");
+    c.arg("--quiet");
     if let Some(out) = out {
         c.arg("--out").arg(out);
     }
@@ -578,6 +561,18 @@ fn values_that_would_be_ignored_are_errors_issue_13_10() {
         &["--inertia"],
     );
     assert!(!dir.join("out").exists());
+    // an unknown key in a design model (a typo) is named, not ignored
+    let model = dir.join("m.toml");
+    std::fs::write(
+        &model,
+        "theta_e = 71.73e-6\nm_c = 13.44\nc = 203.74e3\nd_m = 33.17\nd_c = 226.42\n\
+         i_t = 0.0124141\ncolomb_nm = 0.1\n",
+    )
+    .unwrap();
+    expect_bad_input(
+        bin().args(["design", "--model"]).arg(&model),
+        &["m.toml", "unknown key `colomb_nm`"],
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -649,6 +644,127 @@ fn messages_are_one_readable_line_issue_13_14() {
         bin().args(["commission", "--tilt", "720"]),
         &["--tilt 720", "[-90, 90]"],
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 13 item 14: bad values given as flags or file keys are named as the
+/// user wrote them (the flag, or the file's own key in its units), never by
+/// the library's field names, and no message is a Debug dump.
+#[test]
+fn messages_name_flags_and_keys_as_written_issue_13_14() {
+    let dir = tmpdir("words");
+    let model = dir.join("m.toml");
+    let base = "theta_e = 71.73e-6\nm_c = 13.44\nc = 203.74e3\nd_m = 33.17\nd_c = 226.42\ni_t = 0.0124141\n";
+    std::fs::write(&model, base).unwrap();
+    let current = dir.join("current.toml");
+    std::fs::write(
+        &current,
+        format!("{base}units = \"current\"\ntorque_max_a = -3\n"),
+    )
+    .unwrap();
+    let light = dir.join("light.toml");
+    std::fs::write(&light, base.replace("m_c = 13.44", "m_c = 1e-9")).unwrap();
+    let motion = motion_csv(&dir, None);
+    let design = |extra: &[&str]| {
+        let mut c = bin();
+        c.args(["design", "--model"]).arg(&model).args(extra);
+        c
+    };
+    let friction = |extra: &[&str]| {
+        let mut c = bin();
+        c.args(["friction", "--csv"])
+            .arg(&motion)
+            .args([
+                "--time",
+                "time_s",
+                "--torque",
+                "force_n",
+                "--position",
+                "pos_m",
+            ])
+            .args(extra);
+        c
+    };
+    let cases: Vec<(Command, Vec<&str>)> = vec![
+        (
+            design(&["--pm-velocity", "200"]),
+            vec!["--pm-velocity 200", "deg"],
+        ),
+        (design(&["--pm-position", "0"]), vec!["--pm-position 0"]),
+        (
+            design(&["--filter-attenuation-db", "5"]),
+            vec!["--filter-attenuation-db 5", "dB"],
+        ),
+        (
+            design(&["--resonance-suppression-db", "3"]),
+            vec!["--resonance-suppression-db 3"],
+        ),
+        (design(&["--dynamics", "2"]), vec!["--dynamics 2"]),
+        (design(&["--ts", "-1"]), vec!["--ts -1", "s"]),
+        // before the commissioning moves the axis
+        (
+            {
+                let mut c = bin();
+                c.args(["commission", "--quiet", "--pm-velocity", "190"]);
+                c
+            },
+            vec!["--pm-velocity 190"],
+        ),
+        (
+            friction(&["--cutoff-hz", "-1"]),
+            vec!["--cutoff-hz -1", "Hz"],
+        ),
+        (
+            friction(&["--min-speed-fraction", "2"]),
+            vec!["--min-speed-fraction 2"],
+        ),
+        (
+            {
+                let mut c = bin();
+                c.args(["design", "--model"]).arg(&current);
+                c
+            },
+            vec!["current.toml", "`torque_max_a` = -3"],
+        ),
+        (
+            {
+                let mut c = bin();
+                c.args(["design", "--model"]).arg(&light);
+                c
+            },
+            vec!["light.toml", "default sampling time"],
+        ),
+    ];
+    let internal = [
+        "pm_velocity_deg",
+        "pm_position_deg",
+        "resonance_suppression_db",
+        "filter_attenuation_db",
+        "`dynamics`",
+        "cutoff_hz",
+        "min_speed_fraction",
+        "torque_max_nm",
+        "`ts_s`",
+        "invalid parameter `",
+        "commissioning stopped",
+    ];
+    for (mut cmd, needles) in cases {
+        let err = expect_bad_input(&mut cmd, &needles);
+        assert_eq!(err.trim_end().lines().count(), 1, "{cmd:?}: {err}");
+        for name in internal {
+            assert!(
+                !err.contains(name),
+                "{cmd:?}: internal name `{name}` in {err}"
+            );
+        }
+        // a Debug dump: `Name { field: ... }` or `Variant("...")`
+        let dump = err
+            .split_whitespace()
+            .zip(err.split_whitespace().skip(1))
+            .any(|(a, b)| a.chars().next().is_some_and(|c| c.is_ascii_uppercase()) && b == "{")
+            || err.contains("(\"");
+        assert!(!dump, "{cmd:?}: Debug dump in {err}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

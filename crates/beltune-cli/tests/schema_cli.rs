@@ -310,3 +310,95 @@ fn commission_csv_in_current_units_labels_every_unit_as_current() {
     assert!(text.contains("A s/rad"), "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Issue 15: the keys of `commissioning.json` and `controller.toml` come in
+/// the order of their structs (the identity of the file first, then the model,
+/// the controller, the data), not alphabetically.
+#[test]
+fn files_keep_their_documented_key_order_issue_15() {
+    let dir = temp_dir("order");
+    let out = dir.join("run");
+    ok(&beltune()
+        .args(["commission", "--quiet", "--csv"])
+        .arg(bench())
+        .args([
+            "--input",
+            "iq_ref_A",
+            "--output",
+            "theta_motor_rad",
+            "--period-samples",
+            "2500",
+            "--torque-limit",
+            "15.3",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap());
+    let text = std::fs::read_to_string(out.join("commissioning.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let top: Vec<&str> = json
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(|k| k.as_str())
+        .collect();
+    assert_eq!(
+        top[..6],
+        [
+            "schema_version",
+            "provenance",
+            "plant",
+            "identified",
+            "friction",
+            "controller"
+        ],
+        "{top:?}"
+    );
+    let id: Vec<&str> = json["identified"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(|k| k.as_str())
+        .collect();
+    assert_eq!(
+        id[..5],
+        ["units", "f_r_hz", "f_z_hz", "theta_e", "m_c"],
+        "{id:?}"
+    );
+    // the text itself, not only the parsed map (which could reorder)
+    let at = |k: &str| text.find(&format!("\"{k}\"")).unwrap();
+    assert!(at("schema_version") < at("provenance") && at("identified") < at("controller"));
+
+    let toml = std::fs::read_to_string(out.join("controller.toml")).unwrap();
+    let lines: Vec<&str> = toml
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .collect();
+    let key = |l: &str| l.split(" = ").next().unwrap().to_string();
+    assert_eq!(
+        lines[..4].iter().map(|l| key(l)).collect::<Vec<_>>(),
+        ["schema_version", "units", "ts_s", "torque_max_nm"],
+        "{toml}"
+    );
+    let sections: Vec<&str> = lines
+        .iter()
+        .copied()
+        .filter(|l| l.starts_with('['))
+        .collect();
+    assert_eq!(
+        sections,
+        [
+            "[provenance]",
+            "[gains]",
+            "[prefilter]",
+            "[velocity_filter]",
+            "[feedforward]",
+            "[setpoint]",
+            "[drive_form]"
+        ]
+    );
+    let gains = &toml[toml.find("[gains]").unwrap()..];
+    assert!(gains.find("k_pp_per_s").unwrap() < gains.find("k_p_nm_s_per_rad").unwrap());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -5,15 +5,15 @@
 //! seam, so they can prove that a refused request never reaches the design; the
 //! design tests use the real library backend.
 
+mod common;
+
 use beltune_cli::serve;
 
+use common::http::{self, error_message, Server};
 use serve::api::{
-    DefaultAttenuation, DesignResponse, EffectiveKnobs, ErrorBody, Knobs, PrefilterKind,
-    MAX_BODY_BYTES,
+    DefaultAttenuation, DesignResponse, EffectiveKnobs, Knobs, PrefilterKind, MAX_BODY_BYTES,
 };
 use serve::tuner::{ModelSummary, TuneError, Tuner};
-use serve::AppState;
-use std::io::{Read, Write};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -28,31 +28,13 @@ const DOUBLE_INFEASIBLE_ABOVE_DEG: f64 = 85.0;
 
 impl Tuner for CountingTuner {
     fn model(&self) -> ModelSummary {
-        ModelSummary {
-            source: "test double".into(),
-            f_r_hz: 107.0,
-            f_z_hz: 19.6,
-            nominal_payload_kg: 11.2,
-            measured_frf: None,
-            commissioned: None,
-        }
+        http::double_model()
     }
     fn defaults(&self) -> EffectiveKnobs {
-        EffectiveKnobs {
-            prefilter: PrefilterKind::Butterworth,
-            pm_velocity_deg: 60.0,
-            pm_position_deg: 80.0,
-            resonance_suppression_db: -10.0,
-            filter_attenuation_db: -3.0,
-            dynamics: None,
-            payload_kg: 11.2,
-        }
+        http::double_defaults()
     }
     fn default_attenuation(&self) -> DefaultAttenuation {
-        DefaultAttenuation {
-            butterworth: -3.0,
-            notch: -6.0,
-        }
+        http::double_attenuation()
     }
     fn tune(&self, knobs: &Knobs) -> Result<DesignResponse, TuneError> {
         self.calls.fetch_add(1, Ordering::SeqCst);
@@ -72,42 +54,9 @@ impl Tuner for CountingTuner {
     }
 }
 
-struct Server {
-    addr: SocketAddr,
-    dir: PathBuf,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
-
-/// Start the server on its own runtime in a background thread (it lives until
-/// the test process ends) and return its address.
+/// Start `tuner` behind the server (see [`http::start`]).
 fn start(tuner: Arc<dyn Tuner>, tag: &str) -> Server {
-    let dir = std::env::temp_dir().join(format!("beltune-serve-api-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let state = AppState {
-        tuner,
-        save_dir: dir.clone(),
-        loopback_only: true,
-    };
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let rt = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(1)
-            .enable_all()
-            .build()
-            .unwrap();
-        rt.block_on(async move {
-            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-            tx.send(listener.local_addr().unwrap()).unwrap();
-            serve::serve(listener, state).await.unwrap();
-        });
-    });
-    let addr = rx.recv().unwrap();
-    Server { addr, dir }
+    http::start(tuner, &format!("api-{tag}"), 1)
 }
 
 /// One HTTP/1.1 request with `Connection: close`; returns (status, body).
@@ -130,30 +79,11 @@ fn http_host(
     content_type: Option<&str>,
     body: &[u8],
 ) -> (u16, String) {
-    let mut stream = std::net::TcpStream::connect(addr).unwrap();
-    let mut head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\nContent-Length: {}\r\n",
-        body.len()
-    );
+    let mut headers = format!("Host: {host}\r\n");
     if let Some(ct) = content_type {
-        head.push_str(&format!("Content-Type: {ct}\r\n"));
+        headers.push_str(&format!("Content-Type: {ct}\r\n"));
     }
-    head.push_str("\r\n");
-    stream.write_all(head.as_bytes()).unwrap();
-    // The server may answer (413) and stop reading before the whole body is sent.
-    let _ = stream.write_all(body);
-    let mut raw = Vec::new();
-    let _ = stream.read_to_end(&mut raw);
-    let text = String::from_utf8_lossy(&raw).into_owned();
-    let (head, body) = text
-        .split_once("\r\n\r\n")
-        .unwrap_or_else(|| panic!("no HTTP response: {text:?}"));
-    let status: u16 = head
-        .split_whitespace()
-        .nth(1)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("bad status line: {head}"));
-    (status, body.to_string())
+    http::request(addr, method, path, &headers, body)
 }
 
 fn post_json(addr: SocketAddr, path: &str, body: &str) -> (u16, String) {
@@ -164,14 +94,6 @@ fn post_json(addr: SocketAddr, path: &str, body: &str) -> (u16, String) {
         Some("application/json"),
         body.as_bytes(),
     )
-}
-
-fn error_message(status: u16, body: &str) -> String {
-    let e: ErrorBody = serde_json::from_str(body).unwrap_or_else(|err| {
-        panic!("status {status}: body is not {{\"error\"}} JSON ({err}): {body}")
-    });
-    assert!(!e.error.is_empty(), "empty error message");
-    e.error
 }
 
 fn counting() -> Arc<CountingTuner> {
@@ -334,6 +256,7 @@ fn page_and_assets_are_embedded_and_self_contained() {
 
 // ---------- the real backend: beltune::design on the built-in egc70 ----------
 
+use beltune::design::robust::{design_identified, DesignRule};
 use beltune::design::{self as bdesign, DesignInput, DesignKnobs, FrictionParams};
 use serve::library::{LibraryTuner, PLOT_POINTS};
 
@@ -344,6 +267,14 @@ const JSON_REL_TOL: f64 = 1e-12;
 const MARGIN_TOL_DEG: f64 = 0.01;
 
 /// The design input built without the server: the built-in commissioning's.
+fn from_kind(k: bdesign::PrefilterKind) -> PrefilterKind {
+    match k {
+        bdesign::PrefilterKind::Butterworth => PrefilterKind::Butterworth,
+        bdesign::PrefilterKind::Notch => PrefilterKind::Notch,
+        bdesign::PrefilterKind::None => PrefilterKind::None,
+    }
+}
+
 fn egc70_input() -> DesignInput {
     // The page's default model (issue 16): what the commissioning of the built-in
     // axis with the defaults of `beltune commission` identifies.
@@ -524,9 +455,26 @@ fn empty_request_gives_the_design_defaults_and_dynamics_maps_to_the_documented_m
     let (status, body) = post_json(s.addr, "/api/design", "{}");
     assert_eq!(status, 200, "{body}");
     let r: DesignResponse = serde_json::from_str(&body).unwrap();
-    let d = bdesign::design(&egc70_input(), &DesignKnobs::default()).unwrap();
+    // without expert knobs: the commissioning's design rule on the identified model
+    let (_, run) = serve::library::builtin_commissioning().unwrap();
+    let input = DesignInput {
+        model: run.fit.params,
+        ..run.design.input
+    };
+    let d = design_identified(
+        &input,
+        input.friction.map(|f| f.viscous_nm_s_per_rad),
+        run.identified.m_c_sigma,
+        run.identified.c_sigma,
+        &DesignKnobs::default(),
+        DesignRule::Robust,
+    )
+    .unwrap()
+    .design;
     assert!(close(r.gains.k_p, d.k_p) && close(r.gains.k_i, d.k_i) && close(r.gains.k_pp, d.k_pp));
-    assert_eq!(r.knobs.prefilter, PrefilterKind::Butterworth);
+    assert_eq!(r.knobs.prefilter, from_kind(d.knobs.prefilter));
+    // (the knobs the rule chose are echoed; /api/info shows the thesis defaults
+    // the expert sliders start from)
     assert_eq!(
         r.knobs.payload_kg,
         beltune::model::rigs::EGC70_DEFAULT_PAYLOAD_KG
@@ -719,7 +667,17 @@ fn commissioning_folder_model_is_designed_and_simulated() {
         viscous_nm_s_per_rad: 0.00253,
         coulomb_nm: 0.125,
     });
-    let d = bdesign::design(&input, &DesignKnobs::default()).unwrap();
+    // the design rule; the file has no fit uncertainty (NaN: 5 % assumed)
+    let d = design_identified(
+        &input,
+        Some(0.00253),
+        f64::NAN,
+        f64::NAN,
+        &DesignKnobs::default(),
+        DesignRule::Robust,
+    )
+    .unwrap()
+    .design;
     // i_t in the file is 78 mm / 2 pi to 17 digits, as in thesis_table_a4()
     const I_T_ROUNDING_REL: f64 = 1e-9;
     for (got, want) in [
@@ -842,25 +800,7 @@ fn save_reproduces_the_controller_toml_of_beltune_commission() {
     );
     let original = std::fs::read_to_string(dir.join(serve::CONTROLLER_FILE)).unwrap();
     let model = serve::library::load_commissioning(&dir).unwrap();
-    let state = AppState {
-        tuner: Arc::new(LibraryTuner::new(model).unwrap()),
-        save_dir: dir.clone(),
-        loopback_only: true,
-    };
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let rt = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(1)
-            .enable_all()
-            .build()
-            .unwrap();
-        rt.block_on(async move {
-            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-            tx.send(listener.local_addr().unwrap()).unwrap();
-            serve::serve(listener, state).await.unwrap();
-        });
-    });
-    let addr = rx.recv().unwrap();
+    let addr = http::start_in(Arc::new(LibraryTuner::new(model).unwrap()), &dir, 1);
     let (status, body) = post_json(addr, "/api/save", "{}");
     assert_eq!(status, 200, "{body}");
     let resp: serve::api::SaveResponse = serde_json::from_str(&body).unwrap();

@@ -12,6 +12,7 @@
 
 use beltune_cli::serve;
 
+use beltune::design::robust::{design_identified, DesignRule};
 use beltune::design::{self as bdesign, DesignInput, DesignKnobs};
 use fantoccini::{Client, ClientBuilder, Locator};
 use serde_json::{json, Value};
@@ -29,9 +30,10 @@ const CHROMIUM: &str = "/usr/bin/chromium";
 const WAIT: Duration = Duration::from_secs(60);
 /// JSON round-trips f64 exactly and the page keeps the full value in data-value.
 const REL_TOL: f64 = 1e-12;
-/// Key presses on the slider (step 0.5 deg): 60 -> 55 deg.
+/// Key presses on the slider (step 0.5 deg): 5 deg below where it starts.
 const LEFT_PRESSES: usize = 10;
-const PM_AFTER_DEG: f64 = 55.0;
+/// How far the slider moves the velocity phase margin, deg (0.5 deg steps).
+const PM_STEP_DEG: f64 = 5.0;
 /// A setting the design library refuses for egc70 (checked below against the
 /// library): the slider's lower end, 20 deg velocity phase margin.
 const INFEASIBLE_PM_VELOCITY_DEG: f64 = 20.0;
@@ -310,7 +312,23 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         c.goto(&format!("http://{addr}/")).await.unwrap();
         let seq0 = wait_render(&c, 0).await;
         let input = egc70_input();
-        let d0 = bdesign::design(&input, &DesignKnobs::default()).unwrap();
+        // the page's defaults: the commissioning's design rule on the identified model
+        let d0 = {
+            let (_, run) = serve::library::builtin_commissioning().unwrap();
+            design_identified(
+                &DesignInput {
+                    model: run.fit.params,
+                    ..run.design.input
+                },
+                run.design.input.friction.map(|f| f.viscous_nm_s_per_rad),
+                run.identified.m_c_sigma,
+                run.identified.c_sigma,
+                &DesignKnobs::default(),
+                DesignRule::Robust,
+            )
+            .unwrap()
+            .design
+        };
         check_against(&c, &d0).await;
         let path0 = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "d").await;
         let points: usize = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "data-points")
@@ -337,11 +355,13 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
             .unwrap()
             .parse()
             .unwrap();
-        assert_eq!(value, PM_AFTER_DEG);
+        // the slider starts at the knobs the design rule chose
+        let pm_after_deg = d0.knobs.pm_velocity_deg - PM_STEP_DEG;
+        assert_eq!(value, pm_after_deg);
         let d1 = bdesign::design(
             &input,
             &DesignKnobs {
-                pm_velocity_deg: PM_AFTER_DEG,
+                pm_velocity_deg: pm_after_deg,
                 ..DesignKnobs::default()
             },
         )
@@ -351,7 +371,7 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         // ... and what `beltune design` prints for the same knobs
         let model_toml = root_dir.join("egc70-model.toml");
         write_model_toml(&input, &model_toml);
-        let cli = beltune_design(&model_toml, PM_AFTER_DEG, &root_dir.join("design.json"))
+        let cli = beltune_design(&model_toml, pm_after_deg, &root_dir.join("design.json"))
             .expect("beltune design failed");
         for (id, key) in [
             ("k_p", "k_p"),
@@ -373,7 +393,7 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         }
         // The move numbers and traces are the server's (deterministic, seeded simulation).
         let knobs = serve::api::DesignRequest {
-            pm_velocity_deg: Some(PM_AFTER_DEG),
+            pm_velocity_deg: Some(pm_after_deg),
             ..Default::default()
         }
         .validate()

@@ -2,14 +2,14 @@
 //! never expose a partial `controller.toml`, slow or abusive clients are cut
 //! off, the `Host` check is strict, and every error answer is JSON.
 
-use beltune_cli::serve::api::{
-    DefaultAttenuation, DesignResponse, EffectiveKnobs, ErrorBody, Knobs, PrefilterKind,
-};
+mod common;
+
+use beltune_cli::serve;
+use beltune_cli::serve::api::{DefaultAttenuation, DesignResponse, EffectiveKnobs, Knobs};
 use beltune_cli::serve::tuner::{ModelSummary, TuneError, Tuner};
-use beltune_cli::serve::{self, AppState};
+use common::http::{self, error_message as json_error, exchange, request, Server};
 use std::io::{Read, Write};
-use std::net::{SocketAddr, TcpStream};
-use std::path::PathBuf;
+use std::net::TcpStream;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -20,31 +20,13 @@ struct TextTuner;
 
 impl Tuner for TextTuner {
     fn model(&self) -> ModelSummary {
-        ModelSummary {
-            source: "test double".into(),
-            f_r_hz: 107.0,
-            f_z_hz: 19.6,
-            nominal_payload_kg: 11.2,
-            measured_frf: None,
-            commissioned: None,
-        }
+        http::double_model()
     }
     fn defaults(&self) -> EffectiveKnobs {
-        EffectiveKnobs {
-            prefilter: PrefilterKind::Butterworth,
-            pm_velocity_deg: 60.0,
-            pm_position_deg: 80.0,
-            resonance_suppression_db: -10.0,
-            filter_attenuation_db: -3.0,
-            dynamics: None,
-            payload_kg: 11.2,
-        }
+        http::double_defaults()
     }
     fn default_attenuation(&self) -> DefaultAttenuation {
-        DefaultAttenuation {
-            butterworth: -3.0,
-            notch: -6.0,
-        }
+        http::double_attenuation()
     }
     fn tune(&self, _: &Knobs) -> Result<DesignResponse, TuneError> {
         Err(TuneError::Internal(
@@ -61,80 +43,8 @@ impl Tuner for TextTuner {
     }
 }
 
-struct Server {
-    addr: SocketAddr,
-    dir: PathBuf,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
-
 fn start(tag: &str) -> Server {
-    let dir =
-        std::env::temp_dir().join(format!("beltune-serve-limits-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let state = AppState {
-        tuner: Arc::new(TextTuner),
-        save_dir: dir.clone(),
-        loopback_only: true,
-    };
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let rt = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(2)
-            .enable_all()
-            .build()
-            .unwrap();
-        rt.block_on(async move {
-            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-            tx.send(listener.local_addr().unwrap()).unwrap();
-            serve::serve(listener, state).await.unwrap();
-        });
-    });
-    Server {
-        addr: rx.recv().unwrap(),
-        dir,
-    }
-}
-
-/// Send `raw` bytes, read the answer to the end: (status, body).
-fn exchange(addr: SocketAddr, raw: &[u8]) -> (u16, String) {
-    let mut stream = TcpStream::connect(addr).unwrap();
-    stream
-        .set_read_timeout(Some(Duration::from_secs(30)))
-        .unwrap();
-    let _ = stream.write_all(raw);
-    let mut out = Vec::new();
-    let _ = stream.read_to_end(&mut out);
-    let text = String::from_utf8_lossy(&out).into_owned();
-    let (head, body) = text
-        .split_once("\r\n\r\n")
-        .unwrap_or_else(|| panic!("no HTTP answer: {text:?}"));
-    let status = head
-        .split_whitespace()
-        .nth(1)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("bad status line: {head}"));
-    (status, body.to_string())
-}
-
-fn request(addr: SocketAddr, method: &str, path: &str, headers: &str, body: &str) -> (u16, String) {
-    let raw = format!(
-        "{method} {path} HTTP/1.1\r\n{headers}Connection: close\r\nContent-Length: {}\r\n\r\n{body}",
-        body.len()
-    );
-    exchange(addr, raw.as_bytes())
-}
-
-fn json_error(status: u16, body: &str) -> String {
-    let e: ErrorBody = serde_json::from_str(body)
-        .unwrap_or_else(|e| panic!("status {status}: not JSON ({e}): {body:?}"));
-    assert!(!e.error.is_empty());
-    e.error
+    http::start(Arc::new(TextTuner), &format!("limits-{tag}"), 2)
 }
 
 #[test]

@@ -29,7 +29,7 @@ use beltune::model::rigs::Plant;
 use beltune::plant::Axis as _;
 use beltune::sim::{SimAxis, SimConfig};
 use std::f64::consts::PI;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::Arc;
 
 /// Identity of the virtual drive (vendor ID 0: not a registered vendor).
@@ -49,7 +49,11 @@ pub const ERROR_COMMUNICATION: u16 = 0x8100;
 
 const SM0: u16 = 0x1000;
 const SM1: u16 = 0x1080;
-const MAILBOX_LEN: u16 = 128;
+/// Default length of each mailbox sync manager, bytes (SM0 at 0x1000 and
+/// SM1 at 0x1080 leave room for at most 128).
+pub const MAILBOX_LEN: u16 = 128;
+/// Shortest mailbox the drive accepts, bytes (a segmented SDO needs 16).
+pub const MAILBOX_MIN: u16 = 32;
 const SM2: u16 = 0x1100;
 const SM3: u16 = 0x1180;
 
@@ -60,6 +64,30 @@ pub struct Faults {
     pub drive_fault: AtomicU32,
     /// Responses to drop (frames lost on the wire), counted down per frame.
     pub drop_frames: AtomicU32,
+    /// Requests to drop before they reach the drive (a master that stops
+    /// sending: the drive's SM watchdog runs out), counted down per frame.
+    pub drop_requests: AtomicU32,
+    /// Answers to hold back until the next frame arrives (on the wire: a late
+    /// answer, after the master's frame timeout), counted down per frame.
+    pub late_answers: AtomicU32,
+    /// The faults above take effect once the drive has run this many cycles
+    /// (0: at once), so that a test can aim at a stage of a commissioning.
+    pub after_cycles: AtomicU64,
+}
+
+impl Faults {
+    /// Whether the faults are armed after `cycles` drive cycles.
+    pub fn armed(&self, cycles: u64) -> bool {
+        cycles >= self.after_cycles.load(Ordering::Relaxed)
+    }
+
+    /// Count one frame off `counter` if the faults are armed; true: drop it.
+    pub fn take(&self, counter: &AtomicU32, cycles: u64) -> bool {
+        self.armed(cycles)
+            && counter
+                .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1))
+                .is_ok()
+    }
 }
 
 /// Settings of the virtual drive.
@@ -87,6 +115,10 @@ pub struct DriveConfig {
     pub distributed_clocks: bool,
     /// Speed below which a quick stop is complete, rad/s.
     pub quick_stop_done_rad_s: f64,
+    /// Length of each mailbox (SM0, SM1), bytes, [`MAILBOX_MIN`] ..=
+    /// [`MAILBOX_LEN`]: objects longer than one mailbox (the device name
+    /// 0x1008 in a short one) go as segmented SDO transfers.
+    pub mailbox_bytes: u16,
 }
 
 impl Default for DriveConfig {
@@ -99,6 +131,7 @@ impl Default for DriveConfig {
             quick_stop_damping_nm_s: None,
             distributed_clocks: true,
             quick_stop_done_rad_s: 0.05,
+            mailbox_bytes: MAILBOX_LEN,
         }
     }
 }
@@ -120,6 +153,7 @@ pub struct Firmware {
     last_torque_nm: f64,
     cycles: u64,
     quick_stop_damping: f64,
+    sdo: coe::SdoServer,
 }
 
 /// The virtual drive: ESC and firmware.
@@ -145,6 +179,15 @@ impl VirtualDrive {
             return Err(Error::Config {
                 name: "rated torque fraction",
                 reason: format!("{} is outside (0.05, 1]", cfg.rated_fraction),
+            });
+        }
+        if !(MAILBOX_MIN..=MAILBOX_LEN).contains(&cfg.mailbox_bytes) {
+            return Err(Error::Config {
+                name: "mailbox length",
+                reason: format!(
+                    "{} bytes is outside {MAILBOX_MIN} ..= {MAILBOX_LEN}",
+                    cfg.mailbox_bytes
+                ),
             });
         }
         let mut plant = plant.clone();
@@ -191,6 +234,7 @@ impl VirtualDrive {
             None => 0.25 * theta_e / (cfg.cycle_s + plant.dead_time_s()),
         };
         let distributed_clocks = cfg.distributed_clocks;
+        let mailbox = cfg.mailbox_bytes;
         let firmware = Firmware {
             od,
             sim,
@@ -207,8 +251,9 @@ impl VirtualDrive {
             last_torque_nm: 0.0,
             cycles: 0,
             quick_stop_damping,
+            sdo: coe::SdoServer::new(),
         };
-        let mut esc = Esc::new(crate::esc::sii::build(&sii_content()));
+        let mut esc = Esc::new(crate::esc::sii::build(&sii_content(mailbox)));
         esc.set_distributed_clocks(distributed_clocks);
         Ok(VirtualDrive { esc, firmware })
     }
@@ -304,7 +349,8 @@ impl Application for Firmware {
     }
 
     fn mailbox(&mut self, request: &[u8], state: AlState) -> Option<Vec<u8>> {
-        coe::handle(request, &mut self.od, state, usize::from(MAILBOX_LEN))
+        let capacity = usize::from(self.cfg.mailbox_bytes);
+        self.sdo.handle(request, &mut self.od, state, capacity)
     }
 
     fn wants_sync0(&self) -> bool {
@@ -330,7 +376,11 @@ impl Application for Firmware {
             Some(o) => (o.controlword, o.mode, o.target_torque_permille),
             None => (0, 0, 0),
         };
-        let injected = self.faults.drive_fault.swap(0, Ordering::Relaxed);
+        let injected = if self.faults.armed(self.cycles) {
+            self.faults.drive_fault.swap(0, Ordering::Relaxed)
+        } else {
+            0
+        };
         if injected != 0 {
             self.fault(injected as u16);
         }
@@ -527,7 +577,7 @@ fn dictionary(s: &Scaling, cycle_ns: u32, load_nm_per_inc: u32) -> Dictionary {
     od
 }
 
-fn sii_content() -> SiiContent {
+fn sii_content(mailbox: u16) -> SiiContent {
     let entries = |m: &[MappingEntry]| {
         m.iter()
             .map(|e| {
@@ -545,17 +595,17 @@ fn sii_content() -> SiiContent {
     SiiContent {
         identity: IDENTITY,
         name: NAME.into(),
-        mailbox: (SM0, MAILBOX_LEN, SM1, MAILBOX_LEN),
+        mailbox: (SM0, mailbox, SM1, mailbox),
         sync_managers: vec![
             SiiSyncManager {
                 start: SM0,
-                len: MAILBOX_LEN,
+                len: mailbox,
                 control: 0x26,
                 ty: 1,
             },
             SiiSyncManager {
                 start: SM1,
-                len: MAILBOX_LEN,
+                len: mailbox,
                 control: 0x22,
                 ty: 2,
             },

@@ -7,16 +7,21 @@
 //!   CoE SDO mailbox, distributed clocks, sync-manager watchdog) whose physics
 //!   is [`beltune::sim::SimAxis`];
 //! - [`master`]: the axis on the master side through `ethercrab`, over a raw
-//!   socket or in-process against the virtual drive.
+//!   socket or in-process against the virtual drive;
+//! - [`sched`]: real-time scheduling of the bus thread;
+//! - `netns` (feature `test-util`): a veth pair in a network namespace for wire tests.
 
 pub mod cia402;
 pub mod drive;
 pub mod error;
 pub mod esc;
 pub mod master;
+#[cfg(feature = "test-util")]
+pub mod netns;
 pub mod od;
 pub mod pdo;
 pub mod scaling;
+pub mod sched;
 pub mod serve;
 
 pub use error::Error;

@@ -19,6 +19,10 @@ pub struct ServeStats {
     pub cycles: u64,
     /// Watchdog expiries.
     pub watchdog_expiries: u64,
+    /// SYNC0 cycles in OP that found no new outputs (the master's frame
+    /// came after the SYNC0 it was meant for: the drive applied the previous
+    /// torque once more, as a real drive does).
+    pub cycles_without_new_outputs: u64,
 }
 
 /// Nanoseconds of the monotonic clock.
@@ -100,6 +104,7 @@ pub fn serve(
     let t0 = monotonic_ns();
     // the drive's local clock starts at 1 s (it has been on for a while)
     let local = |now: u64| now - t0 + 1_000_000_000;
+    let mut held: Option<Vec<u8>> = None;
     while !stop.load(Ordering::Relaxed) {
         let mut from: libc::sockaddr_ll = unsafe { std::mem::zeroed() };
         let mut len = std::mem::size_of::<libc::sockaddr_ll>() as libc::socklen_t;
@@ -126,27 +131,39 @@ pub fn serve(
         if frame.len() < 14 || frame[6] & 0x02 != 0 {
             continue;
         }
+        let cycles = drive.firmware.cycles();
+        let faults = drive.faults();
+        if faults.take(&faults.drop_requests, cycles) {
+            continue;
+        }
         if drive.process_frame(frame) {
             frames += 1;
-            let drop = drive
-                .faults()
-                .drop_frames
-                .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1))
-                .is_ok();
+            let drop = faults.take(&faults.drop_frames, cycles);
             if drop {
                 continue;
             }
-            // SAFETY: sending our buffer on our socket to the interface it came from.
-            unsafe {
-                libc::sendto(
-                    sock.0,
-                    frame.as_ptr() as *const libc::c_void,
-                    frame.len(),
-                    0,
-                    &from as *const _ as *const libc::sockaddr,
-                    len,
-                );
+            let send = |bytes: &[u8]| {
+                // SAFETY: sending a buffer we own on our socket to the interface it came from.
+                unsafe {
+                    libc::sendto(
+                        sock.0,
+                        bytes.as_ptr() as *const libc::c_void,
+                        bytes.len(),
+                        0,
+                        &from as *const _ as *const libc::sockaddr,
+                        len,
+                    );
+                }
+            };
+            // a held-back answer goes out late, before the answer to this frame
+            if let Some(old) = held.take() {
+                send(&old);
             }
+            if faults.take(&faults.late_answers, cycles) {
+                held = Some(frame.to_vec());
+                continue;
+            }
+            send(frame);
         }
     }
     let s = drive.esc.stats();
@@ -154,5 +171,6 @@ pub fn serve(
         frames,
         cycles: s.cycles,
         watchdog_expiries: s.watchdog_expiries,
+        cycles_without_new_outputs: s.cycles_without_new_outputs,
     })
 }

@@ -8,78 +8,9 @@ use beltune_ethercat::cia402::State;
 use beltune_ethercat::drive::{DriveConfig, VirtualDrive};
 use beltune_ethercat::master::wire::RawSocket;
 use beltune_ethercat::master::{EthercatAxis, MasterConfig, Storage};
-use std::process::Command;
+use beltune_ethercat::netns::Netns;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-
-/// A namespace with one end of a veth pair; removed on drop.
-struct Netns {
-    ns: String,
-    master_if: String,
-    drive_if: String,
-}
-
-fn ip(args: &[&str]) -> Result<(), String> {
-    let out = Command::new("ip")
-        .args(args)
-        .output()
-        .map_err(|e| format!("ip: {e}"))?;
-    if out.status.success() {
-        Ok(())
-    } else {
-        Err(format!(
-            "ip {}: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr).trim()
-        ))
-    }
-}
-
-impl Netns {
-    fn create(tag: &str) -> Result<Netns, String> {
-        let id = std::process::id() % 100_000;
-        let n = Netns {
-            ns: format!("bt-{tag}-{id}"),
-            master_if: format!("btm{tag}{id}"),
-            drive_if: format!("btd{tag}{id}"),
-        };
-        ip(&["netns", "add", &n.ns])?;
-        // from here on, Drop cleans up
-        ip(&[
-            "link",
-            "add",
-            &n.master_if,
-            "type",
-            "veth",
-            "peer",
-            "name",
-            &n.drive_if,
-        ])?;
-        ip(&["link", "set", &n.drive_if, "netns", &n.ns])?;
-        ip(&["link", "set", &n.master_if, "up"])?;
-        ip(&["-n", &n.ns, "link", "set", &n.drive_if, "up"])?;
-        Ok(n)
-    }
-}
-
-impl Drop for Netns {
-    fn drop(&mut self) {
-        let _ = ip(&["link", "del", &self.master_if]);
-        let _ = ip(&["netns", "del", &self.ns]);
-    }
-}
-
-/// Enter the network namespace `ns` on the calling thread.
-fn enter(ns: &str) -> Result<(), String> {
-    let f =
-        std::fs::File::open(format!("/run/netns/{ns}")).map_err(|e| format!("open netns: {e}"))?;
-    use std::os::fd::AsRawFd;
-    // SAFETY: setns on a namespace descriptor we hold; affects this thread only.
-    if unsafe { libc::setns(f.as_raw_fd(), libc::CLONE_NEWNET) } != 0 {
-        return Err(format!("setns: {}", std::io::Error::last_os_error()));
-    }
-    Ok(())
-}
 
 #[test]
 fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
@@ -92,11 +23,13 @@ fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
     };
     let stop = Arc::new(AtomicBool::new(false));
     let (ns, drive_if, stop2) = (net.ns.clone(), net.drive_if.clone(), Arc::clone(&stop));
+    let (faults_tx, drive_faults) = std::sync::mpsc::channel();
     let server = std::thread::spawn(move || -> Result<(State, u64), String> {
-        enter(&ns)?;
+        beltune_ethercat::netns::enter(&ns)?;
         let plant = rigs::builtin("egc70", None).unwrap();
         let mut drive =
             VirtualDrive::new(&plant, DriveConfig::default()).map_err(|e| e.to_string())?;
+        let _ = faults_tx.send(drive.faults());
         let stats = beltune_ethercat::serve::serve(&drive_if, &mut drive, &stop2)
             .map_err(|e| e.to_string())?;
         Ok((drive.firmware.state(), stats.frames))
@@ -125,6 +58,14 @@ fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
         }
     };
     assert_eq!(axis.identity().name, "beltune virtual servo");
+    // distributed clocks over the veth pair: SYNC0 configured and running
+    assert!(axis.identity().dc, "SYNC0 in use on the wire");
+    // issue 14: one late answer (sent after the master's frame timeout, before
+    // the answer to the next frame) is one lost frame, bridged; before, it
+    // aborted every exchange after it (each answer came after its exchange
+    // had been given up)
+    let faults = drive_faults.recv().unwrap();
+    faults.late_answers.store(1, Ordering::Relaxed);
     let start = axis.last().motor_counts;
     let mut m = axis.last();
     let t0 = std::time::Instant::now();
@@ -136,7 +77,17 @@ fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
         "the motor turned: {} counts",
         m.motor_counts - start
     );
-    eprintln!("300 cycles of 1 ms in {:.3} s", t0.elapsed().as_secs_f64());
+    let (exchanges, missed) = axis.cycle_counts();
+    eprintln!(
+        "300 cycles of 1 ms in {:.3} s; {exchanges} exchanges, {missed} SYNC0 cycles missed",
+        t0.elapsed().as_secs_f64()
+    );
+    assert_eq!(faults.late_answers.load(Ordering::Relaxed), 0, "held back");
+    assert_eq!(
+        axis.transport().stray_frames(),
+        1,
+        "the late answer was dropped"
+    );
     let t1 = std::time::Instant::now();
     let st = axis.quick_stop().unwrap();
     eprintln!("quick stop {st:?} in {:.3} s", t1.elapsed().as_secs_f64());

@@ -129,6 +129,64 @@ fn real(x: f64) -> String {
     format!("{x:?}")
 }
 
+/// How one language spells the values of the table ([`values`]): the two
+/// exports differ only in this and in the struct literal built from the names.
+struct Syntax {
+    /// Prefix of every constant's name (`BELTUNE_` in C).
+    prefix: &'static str,
+    /// The declaration of one named value (the name already upper case).
+    declare: fn(&str, &Value) -> String,
+}
+
+const RUST: Syntax = Syntax {
+    prefix: "",
+    declare: |name, v| {
+        let (ty, lit) = match v {
+            Value::Real(x) => ("f64", real(*x)),
+            Value::Count(c) => ("usize", c.to_string()),
+            Value::Flag(b) => ("bool", b.to_string()),
+        };
+        format!("pub const {name}: {ty} = {lit};")
+    },
+};
+
+const C: Syntax = Syntax {
+    prefix: "BELTUNE_",
+    declare: |name, v| {
+        let lit = match v {
+            Value::Real(x) => real(*x),
+            Value::Count(c) => format!("{c}u"),
+            Value::Flag(b) => b.to_string(),
+        };
+        format!("#define BELTUNE_{name} {lit}")
+    },
+};
+
+impl Syntax {
+    /// The constant's name of the table entry `n` (lower case, torque
+    /// spelling) in `file`'s units.
+    fn name(&self, file: &ControllerFile, n: &str) -> String {
+        let n = match file.units {
+            ModelUnits::Current => crate::units::current_key(n).unwrap_or_else(|| n.to_string()),
+            ModelUnits::Torque => n.to_string(),
+        };
+        format!("{}{}", self.prefix, n.to_ascii_uppercase())
+    }
+
+    /// One declaration per value of the table, one line each.
+    fn declarations(&self, file: &ControllerFile) -> String {
+        values(file)
+            .iter()
+            .map(|(n, v)| (self.declare)(&n.to_ascii_uppercase(), v) + "\n")
+            .collect()
+    }
+
+    /// The names of the coefficients `b0, b1, b2, a1, a2` of prefilter section `i`.
+    fn section(&self, file: &ControllerFile, i: usize) -> [String; 5] {
+        ["b0", "b1", "b2", "a1", "a2"].map(|c| self.name(file, &format!("prefilter{i}_{c}")))
+    }
+}
+
 fn header_lines(file: &ControllerFile, comment: &str) -> String {
     let p = &file.provenance;
     let l = crate::units::labels(file.units);
@@ -157,35 +215,16 @@ pub fn export(file: &ControllerFile, lang: Lang) -> String {
 /// The Rust module: named `const`s, `CASCADE` (`CascadeConfig<f64>`) and
 /// `BELT_STRETCH` (`BeltStretch<f64>`) for `SetpointConversion::new(I_T_M_PER_RAD, BELT_STRETCH)`.
 pub fn rust_module(file: &ControllerFile) -> String {
-    let vals = values(file);
-    let name = |n: &str| -> String {
-        let n = if file.units == ModelUnits::Current {
-            crate::units::current_key(n).unwrap_or_else(|| n.to_string())
-        } else {
-            n.to_string()
-        };
-        n.to_ascii_uppercase()
-    };
+    let name = |n: &str| RUST.name(file, n);
     let mut s = header_lines(file, "//");
     s.push_str(
         "\nuse beltune_rt::control::{\n    AntiWindup, BeltStretch, CascadeConfig, CascadeGains, Feedforward, FeedforwardParams,\n    FeedforwardTerms,\n};\nuse beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};\n\n",
     );
-    for (n, v) in &vals {
-        let (ty, lit) = match v {
-            Value::Real(x) => ("f64", real(*x)),
-            Value::Count(c) => ("usize", c.to_string()),
-            Value::Flag(b) => ("bool", b.to_string()),
-        };
-        let _ = writeln!(s, "pub const {}: {ty} = {lit};", n.to_ascii_uppercase());
-    }
+    s.push_str(&RUST.declarations(file));
     let sos = |i: usize| {
+        let [b0, b1, b2, a1, a2] = RUST.section(file, i);
         format!(
-            "SosCoeffs {{\n            b0: {},\n            b1: {},\n            b2: {},\n            a1: {},\n            a2: {},\n        }}",
-            name(&format!("prefilter{i}_b0")),
-            name(&format!("prefilter{i}_b1")),
-            name(&format!("prefilter{i}_b2")),
-            name(&format!("prefilter{i}_a1")),
-            name(&format!("prefilter{i}_a2")),
+            "SosCoeffs {{\n            b0: {b0},\n            b1: {b1},\n            b2: {b2},\n            a1: {a1},\n            a2: {a2},\n        }}"
         )
     };
     let aw = match file.anti_windup {
@@ -224,35 +263,11 @@ pub fn rust_module(file: &ControllerFile) -> String {
 /// The C header: `#define BELTUNE_...` values, `BELTUNE_CASCADE`
 /// (`BtCascadeConfig`) and `BELTUNE_SETPOINT` (`BtSetpointConfig`) of `beltune_rt.h`.
 pub fn c_header(file: &ControllerFile) -> String {
-    let vals = values(file);
-    let name = |n: &str| -> String {
-        let n = if file.units == ModelUnits::Current {
-            crate::units::current_key(n).unwrap_or_else(|| n.to_string())
-        } else {
-            n.to_string()
-        };
-        format!("BELTUNE_{}", n.to_ascii_uppercase())
-    };
+    let name = |n: &str| C.name(file, n);
     let mut s = header_lines(file, "//");
     s.push_str("#ifndef BELTUNE_CONTROLLER_H\n#define BELTUNE_CONTROLLER_H\n\n#include \"beltune_rt.h\"\n\n");
-    for (n, v) in &vals {
-        let lit = match v {
-            Value::Real(x) => real(*x),
-            Value::Count(c) => format!("{c}u"),
-            Value::Flag(b) => b.to_string(),
-        };
-        let _ = writeln!(s, "#define BELTUNE_{} {lit}", n.to_ascii_uppercase());
-    }
-    let sec = |i: usize| {
-        format!(
-            "{{{}, {}, {}, {}, {}}}",
-            name(&format!("prefilter{i}_b0")),
-            name(&format!("prefilter{i}_b1")),
-            name(&format!("prefilter{i}_b2")),
-            name(&format!("prefilter{i}_a1")),
-            name(&format!("prefilter{i}_a2"))
-        )
-    };
+    s.push_str(&C.declarations(file));
+    let sec = |i: usize| format!("{{{}}}", C.section(file, i).join(", "));
     let aw = match file.anti_windup {
         AntiWindupKind::ConditionalIntegration => "BT_ANTI_WINDUP_CONDITIONAL",
         AntiWindupKind::Off => "BT_ANTI_WINDUP_OFF",

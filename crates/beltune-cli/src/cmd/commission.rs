@@ -27,12 +27,13 @@ use beltune::procedure::outputs::{
     build_report, commissioning_json, controller_toml, data_files, recorded_data_files,
     recorded_outputs,
 };
-use beltune::procedure::outputs::{write_outputs_with_data, OutputTarget};
+use beltune::procedure::outputs::{write_outputs_with_data, AxisRecord, OutputTarget};
 use beltune::procedure::recorded::commission_recorded;
 use beltune::procedure::result::Truth;
 use beltune::provenance::Provenance;
 use beltune::report::render_html;
 use beltune::sim::{SimAxis, SimConfig};
+use beltune_ethercat::master::BusAxis;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -154,6 +155,15 @@ pub struct Args {
     /// end the commissioning with a quick stop).
     #[arg(long, default_value_t = 10.0, requires = "ethercat")]
     pub frame_timeout_ms: f64,
+    /// EtherCAT: run the bus thread under SCHED_FIFO at this priority
+    /// (1-99; root or CAP_SYS_NICE), so that a busy host does not make it
+    /// miss cycles (the computation threads keep normal scheduling).
+    #[arg(long, value_name = "PRIO", requires = "ethercat")]
+    pub realtime_priority: Option<u8>,
+    /// EtherCAT: do not use distributed clocks even where the drive offers
+    /// them (SM-synchronous: the drive runs a cycle per process-data frame).
+    #[arg(long, requires = "ethercat")]
+    pub no_dc: bool,
     /// No progress bars or stage lines (the summary is still printed).
     #[arg(long)]
     pub quiet: bool,
@@ -573,8 +583,36 @@ fn finish_axis_run(r: AxisRun, limits: &super::verdict::Limits, json: bool) -> a
     Ok(())
 }
 
+/// An EtherCAT bus to commission on instead of the raw socket of
+/// `--ethercat IFACE` (tests: the virtual drive in-process).
+pub struct Bus<'a> {
+    /// What the summary calls the bus (e.g. `EtherCAT eth0`).
+    pub label: String,
+    /// Open the axis with the master settings of the command line.
+    #[allow(clippy::type_complexity)]
+    pub open: Box<
+        dyn FnOnce(
+                beltune_ethercat::master::MasterConfig,
+            ) -> Result<Box<dyn BusAxis + 'a>, beltune_ethercat::Error>
+            + 'a,
+    >,
+}
+
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    run_inner(args, None)
+}
+
+/// Run `commission --ethercat ...` on `bus` instead of the raw socket of the
+/// interface (whose name is then ignored).
+pub fn run_on_bus(args: Args, bus: Bus<'_>) -> anyhow::Result<()> {
+    if args.ethercat.is_none() {
+        return Err(bad("run_on_bus needs --ethercat".to_string()));
+    }
+    run_inner(args, Some(bus))
+}
+
+fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
     check_mode_flags(&args)?;
     check_inputs_outside_output(&args)?;
     let limits = args.limits.limits()?;
@@ -630,8 +668,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(e) = args.following_error_max {
         cfg.following_error_max_m = e;
     }
+    if let Some(bus) = bus {
+        return run_ethercat(&args, bus, &ds, &cfg, &limits);
+    }
     if let Some(interface) = args.ethercat.clone() {
-        return run_ethercat(&args, &interface, &ds, &cfg, &limits);
+        use beltune_ethercat::master::wire::RawSocket;
+        use beltune_ethercat::master::{EthercatAxis, Storage};
+        let storage = Storage::new();
+        let bus = Bus {
+            label: format!("EtherCAT {interface}"),
+            open: Box::new(|master| {
+                let axis = EthercatAxis::open(&storage, master, |tx, rx| {
+                    RawSocket::open(&interface, tx, rx)
+                })?;
+                Ok(Box::new(axis) as Box<dyn BusAxis>)
+            }),
+        };
+        return run_ethercat(&args, bus, &ds, &cfg, &limits);
     }
     let plant_noise = plant.noise();
     let noise = beltune::model::MeasurementNoise {
@@ -664,7 +717,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let name = args.plant.clone().unwrap_or_else(|| "egc70".to_string());
     let provenance = Provenance::of_this_process(Some(args.seed.unwrap_or(1)));
-    let json = commissioning_json(&run, &name, Some(truth.clone()), provenance.clone());
+    let axis_record = AxisRecord::simulated(&name, &plant, start_position, args.seed.unwrap_or(1));
+    let json = commissioning_json(
+        &run,
+        &name,
+        Some(truth.clone()),
+        axis_record,
+        provenance.clone(),
+    );
     let toml = controller_toml(
         &run.design,
         &run.friction,
@@ -705,13 +765,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// Commission the drive on an EtherCAT bus (`--ethercat IFACE`).
 fn run_ethercat(
     args: &Args,
-    interface: &str,
+    bus: Bus<'_>,
     ds: &DataSheet,
     cfg: &CommissioningConfig,
     limits: &super::verdict::Limits,
 ) -> anyhow::Result<()> {
-    use beltune_ethercat::master::wire::RawSocket;
-    use beltune_ethercat::master::{EthercatAxis, MasterConfig, Storage};
+    use beltune_ethercat::master::MasterConfig;
     if !(args.frame_timeout_ms.is_finite() && (0.1..=1000.0).contains(&args.frame_timeout_ms)) {
         return Err(anyhow::Error::new(crate::exit::Failure::new(
             crate::exit::ExitStatus::BadInput,
@@ -721,17 +780,20 @@ fn run_ethercat(
             ),
         )));
     }
-    let storage = Storage::new();
+    if let Some(p) = args.realtime_priority {
+        // this thread runs the bus; the computation threads it starts run normally
+        beltune_ethercat::sched::set_realtime_priority(p)
+            .map_err(|e| bad(format!("--realtime-priority: {e}")))?;
+    }
     let master = MasterConfig {
         subdevice: args.subdevice,
         cycle_s: f64::from(args.cycle_us) * 1e-6,
         frame_timeout_s: args.frame_timeout_ms * 1e-3,
+        use_dc: !args.no_dc,
         ..MasterConfig::default()
     };
-    let mut axis = EthercatAxis::open(&storage, master, |tx, rx| {
-        RawSocket::open(interface, tx, rx)
-    })
-    .with_context(|| format!("EtherCAT on {interface}"))?;
+    let label = bus.label;
+    let mut axis = (bus.open)(master).with_context(|| label.clone())?;
     let id = axis.identity().clone();
     let sc = axis.scaling();
     if !args.quiet {
@@ -751,22 +813,37 @@ fn run_ethercat(
             sc.motor_revolutions,
             if sc.load_m_per_inc.is_some() { ", load-side encoder" } else { "" }
         );
-        for l in crate::progress::stage_lines(&format!("EtherCAT {interface}"), &line) {
+        for l in crate::progress::stage_lines(&label, &line) {
             eprintln!("{l}");
         }
     }
     let mut progress = BarProgress::new(args.quiet);
     let started = Instant::now();
-    let run = commission(&mut axis, ds, cfg, &mut progress);
+    let run = commission(axis.as_axis(), ds, cfg, &mut progress);
     // leave the drive switched off and at rest, also after a stop
-    let _ = axis.quick_stop();
+    let _ = axis.stop_drive();
+    let (exchanges, missed) = axis.cycle_counts();
+    drop(axis);
+    if args.realtime_priority.is_some() {
+        // the bus is closed: the report is no real-time work
+        beltune_ethercat::sched::set_normal();
+    }
+    if !args.quiet && id.dc {
+        // a late exchange makes the drive apply the previous torque again
+        let line = format!(
+            "{exchanges} exchanges, {missed} SYNC0 cycles missed by the master (host scheduling)"
+        );
+        for l in crate::progress::stage_lines(&label, &line) {
+            eprintln!("{l}");
+        }
+    }
     let run = run.map_err(|e| stopped(e, &mut progress, args))?;
-    let name = format!(
-        "EtherCAT {interface} SubDevice {} ({})",
-        args.subdevice, id.name
-    );
+    let name = format!("{label} SubDevice {} ({})", args.subdevice, id.name);
     let provenance = Provenance::of_this_process(None);
-    let json = commissioning_json(&run, &name, None, provenance.clone());
+    let axis_record = AxisRecord::Ethercat {
+        source: name.clone(),
+    };
+    let json = commissioning_json(&run, &name, None, axis_record, provenance.clone());
     let toml = controller_toml(
         &run.design,
         &run.friction,

@@ -41,9 +41,13 @@ struct JsonOut<'a> {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let check_ts = |ts: f64, what: &str| -> anyhow::Result<()> {
         beltune::model::params::check_sample_time(ts).map_err(|e| {
+            let why = match e {
+                beltune::Error::InvalidParameter { reason, .. } => reason,
+                e => e.to_string(),
+            };
             anyhow::Error::new(crate::exit::Failure::new(
                 crate::exit::ExitStatus::BadInput,
-                format!("{what} {}: {}", beltune::error::short_number(ts), e),
+                format!("{what} {}: {why}", beltune::error::short_number(ts)),
             ))
         })
     };
@@ -54,9 +58,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         super::util::check_not_an_input("--json", out, &[&args.model])?;
     }
     let model = ModelFile::load(&args.model)?;
-    check_ts(model.design_ts_s(args.ts), "the model's ts_s")?;
+    check_ts(
+        model.design_ts_s(args.ts),
+        &format!("{}: the sampling time ts_s", args.model.display()),
+    )?;
     let knobs = args.knobs.knobs()?;
-    let d = model.design(args.ts, &knobs, args.knobs.rule())?.design;
+    let d = model
+        .design(args.ts, &knobs, args.knobs.rule())
+        .map_err(|e| super::util::in_flag_words(e.into(), &super::util::KNOB_FLAGS))?
+        .design;
     if !model.identified.dead_time_measured {
         println!(
             "dead time:  not measured; {} ms assumed (thesis 3.30)",

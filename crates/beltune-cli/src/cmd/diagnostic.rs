@@ -8,16 +8,24 @@
 //! command runs again once the cause is fixed (a later result in `DIR`
 //! removes the then stale sibling).
 //!
+//! The same diagnostic ends a failed exchange with the axis (lost frames, a
+//! drive fault, a watchdog: the drive was told to quick stop): `limit` is
+//! then `axis` and `violation` names the failure.
+//!
 //! JSON keys (schema [`SCHEMA`], stable like the summary's): `schema`,
 //! `stage`, `reason`, `limit` (`travel`, `travel_ahead`, `velocity`,
-//! `torque`, `following_error`, `non_finite`), `violation` (the values, SI),
+//! `torque`, `following_error`, `non_finite`, `axis`), `violation` (the
+//! values, SI; for `axis`: `{"Axis": {"error", "message", "error_code",
+//! "quick_stop"}}` with `error` one of `timeout`, `working_counter`,
+//! `drive_fault`, `not_operational`),
 //! `limits` (the supervisor's `travel_min_m`, `travel_max_m`,
 //! `torque_max_nm`, `velocity_max_m_s`, `following_error_max_m`), `time_s`,
 //! `position_m`, `velocity_m_s`, `torque_command_nm`, `following_error_m`,
 //! `stop_position_m`, `stop_error`, `samples_file`, `samples`,
 //! `provenance`.
 
-use crate::progress::StopCapture;
+use crate::progress::{StopCapture, StopCause};
+use beltune::plant::AxisError;
 use beltune::procedure::outputs::OutputTarget;
 use beltune::procedure::runner::HistorySample;
 use beltune::procedure::Violation;
@@ -43,13 +51,41 @@ pub const CSV_COLUMNS: [&str; 8] = [
     "following_error_m",
 ];
 
+/// The `violation` of the description: a violated limit, or the failed exchange.
+#[derive(Serialize)]
+enum Cause<'a> {
+    Axis(AxisFailure),
+    #[serde(untagged)]
+    Limit(&'a Violation),
+}
+
+#[derive(Serialize)]
+struct AxisFailure {
+    error: &'static str,
+    message: String,
+    /// CiA 402 error code of a drive fault (0x603F).
+    error_code: Option<u16>,
+    /// Why the quick stop failed too, if it did.
+    quick_stop: Option<String>,
+}
+
+/// The short name of a failed exchange.
+pub fn axis_error_name(e: &AxisError) -> &'static str {
+    match e {
+        AxisError::Timeout { .. } => "timeout",
+        AxisError::WorkingCounter { .. } => "working_counter",
+        AxisError::DriveFault { .. } => "drive_fault",
+        AxisError::NotOperational => "not_operational",
+    }
+}
+
 #[derive(Serialize)]
 struct Description<'a> {
     schema: &'static str,
     stage: &'a str,
     reason: &'a str,
     limit: &'static str,
-    violation: &'a Violation,
+    violation: Cause<'a>,
     limits: &'a beltune::procedure::SafetyLimits,
     time_s: f64,
     position_m: f64,
@@ -160,28 +196,63 @@ pub fn write(
     seed: Option<u64>,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let dir = folder(target);
-    let r = &stop.record;
-    let description = Description {
-        schema: SCHEMA,
-        stage: &stop.stage,
-        reason,
-        limit: limit_name(&r.violation),
-        violation: &r.violation,
-        limits: &r.limits,
-        time_s: r.time_s,
-        position_m: r.position_m,
-        velocity_m_s: r.velocity_m_s,
-        torque_command_nm: r.torque_command_nm,
-        following_error_m: r.following_error_m,
-        stop_position_m: r.stop_position_m,
-        stop_error: r.stop_error.as_deref(),
-        samples_file: CSV_FILE,
-        samples: r.history.len(),
-        provenance: beltune::provenance::Provenance::of_this_process(seed),
+    let provenance = beltune::provenance::Provenance::of_this_process(seed);
+    let (description, history) = match &stop.cause {
+        StopCause::Limit(r) => (
+            Description {
+                schema: SCHEMA,
+                stage: &stop.stage,
+                reason,
+                limit: limit_name(&r.violation),
+                violation: Cause::Limit(&r.violation),
+                limits: &r.limits,
+                time_s: r.time_s,
+                position_m: r.position_m,
+                velocity_m_s: r.velocity_m_s,
+                torque_command_nm: r.torque_command_nm,
+                following_error_m: r.following_error_m,
+                stop_position_m: r.stop_position_m,
+                stop_error: r.stop_error.as_deref(),
+                samples_file: CSV_FILE,
+                samples: r.history.len(),
+                provenance,
+            },
+            &r.history,
+        ),
+        StopCause::Axis(r) => (
+            Description {
+                schema: SCHEMA,
+                stage: &stop.stage,
+                reason,
+                limit: "axis",
+                violation: Cause::Axis(AxisFailure {
+                    error: axis_error_name(&r.error),
+                    message: r.error.to_string(),
+                    error_code: match r.error {
+                        AxisError::DriveFault { error_code } => Some(error_code),
+                        _ => None,
+                    },
+                    quick_stop: r.quick_stop.map(|e| e.to_string()),
+                }),
+                limits: &r.limits,
+                time_s: r.time_s,
+                position_m: r.position_m,
+                velocity_m_s: r.velocity_m_s,
+                torque_command_nm: r.torque_command_nm,
+                following_error_m: r.following_error_m,
+                // the drive stopped the axis on its own: where, the host cannot say
+                stop_position_m: None,
+                stop_error: None,
+                samples_file: CSV_FILE,
+                samples: r.history.len(),
+                provenance,
+            },
+            &r.history,
+        ),
     };
     let mut text = serde_json::to_string_pretty(&description)?;
     text.push('\n');
-    let csv = samples_csv(&r.history);
+    let csv = samples_csv(history);
     Ok(beltune::io::write_folder_atomic(
         &dir,
         &[(JSON_FILE, text.as_bytes()), (CSV_FILE, csv.as_bytes())],

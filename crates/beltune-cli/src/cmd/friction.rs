@@ -71,6 +71,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             min_speed_fraction: args.min_speed_fraction,
         },
     )
+    .map_err(|e| {
+        super::util::in_flag_words(
+            e.into(),
+            &[
+                ("cutoff_hz", "--cutoff-hz"),
+                ("min_speed_fraction", "--min-speed-fraction"),
+            ],
+        )
+    })
     .with_context(|| args.csv.display().to_string())?;
     println!(
         "inertia {:.6e}, viscous {:.6e}, coulomb {:.6e}, offset {:.6e}",

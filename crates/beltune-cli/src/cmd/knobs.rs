@@ -35,7 +35,9 @@ pub struct KnobArgs {
 }
 
 impl KnobArgs {
-    /// The knobs, or one line saying which value is wrong.
+    /// The knobs, or one line saying which flag is wrong. The ranges are
+    /// checked here, before a commissioning moves the axis (the design checks
+    /// them again, with the library's names).
     pub fn knobs(&self) -> anyhow::Result<DesignKnobs> {
         let kind: PrefilterKind = self.prefilter.as_deref().unwrap_or("butterworth").parse()?;
         let mut knobs = DesignKnobs {
@@ -43,7 +45,52 @@ impl KnobArgs {
             ..DesignKnobs::default()
         };
         if let Some(d) = &self.dynamics {
-            knobs = d.parse::<Dynamics>()?.knobs(&knobs);
+            let d = d
+                .parse::<Dynamics>()
+                .map_err(|e| super::util::in_flag_words(e.into(), &super::util::KNOB_FLAGS))?;
+            knobs = d.knobs(&knobs);
+        }
+        let bad = |flag: &str, v: f64, why: &str| {
+            anyhow::Error::new(crate::exit::Failure::new(
+                crate::exit::ExitStatus::BadInput,
+                format!("{flag} {}: {why}", beltune::error::short_number(v)),
+            ))
+        };
+        for (flag, v, what) in [
+            (
+                "--pm-velocity",
+                self.pm_velocity,
+                "the velocity phase margin",
+            ),
+            (
+                "--pm-position",
+                self.pm_position,
+                "the position phase margin",
+            ),
+        ] {
+            if let Some(v) = v.filter(|v| !(*v > 0.0 && *v < 180.0)) {
+                return Err(bad(flag, v, &format!("{what} must lie in (0, 180) deg")));
+            }
+        }
+        if let Some(v) = self
+            .resonance_suppression_db
+            .filter(|v| !(v.is_finite() && *v < 0.0))
+        {
+            return Err(bad(
+                "--resonance-suppression-db",
+                v,
+                "the open-loop gain at the resonance A_sup must be below 0 dB",
+            ));
+        }
+        if let Some(v) = self
+            .filter_attenuation_db
+            .filter(|v| !(-60.0..0.0).contains(v))
+        {
+            return Err(bad(
+                "--filter-attenuation-db",
+                v,
+                "the prefilter gain at the antiresonance must lie in [-60, 0) dB",
+            ));
         }
         if let Some(v) = self.pm_velocity {
             knobs.pm_velocity_deg = v;

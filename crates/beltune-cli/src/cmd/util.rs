@@ -39,3 +39,36 @@ pub fn check_not_an_input(flag: &str, out: &Path, inputs: &[&Path]) -> anyhow::R
     }
     Ok(())
 }
+
+/// The command-line flags of the design knobs, by the library's parameter names.
+pub const KNOB_FLAGS: [(&str, &str); 5] = [
+    ("pm_velocity_deg", "--pm-velocity"),
+    ("pm_position_deg", "--pm-position"),
+    ("resonance_suppression_db", "--resonance-suppression-db"),
+    ("filter_attenuation_db", "--filter-attenuation-db"),
+    ("dynamics", "--dynamics"),
+];
+
+/// A library error about a parameter the user gave as a flag, in the words
+/// of the command line: `--pm-velocity 200: the velocity phase margin must
+/// lie in (0, 180) degrees` instead of the library's field name (issue 13
+/// item 14). `flags` maps the library's parameter names to the flags; any
+/// other error is returned unchanged.
+pub fn in_flag_words(e: anyhow::Error, flags: &[(&str, &str)]) -> anyhow::Error {
+    for cause in e.chain() {
+        if let Some(beltune::Error::InvalidParameter {
+            name,
+            value,
+            reason,
+        }) = cause.downcast_ref::<beltune::Error>()
+        {
+            if let Some((_, flag)) = flags.iter().find(|(n, _)| n == name) {
+                return anyhow::Error::new(crate::exit::Failure::new(
+                    crate::exit::ExitStatus::BadInput,
+                    format!("{flag} {}: {reason}", beltune::error::short_number(*value)),
+                ));
+            }
+        }
+    }
+    e
+}

@@ -36,6 +36,11 @@ pub struct Args {
     /// per process-data frame (independent of the host's timing).
     #[arg(long)]
     pub no_dc: bool,
+    /// Run the drive under SCHED_FIFO at this priority (1-99; root or
+    /// CAP_SYS_NICE): on a busy host a normally scheduled drive is
+    /// descheduled for milliseconds and its answers miss their cycle.
+    #[arg(long, value_name = "PRIO")]
+    pub realtime_priority: Option<u8>,
 }
 
 static STOP: AtomicBool = AtomicBool::new(false);
@@ -63,6 +68,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ..DriveConfig::default()
     };
     let mut drive = VirtualDrive::new(&plant, cfg).context("virtual drive")?;
+    if let Some(p) = args.realtime_priority {
+        beltune_ethercat::sched::set_realtime_priority(p).context("--realtime-priority")?;
+    }
     // SAFETY: installing an async-signal-safe handler (an atomic store).
     unsafe {
         libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
@@ -77,8 +85,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     let stats = beltune_ethercat::serve::serve(&args.interface, &mut drive, &STOP)?;
     eprintln!(
-        "stopped: {} frames, {} cycles, {} watchdog expiries",
-        stats.frames, stats.cycles, stats.watchdog_expiries
+        "stopped: {} frames, {} cycles ({} without new outputs), {} watchdog expiries",
+        stats.frames, stats.cycles, stats.cycles_without_new_outputs, stats.watchdog_expiries
     );
     Ok(())
 }

@@ -23,10 +23,11 @@ use beltune::design::{
     PrefilterKind as DesignPrefilterKind,
 };
 use beltune::ident::FitModel;
+use beltune::ident::ModelUnits;
 use beltune::lti::StabilityMargins;
 use beltune::model::rigs::{self, LinearPlant, Plant};
 use beltune::procedure::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
-use beltune::procedure::outputs;
+use beltune::procedure::outputs::{self, AxisRecord};
 use beltune::procedure::plots::{self, FrfLines};
 use beltune::procedure::report_build;
 use beltune::procedure::result::{FrictionResult, MoveSummary};
@@ -35,7 +36,9 @@ use beltune::procedure::validation::{
 };
 use beltune::procedure::NoProgress;
 use beltune::provenance::Provenance;
-use beltune::report::{render_html, BodeCurve, ParameterRow, Report};
+use beltune::report::{
+    render_html, BodeCurve, ExcitationPlot, FrictionPlot, ParameterRow, Report, Table,
+};
 use beltune::sim::{SimAxis, SimConfig};
 use std::time::Instant;
 
@@ -110,6 +113,14 @@ pub struct DesignModel {
     pub input: Option<DesignInput>,
     /// Torque limit of the drive from the record, N m (`None`: egc70's).
     pub torque_max_nm: Option<f64>,
+    /// Unit system of the record (current units stay current units in a saved set).
+    pub units: ModelUnits,
+    /// What the commissioning ran on (`commissioning.json` key `axis`; absent in older files).
+    pub axis: Option<AxisRecord>,
+    /// The identification experiment as the report plots it (`excitation.csv`), if known.
+    pub excitation: Option<ExcitationPlot>,
+    /// The friction runs (`friction.csv`), if known.
+    pub friction_runs: Option<FrictionPlot>,
     /// One-sigma uncertainty of the identified `m_c`, kg (NaN: unknown, 5 %).
     pub m_c_sigma: f64,
     /// One-sigma uncertainty of the identified `c`, N/m (NaN: unknown, 5 %).
@@ -159,6 +170,35 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     } else {
         None
     };
+    let axis = match json.get("axis") {
+        None | Some(serde_json::Value::Null) => None,
+        Some(a) => Some(
+            serde_json::from_value::<AxisRecord>(a.clone())
+                .map_err(|e| anyhow::anyhow!("{}: `axis`: {e}", path.display()))?,
+        ),
+    };
+    if let Some(AxisRecord::Simulated { plant, .. }) = &axis {
+        plant
+            .validate()
+            .with_context(|| format!("{}: the simulated plant of `axis`", path.display()))?;
+    }
+    let ex_path = dir.join(plots::EXCITATION_CSV);
+    let excitation = if ex_path.exists() {
+        Some(
+            report_build::read_excitation_csv(&ex_path)
+                .with_context(|| format!("reading {}", ex_path.display()))?,
+        )
+    } else {
+        None
+    };
+    let fr_path = dir.join(plots::FRICTION_CSV);
+    let friction_runs = match (&friction, fr_path.exists()) {
+        (Some(f), true) => Some(
+            report_build::read_friction_csv(&fr_path, f.viscous_nm_s_per_rad, f.coulomb_nm)
+                .with_context(|| format!("reading {}", fr_path.display()))?,
+        ),
+        _ => None,
+    };
     Ok(DesignModel {
         source: format!("commissioning {}", dir.display()),
         params,
@@ -171,6 +211,10 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         m_c_sigma: id.m_c_sigma,
         c_sigma: id.c_sigma,
         torque_max_nm: id.torque_max_nm,
+        units: id.units,
+        axis,
+        excitation,
+        friction_runs,
     })
 }
 
@@ -194,9 +238,11 @@ pub fn builtin_commissioning() -> beltune::Result<(Plant, Commissioning)> {
 /// Which plant the simulated move runs on.
 #[derive(Debug, Clone)]
 enum MovePlant {
-    /// The built-in egc70 (nonlinear three-mass model) with the slider's payload.
-    Egc70,
-    /// The identified linear model with the slider's payload added to `m_c`.
+    /// The simulated plant the commissioning ran on (named), with the
+    /// slider's payload (a linear set: the payload added to its `m_c`).
+    Simulated(String, Box<Plant>),
+    /// The identified linear model with the slider's payload added to `m_c`
+    /// (recorded data, a real drive, or a folder from before `axis` was recorded).
     Identified,
 }
 
@@ -231,9 +277,22 @@ impl LibraryTuner {
         input
             .validate()
             .with_context(|| format!("design input from {}", model.source))?;
-        let torque_max_nm = match model.torque_max_nm {
-            Some(t) => t,
-            None => rigs::builtin("egc70", None)?.info().torque_max_nm,
+        let (move_plant, nominal_payload_kg) = match &model.axis {
+            Some(AxisRecord::Simulated {
+                name,
+                payload_kg,
+                plant,
+                ..
+            }) => (
+                MovePlant::Simulated(name.clone(), plant.clone()),
+                payload_kg.unwrap_or(0.0),
+            ),
+            _ => (MovePlant::Identified, 0.0),
+        };
+        let torque_max_nm = match (&move_plant, model.torque_max_nm) {
+            (_, Some(t)) => t,
+            (MovePlant::Simulated(_, p), None) => p.info().torque_max_nm,
+            (MovePlant::Identified, None) => rigs::builtin("egc70", None)?.info().torque_max_nm,
         };
         let f = model.friction.unwrap_or(FrictionTotals {
             viscous_nm_s_per_rad: 0.0,
@@ -255,8 +314,8 @@ impl LibraryTuner {
             model,
             input,
             friction,
-            nominal_payload_kg: 0.0,
-            move_plant: MovePlant::Identified,
+            nominal_payload_kg,
+            move_plant,
             torque_max_nm,
         })
     }
@@ -277,19 +336,26 @@ impl LibraryTuner {
     ) -> anyhow::Result<Self> {
         let fit = &run.fit;
         let lines = plots::frf_lines(&run.frf, &fit.model.tf(&fit.params), run.dead_time.seconds)?;
+        let axis = AxisRecord::simulated(name, plant, BUILTIN_START_POSITION_M, BUILTIN_SEED);
         let json = serde_json::to_value(outputs::commissioning_json(
             run,
             name,
             None,
+            axis.clone(),
             Provenance::of_this_process(Some(BUILTIN_SEED)),
         ))
         .context("commissioning.json of the built-in run")?;
+        let report = report_build::build_report(run, name, None, None, None)
+            .context("report of the built-in run")?;
         let model = DesignModel {
             source: format!(
                 "built-in {name} commissioned at start-up ({} kg payload, seed {BUILTIN_SEED})",
                 rigs::EGC70_DEFAULT_PAYLOAD_KG
             ),
-            params: run.design.input.model,
+            // the identified model: the design rule derives its design model
+            // from it (design::robust::design_model), as the commissioning did;
+            // `run.design.input.model` is that derived model already
+            params: run.fit.params,
             dead_time_s: run.design.input.dead_time_s,
             friction: Some(FrictionTotals {
                 viscous_nm_s_per_rad: run.friction.viscous_nm_s_per_rad,
@@ -302,14 +368,17 @@ impl LibraryTuner {
             json: Some(json),
             m_c_sigma: run.identified.m_c_sigma,
             c_sigma: run.identified.c_sigma,
-            input: Some(run.design.input),
-            torque_max_nm: None,
+            input: Some(DesignInput {
+                model: run.fit.params,
+                ..run.design.input
+            }),
+            torque_max_nm: Some(plant.info().torque_max_nm),
+            units: ModelUnits::Torque,
+            axis: Some(axis),
+            excitation: report.excitation,
+            friction_runs: report.friction,
         };
-        let mut tuner = LibraryTuner::new(model)?;
-        tuner.torque_max_nm = plant.info().torque_max_nm;
-        tuner.nominal_payload_kg = rigs::EGC70_DEFAULT_PAYLOAD_KG;
-        tuner.move_plant = MovePlant::Egc70;
-        Ok(tuner)
+        LibraryTuner::new(model)
     }
 
     /// What the design library receives for `knobs` (defaults from
@@ -345,7 +414,10 @@ impl LibraryTuner {
     /// message.
     pub fn design(&self, knobs: &Knobs) -> Result<ControllerDesign, TuneError> {
         let k = self.design_knobs(knobs)?;
-        let explicit = knobs.prefilter.is_some()
+        // the page always sends its prefilter: the default one is no expert knob
+        let explicit = knobs
+            .prefilter
+            .is_some_and(|p| to_design_kind(p) != DesignKnobs::default().prefilter)
             || knobs.filter_attenuation_db.is_some()
             || knobs.dynamics.is_some()
             || knobs.pm_velocity_deg.is_some()
@@ -375,8 +447,15 @@ impl LibraryTuner {
 
     /// The plant of the simulated move with `payload_kg`.
     pub fn move_plant(&self, payload_kg: f64) -> beltune::Result<Plant> {
-        match self.move_plant {
-            MovePlant::Egc70 => rigs::builtin("egc70", Some(payload_kg)),
+        match &self.move_plant {
+            MovePlant::Simulated(_, plant) => match plant.as_ref() {
+                Plant::Physical(_) => plant.with_payload(payload_kg),
+                Plant::Linear(l) => {
+                    let mut l = l.clone();
+                    l.two_mass.m_c += payload_kg;
+                    Ok(Plant::Linear(l))
+                }
+            },
             MovePlant::Identified => {
                 let drive = rigs::builtin("egc70", None)?.info();
                 let mut two_mass = self.model.params;
@@ -406,7 +485,7 @@ impl LibraryTuner {
     /// identified plant (no Coulomb friction) inertia and viscous friction.
     fn move_variant(&self) -> (FeedforwardVariant, FrictionResult) {
         match self.move_plant {
-            MovePlant::Egc70 => (FeedforwardVariant::Nonlinear, self.friction.clone()),
+            MovePlant::Simulated(..) => (FeedforwardVariant::Nonlinear, self.friction.clone()),
             MovePlant::Identified => (
                 FeedforwardVariant::Linear,
                 FrictionResult {
@@ -419,8 +498,10 @@ impl LibraryTuner {
 
     /// Label of the simulated move.
     fn move_label(&self) -> String {
-        match self.move_plant {
-            MovePlant::Egc70 => "simulated on egc70, nonlinear feedforward".into(),
+        match &self.move_plant {
+            MovePlant::Simulated(name, _) => {
+                format!("simulated on {name}, nonlinear feedforward")
+            }
             MovePlant::Identified => {
                 "simulated on the identified linear model, linear feedforward".into()
             }
@@ -446,6 +527,32 @@ impl LibraryTuner {
             MOVE_SEED,
             MOVE_FOLLOWING_ERROR_MAX_M,
         )
+    }
+
+    /// The page's text for a simulated move that failed. A stop that ran
+    /// past the stroke (a controller designed for the nominal payload on a
+    /// much heavier cart, issue 13 item 3) is not shown as a position beyond
+    /// the end: the payload is refused with the reason, since a real axis
+    /// would hit its end stop.
+    fn move_error_text(&self, e: &beltune::Error, payload_kg: f64) -> String {
+        let text = e.to_string();
+        let stroke_m = match self.move_plant(payload_kg) {
+            Ok(p) => p.stroke_m(),
+            Err(_) => None,
+        };
+        if let (Some(stroke_m), Some(at_mm)) = (stroke_m, stop_position_mm(&text)) {
+            if at_mm > stroke_m * 1e3 {
+                return format!(
+                    "{payload_kg} kg payload refused: with this controller the simulated axis cannot \
+                     be stopped inside its {:.0} mm stroke (a real axis would hit its end stop); the \
+                     design assumes {} kg: lower the payload, raise the phase margins, or commission \
+                     with the payload on the cart",
+                    stroke_m * 1e3,
+                    self.nominal_payload_kg
+                );
+            }
+        }
+        format!("simulated move with {payload_kg} kg payload: {text}")
     }
 
     fn frf_overlay(&self) -> Option<FrfOverlay> {
@@ -567,10 +674,7 @@ impl Tuner for LibraryTuner {
         let payload_kg = self.payload_kg(knobs);
         let (validation_move, move_error) = match self.validation_move(&d, payload_kg) {
             Ok(m) => (Some(move_data(&m, payload_kg, self.move_label())), None),
-            Err(e) => (
-                None,
-                Some(format!("simulated move with {payload_kg} kg payload: {e}")),
-            ),
+            Err(e) => (None, Some(self.move_error_text(&e, payload_kg))),
         };
         Ok(DesignResponse {
             knobs: EffectiveKnobs {
@@ -620,9 +724,14 @@ impl Tuner for LibraryTuner {
         let d = self.design(knobs)?;
         let toml = self.controller_toml_of(&d)?;
         let payload_kg = self.payload_kg(knobs);
-        let sim = self.validation_move(&d, payload_kg).ok();
+        let sim = self.validation_move(&d, payload_kg);
+        let sim_error = sim
+            .as_ref()
+            .err()
+            .map(|e| self.move_error_text(e, payload_kg));
+        let sim = sim.ok();
         let report = self
-            .tuned_report(&d, sim.as_ref(), payload_kg)
+            .tuned_report(&d, sim.as_ref(), sim_error.as_deref(), payload_kg)
             .map_err(|e| TuneError::Internal(format!("report: {e}")))?;
         let html = render_html(&report).map_err(|e| TuneError::Internal(e.to_string()))?;
         let json = self.tuned_json(&d, sim.as_ref());
@@ -653,6 +762,19 @@ impl Tuner for LibraryTuner {
             name: plots::LOOPS_CSV.into(),
             bytes: plots::loops_csv(&loops).into_bytes(),
         });
+        // the loaded folder's experiment data, so that the saved set is complete on its own
+        if let Some(e) = &self.model.excitation {
+            files.push(SavedFile {
+                name: plots::EXCITATION_CSV.into(),
+                bytes: report_build::excitation_csv(e).into_bytes(),
+            });
+        }
+        if let Some(f) = &self.model.friction_runs {
+            files.push(SavedFile {
+                name: plots::FRICTION_CSV.into(),
+                bytes: report_build::friction_csv(f).into_bytes(),
+            });
+        }
         if !report.moves.is_empty() {
             files.push(SavedFile {
                 name: plots::MOVES_CSV.into(),
@@ -669,7 +791,7 @@ impl LibraryTuner {
             d,
             &self.friction,
             self.torque_max_nm,
-            beltune::ident::ModelUnits::Torque,
+            self.model.units,
             Provenance::of_this_process(None),
         )
         .map_err(|e| TuneError::Internal(e.to_string()))?;
@@ -727,6 +849,11 @@ impl LibraryTuner {
                 }),
             );
         }
+        // a record in current units keeps the current spelling of every key
+        // (the loaded keys already have it; the new sections get it here)
+        if self.model.units == ModelUnits::Current {
+            beltune::units::relabel_keys(&mut v, &beltune::units::current_key);
+        }
         v
     }
 
@@ -736,6 +863,7 @@ impl LibraryTuner {
         &self,
         d: &ControllerDesign,
         sim: Option<&MoveResult>,
+        sim_error: Option<&str>,
         payload_kg: f64,
     ) -> beltune::Result<Report> {
         let p = &self.model.params;
@@ -767,13 +895,18 @@ impl LibraryTuner {
             value: Some(v),
         };
         let hz = |w: f64| w / (2.0 * std::f64::consts::PI);
+        let l = beltune::units::labels(self.model.units);
+        let stiffness = match self.model.units {
+            ModelUnits::Torque => row("belt stiffness c", "kN/m", p.c / 1e3, 1),
+            ModelUnits::Current => row("belt stiffness c", l.stiffness, p.c, 1),
+        };
         let parameters = vec![
             row("resonance f_r", "Hz", f_r, 2),
             row("antiresonance f_z", "Hz", f_z, 2),
-            row("moving mass m_c", "kg", p.m_c, 2),
-            row("belt stiffness c", "kN/m", p.c / 1e3, 1),
-            row("K_P", "N m s/rad", d.k_p, 4),
-            row("K_I", "N m/rad", d.k_i, 3),
+            row("moving mass m_c", l.mass, p.m_c, 2),
+            stiffness,
+            row("K_P", l.torque_per_velocity, d.k_p, 4),
+            row("K_I", l.torque_per_angle, d.k_i, 3),
             row("K_PP", "1/s", d.k_pp, 3),
             row(
                 "velocity crossover f_c",
@@ -806,6 +939,48 @@ impl LibraryTuner {
         let validation_rows = sim
             .map(|m| vec![report_build::validation_row(&label, &m.summary)])
             .unwrap_or_default();
+        // The sections of the commissioning's report that need the experiment's
+        // data: shown from the loaded folder, or said why they are absent.
+        let mut absent = Vec::new();
+        let folder_file = |name: &str| match &self.model.json {
+            Some(_) => format!("the loaded folder has no {name}"),
+            None => format!("no {name} is known"),
+        };
+        if self.model.excitation.is_none() {
+            absent.push(vec![
+                "identification experiment".to_string(),
+                format!(
+                    "{} (written by `beltune commission` on an axis; a record from a CSV file has no excitation trace of its own)",
+                    folder_file(plots::EXCITATION_CSV)
+                ),
+            ]);
+        }
+        if self.model.friction_runs.is_none() {
+            absent.push(vec![
+                "friction".to_string(),
+                format!(
+                    "{} (the constant-velocity runs of `beltune commission` on an axis, or `--friction-csv`)",
+                    folder_file(plots::FRICTION_CSV)
+                ),
+            ]);
+        }
+        if sim.is_none() {
+            absent.push(vec![
+                "validation move".to_string(),
+                sim_error.map_or_else(
+                    || format!("the simulated move with {payload_kg} kg payload did not complete"),
+                    str::to_string,
+                ),
+            ]);
+        }
+        let mut tables = vec![report_build::drive_form_table(d, self.model.units)];
+        if !absent.is_empty() {
+            tables.push(Table {
+                title: "Sections not in this report".into(),
+                header: vec!["section".into(), "why".into()],
+                rows: absent,
+            });
+        }
         Ok(Report {
             title: format!("beltune tuning report: {}", self.model.source),
             summary: format!(
@@ -823,6 +998,9 @@ impl LibraryTuner {
             validation_rows,
             verdict: Some(verdict),
             provenance: Some(Provenance::of_this_process(None)),
+            excitation: self.model.excitation.clone(),
+            friction: self.model.friction_runs.clone(),
+            tables,
             ..Report::default()
         })
     }
@@ -902,6 +1080,16 @@ pub fn write_saved_set(dir: &Path, files: &[SavedFile]) -> anyhow::Result<SavedS
     result
 }
 
+/// The rest position of a safety stop, mm, from the supervisor's text
+/// ("...; axis stopped at 619.8 mm", [`beltune::procedure::runner`]).
+fn stop_position_mm(text: &str) -> Option<f64> {
+    text.rsplit("axis stopped at ")
+        .next()
+        .filter(|_| text.contains("axis stopped at "))
+        .and_then(|t| t.split(" mm").next())
+        .and_then(|t| t.trim().parse().ok())
+}
+
 /// Largest number of points of each move trace sent to the page.
 pub const MOVE_TRACE_POINTS: usize = 400;
 /// Following error at which the simulated move is aborted (a badly damped or
@@ -960,6 +1148,66 @@ mod tests {
         assert_eq!(m.dead_time_s, 0.001);
         assert_eq!(m.friction.unwrap().coulomb_nm, 0.125);
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Issue 13 item 3: the payload slider at its limit (30 kg) once ended
+    /// "axis stopped at 640.9 mm", beyond the 600 mm stroke. Whatever the
+    /// knobs, the simulated move either completes inside the travel window or
+    /// stops inside the stroke (its stop planned with the deceleration the
+    /// heavier axis really has), and says where.
+    #[test]
+    fn the_heaviest_payload_stays_inside_the_stroke_issue_13_3() {
+        let tuner = LibraryTuner::builtin().unwrap();
+        let stroke_mm = rigs::builtin("egc70", None).unwrap().stroke_m().unwrap() * 1e3;
+        let window_max_mm = MoveSpec::default().limits.position_max * 1e3;
+        let (mut stops, mut refused) = (0, 0);
+        for prefilter in [
+            PrefilterKind::None,
+            PrefilterKind::Notch,
+            PrefilterKind::Butterworth,
+        ] {
+            for (pm_v, pm_p) in [(30.0, 40.0), (45.0, 40.0), (60.0, 40.0), (60.0, 80.0)] {
+                let knobs = Knobs {
+                    prefilter: Some(prefilter),
+                    pm_velocity_deg: Some(pm_v),
+                    pm_position_deg: Some(pm_p),
+                    payload_kg: Some(30.0),
+                    ..Knobs::default()
+                };
+                let Ok(r) = tuner.tune(&knobs) else { continue };
+                let what = format!("{prefilter:?} {pm_v}/{pm_p} deg");
+                match (&r.validation_move, &r.move_error) {
+                    (Some(m), None) => {
+                        let max_mm = m.actual_m.iter().fold(f64::MIN, |a, b| a.max(*b)) * 1e3;
+                        assert!(max_mm <= window_max_mm, "{what}: moved to {max_mm} mm");
+                    }
+                    (None, Some(e)) => {
+                        assert!(!e.contains("NaN") && !e.contains("inf"), "{what}: {e}");
+                        if e.contains("refused") {
+                            refused += 1;
+                            assert!(e.contains("600 mm stroke") && e.contains("11.2 kg"), "{e}");
+                            assert!(stop_position_mm(e).is_none(), "{what}: {e}");
+                            continue;
+                        }
+                        stops += 1;
+                        let at = stop_position_mm(e)
+                            .unwrap_or_else(|| panic!("{what}: no stop position in `{e}`"));
+                        assert!(at <= stroke_mm, "{what}: {e}");
+                    }
+                    other => panic!("{what}: {other:?}"),
+                }
+            }
+        }
+        // the sweep reaches the cases that stop (no prefilter, low margins)
+        assert!(
+            stops + refused > 0,
+            "no setting stopped: the test did not reach its case"
+        );
+        assert_eq!(
+            stop_position_mm("safety stop: x; axis stopped at 619.8 mm"),
+            Some(619.8)
+        );
+        assert_eq!(stop_position_mm("safety stop: x"), None);
     }
 
     #[test]

@@ -1,5 +1,10 @@
-//! Helpers shared by the CLI integration tests: a headless Chromium session.
+//! Helpers shared by the CLI integration tests: a headless Chromium session
+//! (this file), the HTTP client of the `serve` tests ([`http`]) and the bench
+//! recording ([`bench`]).
 #![allow(dead_code)]
+
+pub mod bench;
+pub mod http;
 
 use fantoccini::{Client, ClientBuilder};
 use std::path::PathBuf;

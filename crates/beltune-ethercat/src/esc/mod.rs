@@ -129,6 +129,10 @@ pub struct EscStats {
     pub mailbox_requests: u64,
     /// Watchdog expiries.
     pub watchdog_expiries: u64,
+    /// Application cycles in OP that found no output write since the cycle
+    /// before (SYNC0: the master's frame came late; the cycle used the
+    /// previous outputs again).
+    pub cycles_without_new_outputs: u64,
 }
 
 /// The emulated ESC.
@@ -147,6 +151,7 @@ pub struct Esc {
     watchdog_expired: bool,
     next_sync0_ns: Option<u64>,
     cycle_due: bool,
+    fresh_outputs: bool,
     stats: EscStats,
 }
 
@@ -207,6 +212,7 @@ impl Esc {
             watchdog_expired: false,
             next_sync0_ns: None,
             cycle_due: false,
+            fresh_outputs: false,
             stats: EscStats::default(),
         };
         esc.publish_al();
@@ -376,6 +382,10 @@ impl Esc {
             return;
         }
         let mut inputs = self.mem[s..s + n].to_vec();
+        if self.al_state == AlState::Op && !self.fresh_outputs {
+            self.stats.cycles_without_new_outputs += 1;
+        }
+        self.fresh_outputs = false;
         app.cycle(
             self.time_ns,
             self.al_state == AlState::Op,
@@ -627,6 +637,7 @@ impl Esc {
             self.outputs = self.mem[s..s + usize::from(sms[2].len)].to_vec();
             self.last_output_ns = self.time_ns;
             self.cycle_due = true;
+            self.fresh_outputs = true;
         }
     }
 

@@ -88,13 +88,15 @@ impl Transport for InProcess<'_> {
             }
             self.frames += 1;
             self.tick(FRAME_TIME_NS);
+            let cycles = self.drive.firmware.cycles();
+            if self.faults.take(&self.faults.drop_requests, cycles) {
+                // lost on the way to the drive: it sees nothing, no answer comes
+                self.dropped += 1;
+                continue;
+            }
             let mut frame_buf = std::mem::take(&mut self.buf);
             let processed = self.drive.process_frame(&mut frame_buf);
-            let drop = self
-                .faults
-                .drop_frames
-                .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1))
-                .is_ok();
+            let drop = self.faults.take(&self.faults.drop_frames, cycles);
             if processed && !drop {
                 if let Err(e) = self.rx.receive_frame(&frame_buf) {
                     self.buf = frame_buf;

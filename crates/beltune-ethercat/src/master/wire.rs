@@ -18,6 +18,7 @@ type TxRx<'sto> = Pin<
 pub struct RawSocket<'sto> {
     task: TxRx<'sto>,
     next_cycle: Option<Instant>,
+    stray_frames: u64,
     /// Pace the cycles in real time (a real drive needs it; a test against
     /// an SM-synchronous virtual drive may run unpaced).
     pub paced: bool,
@@ -47,17 +48,38 @@ impl<'sto> RawSocket<'sto> {
         Ok(RawSocket {
             task: Box::pin(task),
             next_cycle: None,
+            stray_frames: 0,
             paced: true,
         })
     }
 }
 
+impl RawSocket<'_> {
+    /// Answers that came after their frame had timed out (dropped).
+    pub fn stray_frames(&self) -> u64 {
+        self.stray_frames
+    }
+}
+
 impl Transport for RawSocket<'_> {
     fn poll_io(&mut self, cx: &mut Context<'_>) -> Poll<Result<(), ethercrab::error::Error>> {
-        match self.task.as_mut().poll(cx) {
-            Poll::Ready(Ok(_)) => Poll::Ready(Err(ethercrab::error::Error::SendFrame)),
-            Poll::Ready(Err(e)) => Poll::Ready(Err(e)),
-            Poll::Pending => Poll::Pending,
+        loop {
+            match self.task.as_mut().poll(cx) {
+                // An answer to a frame that already timed out (the drive or the
+                // host was late): ethercrab's TX/RX task reports it as
+                // `ReceiveFrame` and returns. Passing that on aborted the
+                // exchange in flight, whose answer then came after it had been
+                // given up and aborted the next one, and so on: once one answer
+                // was late, no exchange succeeded any more (issue 14, "lost
+                // frames after 100-2000 cycles"). The late answer is dropped
+                // and the task (re-entrant: it keeps its queues) polled again.
+                Poll::Ready(Err(ethercrab::error::Error::ReceiveFrame)) => {
+                    self.stray_frames += 1;
+                }
+                Poll::Ready(Ok(_)) => return Poll::Ready(Err(ethercrab::error::Error::SendFrame)),
+                Poll::Ready(Err(e)) => return Poll::Ready(Err(e)),
+                Poll::Pending => return Poll::Pending,
+            }
         }
     }
 

@@ -462,7 +462,7 @@ impl<T: Real> CascadeController<T> {
             self.coulomb_hold = -T::ONE;
         } else if self.coulomb_hold != T::ZERO {
             if e_phi * self.coulomb_hold > T::ZERO {
-                tau_ff = tau_ff + self.coulomb_hold * self.ff.coulomb_nm;
+                tau_ff += self.coulomb_hold * self.ff.coulomb_nm;
             } else {
                 self.coulomb_hold = T::ZERO;
             }

@@ -313,6 +313,87 @@ struct FlatFriction {
     coulomb_nm: Option<f64>,
 }
 
+/// Keys of the model itself (flat form, or the `identified` table), with their
+/// old spellings and the recomputed frequencies a written record carries.
+const MODEL_KEYS: &[&str] = &[
+    "units",
+    "f_r_hz",
+    "f_z_hz",
+    "theta_e",
+    "m_c",
+    "c",
+    "d",
+    "d_m",
+    "d_c",
+    "i_t",
+    "dead_time_s",
+    "dead_time_measured",
+    "t_r_s",
+    "ts_s",
+    "sample_time_s",
+    "torque_max_nm",
+    "torque_limit_nm",
+    "fit_rms_db",
+    "m_c_sigma",
+    "c_sigma",
+    "mean_coherence",
+    "lines_used",
+    "n_lines",
+    "position_m",
+];
+/// Keys of a `friction` table (and the flat form's friction), with old spellings.
+const FRICTION_KEYS: &[&str] = &[
+    "viscous_nm_s_per_rad",
+    "viscous",
+    "coulomb_nm",
+    "coulomb",
+    "linear_viscous_nm_s_per_rad",
+    "linear_viscous",
+    "relative_residual",
+    "holding_torque_nm",
+];
+/// Top-level keys of the document form.
+const DOCUMENT_KEYS: &[&str] = &["schema_version", "provenance", "identified", "friction"];
+
+/// A hand-written (TOML) model may hold only the keys beltune reads: a key it
+/// does not know (a typo such as `colomb_nm`, or a unit beltune does not use)
+/// would otherwise be silently ignored (issue 13 item 10). JSON records
+/// (`identify --json`, `commissioning.json`) carry more sections and are not
+/// checked. In current units a key may carry the current suffix (`_a`).
+fn check_known_keys(v: &serde_json::Value) -> std::result::Result<(), String> {
+    let current =
+        |m: &serde_json::Value| m.get("units").and_then(|u| u.as_str()) == Some("current");
+    let known = |key: &str, list: &[&str], current: bool| {
+        list.contains(&key)
+            || (current
+                && crate::units::torque_key(key).is_some_and(|k| list.contains(&k.as_str())))
+    };
+    let check = |table: &serde_json::Value, list: &[&str], current: bool, prefix: &str| {
+        let Some(map) = table.as_object() else {
+            return Ok(());
+        };
+        match map.keys().find(|k| !known(k, list, current)) {
+            Some(k) => Err(format!(
+                "unknown key `{prefix}{k}`: not a key of the identified-model file \
+                 (docs/schema.md lists them)"
+            )),
+            None => Ok(()),
+        }
+    };
+    if let Some(id) = v.get("identified") {
+        let cur = current(id);
+        check(v, DOCUMENT_KEYS, cur, "")?;
+        check(id, MODEL_KEYS, cur, "identified.")?;
+        if let Some(f) = v.get("friction") {
+            check(f, FRICTION_KEYS, cur, "friction.")?;
+        }
+        Ok(())
+    } else {
+        let flat: Vec<&str> = MODEL_KEYS.iter().chain(FRICTION_KEYS).copied().collect();
+        check(v, &flat, current(v), "")
+    }
+}
+
 impl ModelFile {
     /// A schema-[`SCHEMA_VERSION`] record.
     pub fn new(
@@ -343,6 +424,9 @@ impl ModelFile {
             serde_json::to_value(t).map_err(|e| perr(e.to_string()))?
         };
         let mut value = value;
+        if !text.trim_start().starts_with('{') {
+            check_known_keys(&value).map_err(perr)?;
+        }
         let units_of =
             |v: &serde_json::Value| v.get("units").and_then(|u| u.as_str()) == Some("current");
         if value.get("identified").is_some_and(units_of) || units_of(&value) {
@@ -385,13 +469,37 @@ impl ModelFile {
                 friction,
             }
         };
-        file.design_input(None)?.validate()?;
-        if let Some(t) = file.identified.torque_max_nm {
-            crate::error::require_positive("torque_max_nm", t)?;
-        }
-        if let Some(ts) = file.identified.ts_s {
-            crate::error::require_positive("ts_s", ts)?;
-        }
+        let checked = (|| -> Result<()> {
+            file.design_input(None)?.validate()?;
+            if let Some(t) = file.identified.torque_max_nm {
+                crate::error::require_positive("torque_max_nm", t)?;
+            }
+            if let Some(ts) = file.identified.ts_s {
+                crate::error::require_positive("ts_s", ts)?;
+            }
+            Ok(())
+        })();
+        // The file's name and its own spelling of the key (current units:
+        // `torque_max_a`), not the library's (issue 13 item 14).
+        checked.map_err(|e| match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                reason,
+            } => {
+                let value = crate::error::short_number(value);
+                let key = match file.identified.units {
+                    ModelUnits::Current => crate::units::current_key(&name).unwrap_or(name),
+                    ModelUnits::Torque => name,
+                };
+                perr(if key == "ts_s" && file.identified.ts_s.is_none() {
+                    format!("at the default sampling time {value} s: {reason}")
+                } else {
+                    format!("`{key}` = {value}: {reason}")
+                })
+            }
+            e => e,
+        })?;
         Ok(file)
     }
 
@@ -538,6 +646,50 @@ mod tests {
         assert_eq!(m.friction.unwrap().linear_viscous_nm_s_per_rad, 0.00406);
     }
 
+    /// A TOML model with a key beltune does not read is an error naming the
+    /// key; JSON records with more sections (`commissioning.json`) still load.
+    #[test]
+    fn unknown_keys_in_a_toml_model_are_errors_issue_13_10() {
+        for (text, key) in [
+            (TOML.to_string() + "colomb_nm = 0.1\n", "colomb_nm"),
+            (
+                TOML.replace("m_c = 13.44", "m_cart = 13.44\nm_c = 13.44"),
+                "m_cart",
+            ),
+        ] {
+            let e = ModelFile::parse(&text, "x.toml").unwrap_err().to_string();
+            assert!(e.contains(&format!("`{key}`")), "{e}");
+        }
+        let flat = ModelFile::parse(TOML, "a.toml").unwrap();
+        let doc = ModelFile::new(
+            flat.identified,
+            flat.friction,
+            Provenance::now(vec![], None),
+        );
+        let good = toml::to_string(&doc).unwrap();
+        ModelFile::parse(&good, "d.toml").unwrap();
+        let bad = good.replace("[identified]\n", "[identified]\nstiffness = 1.0\n");
+        let e = ModelFile::parse(&bad, "d.toml").unwrap_err().to_string();
+        assert!(e.contains("`identified.stiffness`"), "{e}");
+        let bad = good.replace("[friction]\n", "[friction]\nstiction_nm = 1.0\n");
+        let e = ModelFile::parse(&bad, "d.toml").unwrap_err().to_string();
+        assert!(e.contains("`friction.stiction_nm`"), "{e}");
+        let bad = format!("comment = \"x\"\n{good}");
+        assert!(ModelFile::parse(&bad, "d.toml")
+            .unwrap_err()
+            .to_string()
+            .contains("`comment`"));
+        // in current units the current spelling of a torque key is known
+        let cur = TOML.to_string() + "units = \"current\"\ntorque_max_a = 15.0\n";
+        assert_eq!(
+            ModelFile::parse(&cur, "c.toml")
+                .unwrap()
+                .identified
+                .torque_max_nm,
+            Some(15.0)
+        );
+    }
+
     #[test]
     fn bad_files_are_errors() {
         assert!(ModelFile::parse("theta_e = 1", "x.toml").is_err());
@@ -550,6 +702,14 @@ mod tests {
         let e = ModelFile::parse(newer, "n.json").unwrap_err();
         assert!(e.to_string().contains("newer"), "{e}");
         let lim = TOML.to_string() + "torque_max_nm = -3\n";
-        assert!(ModelFile::parse(&lim, "x.toml").is_err());
+        let e = ModelFile::parse(&lim, "x.toml").unwrap_err().to_string();
+        assert!(e.starts_with("x.toml: `torque_max_nm` = -3"), "{e}");
+        // the file's own spelling of the key in current units (issue 13 item 14)
+        let lim = TOML.to_string() + "units = \"current\"\ntorque_max_a = -3\n";
+        let e = ModelFile::parse(&lim, "x.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("`torque_max_a` = -3") && !e.contains("_nm"),
+            "{e}"
+        );
     }
 }

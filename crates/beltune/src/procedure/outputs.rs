@@ -48,8 +48,65 @@ pub struct CommissioningJson {
     /// For a simulated plant: the true values at the identification position.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub truth: Option<Truth>,
+    /// What the commissioning ran on: a simulated plant (its parameters, so
+    /// that the tuning page simulates on the same plant as the report), a
+    /// recorded file or a real drive (no simulator truth).
+    pub axis: AxisRecord,
     /// The stage log.
     pub log: Vec<String>,
+}
+
+/// What a commissioning ran on (`commissioning.json` key `axis`, docs/schema.md).
+/// Absent in files written before it was added: readers then know only the
+/// identified model.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum AxisRecord {
+    /// A simulated axis.
+    Simulated {
+        /// The plant's name (built-in) or file, as given.
+        name: String,
+        /// Payload on the cart, kg (`null`: a linear set, which has none).
+        payload_kg: Option<f64>,
+        /// Cart position at the start, m.
+        start_position_m: f64,
+        /// Noise seed of the simulation.
+        seed: u64,
+        /// Every parameter of the simulated plant (payload and tilt included).
+        plant: Box<crate::model::rigs::Plant>,
+    },
+    /// Recorded data (CSV): no simulator truth.
+    Recorded {
+        /// The record's file.
+        source: String,
+    },
+    /// A real drive (EtherCAT): no simulator truth.
+    Ethercat {
+        /// The interface and SubDevice.
+        source: String,
+    },
+}
+
+impl AxisRecord {
+    /// The record of a simulated `plant` named `name`.
+    pub fn simulated(
+        name: &str,
+        plant: &crate::model::rigs::Plant,
+        start_position_m: f64,
+        seed: u64,
+    ) -> Self {
+        let payload_kg = match plant {
+            crate::model::rigs::Plant::Physical(p) => Some(p.payload_kg),
+            crate::model::rigs::Plant::Linear(_) => None,
+        };
+        AxisRecord::Simulated {
+            name: name.to_string(),
+            payload_kg,
+            start_position_m,
+            seed,
+            plant: Box::new(plant.clone()),
+        }
+    }
 }
 
 impl CommissioningJson {
@@ -86,6 +143,7 @@ pub fn commissioning_json(
     run: &Commissioning,
     plant: &str,
     truth: Option<Truth>,
+    axis: AxisRecord,
     provenance: Provenance,
 ) -> CommissioningJson {
     let mut identified = run.identified.clone();
@@ -106,6 +164,7 @@ pub fn commissioning_json(
         excitation_amplitude_nm: Some(run.excitation_amplitude_nm),
         identification_position_m: Some(run.identification_position_m),
         truth,
+        axis,
         log: run.log.clone(),
     }
 }
@@ -222,6 +281,9 @@ pub fn recorded_outputs(
         excitation_amplitude_nm: None,
         identification_position_m: None,
         truth: None,
+        axis: AxisRecord::Recorded {
+            source: source.to_string(),
+        },
         log: run.log.clone(),
     };
     let mut run_with_limit = run.clone();

@@ -37,6 +37,10 @@ pub const FRF_CSV: &str = "frf.csv";
 pub const LOOPS_CSV: &str = "loops.csv";
 /// File name of the validation moves beside the report.
 pub const MOVES_CSV: &str = "moves.csv";
+/// File name of the identification experiment's trace (as plotted) beside the report.
+pub const EXCITATION_CSV: &str = "excitation.csv";
+/// File name of the friction runs (velocity, mean torque) beside the report.
+pub const FRICTION_CSV: &str = "friction.csv";
 
 /// The loops of a design on one frequency grid (Hz).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]

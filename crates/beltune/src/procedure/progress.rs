@@ -1,7 +1,7 @@
 //! Progress reporting of the commissioning stages. The library only calls this
 //! trait; the command-line program draws progress bars (indicatif) from it.
 
-use super::runner::SafetyStopRecord;
+use super::runner::{AxisFailureRecord, SafetyStopRecord};
 
 /// Receives the progress of the commissioning procedure.
 pub trait Progress {
@@ -16,6 +16,12 @@ pub trait Progress {
     /// diagnostic file). Called once, after the stop and before the procedure
     /// returns [`crate::Error::SafetyStop`]. The default ignores it.
     fn safety_stopped(&mut self, _record: &SafetyStopRecord) {}
+    /// An exchange with the axis failed in the current stage (lost frames,
+    /// a drive fault, a watchdog) and the drive was told to quick stop;
+    /// `record` holds the error and the last second of samples (for the
+    /// same diagnostic as a safety stop). Called once, before the procedure
+    /// returns [`crate::Error::Axis`]. The default ignores it.
+    fn exchange_failed(&mut self, _record: &AxisFailureRecord) {}
 }
 
 /// Discards all progress (for tests and `--quiet`).

@@ -6,8 +6,9 @@
 
 use super::commission::Commissioning;
 use super::plots::{
-    decimate, frf_csv, frf_display, frf_lines, loop_data, loops_csv, resonance_markers, with_gains,
-    LoopData, FRF_CSV, LOOPS_CSV, MOVES_CSV, TRACE_POINTS,
+    csv_text, decimate, frf_csv, frf_display, frf_lines, loop_data, loops_csv, resonance_markers,
+    with_gains, LoopData, EXCITATION_CSV, FRF_CSV, FRICTION_CSV, LOOPS_CSV, MOVES_CSV,
+    TRACE_POINTS,
 };
 use super::recorded::RecordedCommissioning;
 use super::result::{IdentifiedModel, MoveSummary, Truth};
@@ -314,8 +315,11 @@ fn model_and_controller_rows(id: &IdentifiedModel, des: &ControllerDesign) -> Ve
 
 /// The controller as a drive menu shows it ([`crate::design::DriveForm`]):
 /// speed-loop gain, integral time in ms, position gain in 1/s and (m/min)/mm,
-/// filter, velocity filter, sampling time.
-pub fn drive_form_table(des: &ControllerDesign) -> crate::report::Table {
+/// filter, velocity filter, sampling time; K_P in the unit of `units`.
+pub fn drive_form_table(
+    des: &ControllerDesign,
+    units: crate::ident::ModelUnits,
+) -> crate::report::Table {
     let f = crate::design::DriveForm::of(des);
     let opt = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |x| format!("{x:.d$}"));
     let row = |name: &str, unit: &str, v: String| vec![name.to_string(), unit.to_string(), v];
@@ -325,7 +329,7 @@ pub fn drive_form_table(des: &ControllerDesign) -> crate::report::Table {
         rows: vec![
             row(
                 "speed controller gain K_P",
-                "N m s/rad",
+                crate::units::labels(units).torque_per_velocity,
                 format!("{:.4}", f.velocity_gain_nm_s_per_rad),
             ),
             row(
@@ -592,7 +596,7 @@ pub fn build_report(
         provenance: provenance.cloned(),
         excitation: Some(excitation),
         data_files: data_file_notes(true),
-        tables: vec![drive_form_table(des)],
+        tables: vec![drive_form_table(des, crate::ident::ModelUnits::Torque)],
     })
 }
 
@@ -612,6 +616,15 @@ fn data_file_notes(with_moves: bool) -> Vec<(String, String)> {
         v.push((
             MOVES_CSV.to_string(),
             "the validation moves (desired position, errors, torque) as plotted".to_string(),
+        ));
+        v.push((
+            EXCITATION_CSV.to_string(),
+            "the identification experiment (torque, position) as plotted, with its limits"
+                .to_string(),
+        ));
+        v.push((
+            FRICTION_CSV.to_string(),
+            "the constant-velocity friction runs (velocity, mean torque)".to_string(),
         ));
     }
     v
@@ -659,11 +672,101 @@ pub fn data_files(run: &Commissioning, report: &Report) -> Result<Vec<(String, S
     let fit = &run.fit;
     let tf = fit.model.tf(&fit.params);
     let lines = frf_lines(&run.frf, &tf, run.dead_time.seconds)?;
-    Ok(vec![
+    let mut files = vec![
         (FRF_CSV.into(), frf_csv(&lines)),
         (LOOPS_CSV.into(), loops_csv(&loop_data(&run.design)?)),
         (MOVES_CSV.into(), moves_csv(&report.moves)),
+    ];
+    if let Some(e) = &report.excitation {
+        files.push((EXCITATION_CSV.into(), excitation_csv(e)));
+    }
+    if let Some(f) = &report.friction {
+        files.push((FRICTION_CSV.into(), friction_csv(f)));
+    }
+    Ok(files)
+}
+
+/// Columns of `excitation.csv`: the trace as plotted (envelope), and the
+/// torque limit and travel window drawn with it (the same on every row).
+const EXCITATION_COLUMNS: [&str; 6] = [
+    "time_s",
+    "torque_nm",
+    "position_m",
+    "torque_limit_nm",
+    "travel_min_m",
+    "travel_max_m",
+];
+
+/// `excitation.csv`: the identification experiment as the report plots it.
+pub fn excitation_csv(e: &ExcitationPlot) -> String {
+    let n = e.time_s.len();
+    let same = |v: f64| vec![v; n];
+    // the torque and position envelopes share their time base (same samples, same buckets)
+    let position: Vec<f64> = if e.position_time_s == e.time_s {
+        e.position_m.clone()
+    } else {
+        e.time_s
+            .iter()
+            .map(|t| {
+                let k = e.position_time_s.partition_point(|x| x < t);
+                e.position_m
+                    .get(k.min(e.position_m.len().saturating_sub(1)))
+                    .copied()
+                    .unwrap_or(f64::NAN)
+            })
+            .collect()
+    };
+    csv_text(&[
+        (EXCITATION_COLUMNS[0], &e.time_s),
+        (EXCITATION_COLUMNS[1], &e.torque_nm),
+        (EXCITATION_COLUMNS[2], &position),
+        (EXCITATION_COLUMNS[3], &same(e.torque_limit_nm)),
+        (EXCITATION_COLUMNS[4], &same(e.travel_min_m)),
+        (EXCITATION_COLUMNS[5], &same(e.travel_max_m)),
     ])
+}
+
+/// Read `excitation.csv` back.
+pub fn read_excitation_csv(path: &std::path::Path) -> Result<ExcitationPlot> {
+    let cols = crate::ident::read_csv_columns(path, &EXCITATION_COLUMNS)?;
+    let col = |n: &str| -> Vec<f64> { cols.column(n).map(|c| c.to_vec()).unwrap_or_default() };
+    let first = |n: &str| col(n).first().copied().unwrap_or(f64::NAN);
+    let time_s = col("time_s");
+    Ok(ExcitationPlot {
+        position_time_s: time_s.clone(),
+        time_s,
+        torque_nm: col("torque_nm"),
+        position_m: col("position_m"),
+        torque_limit_nm: first("torque_limit_nm"),
+        travel_min_m: first("travel_min_m"),
+        travel_max_m: first("travel_max_m"),
+    })
+}
+
+/// `friction.csv`: each constant-velocity run of the friction stage.
+pub fn friction_csv(f: &FrictionPlot) -> String {
+    csv_text(&[
+        ("velocity_rad_s", &f.velocity_rad_s),
+        ("mean_torque_nm", &f.torque_nm),
+    ])
+}
+
+/// Read `friction.csv` back; the fitted curve is `viscous_nm_s_per_rad`,
+/// `coulomb_nm` (from `commissioning.json`).
+pub fn read_friction_csv(
+    path: &std::path::Path,
+    viscous_nm_s_per_rad: f64,
+    coulomb_nm: f64,
+) -> Result<FrictionPlot> {
+    let names = ["velocity_rad_s", "mean_torque_nm"];
+    let cols = crate::ident::read_csv_columns(path, &names)?;
+    let col = |n: &str| -> Vec<f64> { cols.column(n).map(|c| c.to_vec()).unwrap_or_default() };
+    Ok(FrictionPlot {
+        velocity_rad_s: col("velocity_rad_s"),
+        torque_nm: col("mean_torque_nm"),
+        viscous_nm_s_per_rad,
+        coulomb_nm,
+    })
 }
 
 /// The report of a commissioning from recorded data (`source` names the record).

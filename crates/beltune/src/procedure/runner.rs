@@ -138,6 +138,30 @@ pub struct SafetyStopRecord {
     pub history: Vec<HistorySample>,
 }
 
+/// What the runner knew when an exchange with the axis failed, handed to
+/// [`Progress::exchange_failed`] before [`Error::Axis`] is returned.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxisFailureRecord {
+    /// Why the exchange failed.
+    pub error: crate::plant::AxisError,
+    /// Why the drive's quick stop failed too, if it did.
+    pub quick_stop: Option<crate::plant::AxisError>,
+    /// The limits the supervisor enforced.
+    pub limits: SafetyLimits,
+    /// Busy time of the axis at the failed exchange, s.
+    pub time_s: f64,
+    /// Motor-side cart position of the last good exchange, m.
+    pub position_m: f64,
+    /// Filtered velocity of the last good exchange, m/s.
+    pub velocity_m_s: f64,
+    /// Torque command of the failed exchange, N m.
+    pub torque_command_nm: f64,
+    /// Following error of the failed exchange, m (`None` in open loop).
+    pub following_error_m: Option<f64>,
+    /// The samples of the last [`STOP_HISTORY_S`] before the failure, oldest first.
+    pub history: Vec<HistorySample>,
+}
+
 /// Drives the axis for the whole procedure.
 pub struct Runner<'a> {
     axis: &'a mut dyn Axis,
@@ -346,6 +370,18 @@ impl<'a> Runner<'a> {
             Err(error) => {
                 // The host can no longer control the axis: the drive stops it.
                 let quick_stop = self.axis.quick_stop().err();
+                let record = AxisFailureRecord {
+                    error,
+                    quick_stop,
+                    limits: *self.supervisor.limits(),
+                    time_s: self.busy_time_s(),
+                    position_m: self.position_m(),
+                    velocity_m_s: self.velocity_m_s,
+                    torque_command_nm: torque_nm,
+                    following_error_m,
+                    history: self.history.iter().copied().collect(),
+                };
+                self.progress.exchange_failed(&record);
                 return Err(Error::Axis { error, quick_stop });
             }
         };
@@ -884,5 +920,130 @@ mod tests {
             .all(|h| h.sample.torque_command_nm == 0.05 || h.sample.torque_command_nm == 0.0));
         assert!(r.stop_position_m.is_some() && r.stop_error.is_none());
         assert_eq!(r.torque_command_nm, 0.05);
+    }
+
+    /// A simulated axis whose exchange fails after `good` exchanges.
+    struct FailsAfter {
+        sim: SimAxis,
+        good: u64,
+        quick_stops: u32,
+    }
+
+    impl Axis for FailsAfter {
+        fn info(&self) -> AxisInfo {
+            self.sim.info()
+        }
+        fn exchange(&mut self, torque_nm: f64) -> std::result::Result<Measurement, AxisError> {
+            if self.good == 0 {
+                return Err(AxisError::Timeout { cycles: 4 });
+            }
+            self.good -= 1;
+            self.sim.exchange(torque_nm)
+        }
+        fn quick_stop(&mut self) -> std::result::Result<(), AxisError> {
+            self.quick_stops += 1;
+            Ok(())
+        }
+    }
+
+    /// Keeps the record a failed exchange hands over.
+    #[derive(Default)]
+    struct FailureRecorder(Vec<AxisFailureRecord>);
+    impl Progress for FailureRecorder {
+        fn stage_started(&mut self, _: &str, _: u64) {}
+        fn advance(&mut self, _: u64) {}
+        fn stage_finished(&mut self, _: &str) {}
+        fn exchange_failed(&mut self, record: &AxisFailureRecord) {
+            self.0.push(record.clone());
+        }
+    }
+
+    /// Issue 14: a failed exchange hands over the last second of samples
+    /// (for the same diagnostic as a safety stop), once, after the drive's
+    /// quick stop.
+    #[test]
+    fn a_failed_exchange_hands_over_the_last_second_of_samples() {
+        let plant = rigs::builtin("egc70", None).unwrap();
+        let info = plant.info();
+        let start = 0.3;
+        let good = (1.5 / info.ts_s) as u64;
+        let mut axis = FailsAfter {
+            sim: SimAxis::new(
+                &plant,
+                SimConfig {
+                    initial_cart_position_m: Some(start),
+                    ..SimConfig::default()
+                },
+            )
+            .unwrap(),
+            good,
+            quick_stops: 0,
+        };
+        let i_t = 0.078 / (2.0 * std::f64::consts::PI);
+        let j = 1.4e-4 + i_t * i_t * 12.16;
+        let boot = bootstrap_controller(j, i_t, info.ts_s, info.torque_max_nm).unwrap();
+        let limits = SafetyLimits {
+            travel_min_m: 0.0,
+            travel_max_m: 0.6,
+            torque_max_nm: info.torque_max_nm,
+            velocity_max_m_s: 1.0,
+            following_error_max_m: 0.01,
+        };
+        let supervisor = SafetySupervisor::new(limits, 5.0).unwrap();
+        let stop_limits = Limits {
+            v_max: 0.5,
+            v_min: -0.5,
+            a_max: 5.0,
+            a_min: -5.0,
+            j_max: 100.0,
+            j_min: -100.0,
+            position_min: 0.0,
+            position_max: 0.6,
+        };
+        let mut rec = FailureRecorder::default();
+        let mut runner = Runner::new(
+            &mut axis,
+            &mut rec,
+            supervisor,
+            i_t,
+            start,
+            boot,
+            stop_limits,
+        )
+        .unwrap();
+        let mut steps = 0u64;
+        let err = loop {
+            match runner.step(0.01, None) {
+                Ok(_) => steps += 1,
+                Err(e) => break e,
+            }
+            assert!(steps <= good, "the axis did not fail");
+        };
+        assert_eq!(steps, good);
+        assert!(
+            matches!(
+                err,
+                Error::Axis {
+                    error: AxisError::Timeout { cycles: 4 },
+                    quick_stop: None
+                }
+            ),
+            "{err}"
+        );
+        assert_eq!(axis.quick_stops, 1);
+        assert_eq!(rec.0.len(), 1, "handed over once");
+        let r = &rec.0[0];
+        assert_eq!(r.error, AxisError::Timeout { cycles: 4 });
+        assert_eq!(r.limits, limits);
+        assert_eq!(r.torque_command_nm, 0.01);
+        let n = (STOP_HISTORY_S / info.ts_s).ceil() as usize;
+        assert_eq!(r.history.len(), n, "one second of samples");
+        let last = r.history.last().unwrap();
+        assert!(
+            (last.time_s - r.time_s).abs() < 1e-12,
+            "ends at the failure"
+        );
+        assert!((last.time_s - good as f64 * info.ts_s).abs() < 1e-9);
+        assert_eq!(last.sample.position_m, r.position_m);
     }
 }

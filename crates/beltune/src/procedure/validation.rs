@@ -265,8 +265,9 @@ pub fn validation_track_options(
     }
 }
 
-/// Deceleration of the supervisor's jerk-limited stop in a simulated
-/// validation move, m/s^2.
+/// Largest deceleration of the supervisor's jerk-limited stop in a simulated
+/// validation move, m/s^2 (less when the plant's torque limit and inertia
+/// allow less, [`super::safety::StopCapability::from_axis`]).
 pub const SIM_STOP_DECELERATION_M_S2: f64 = 20.0;
 
 /// The validation move of design `des` on a fresh simulation of `plant`
@@ -293,8 +294,22 @@ pub fn simulate_validation_move(
     let mut axis = crate::sim::SimAxis::new(plant, config)?;
     let torque_max = info.torque_max_nm;
     let feedback = super::commission::cascade_from_design(des, torque_max, 0.0)?;
-    let a_stop = SIM_STOP_DECELERATION_M_S2;
-    let supervisor = SafetySupervisor::new(
+    // The stop is planned and supervised with the deceleration this plant
+    // really has (its torque limit on its own rigid inertia, as stage 2 does
+    // on the axis), not with the design model's: a payload the design did not
+    // assume decelerates slower, and the look-ahead must know it (issue 13 item 3).
+    let truth = plant.linearize(spec.start_m)?;
+    let capability = super::safety::StopCapability::from_axis(
+        torque_max,
+        truth.rigid_inertia(),
+        truth.i_t,
+        0.0,
+        plant.friction_totals().coulomb_nm,
+    )?;
+    let a_stop = capability
+        .worst_deceleration_m_s2()
+        .min(SIM_STOP_DECELERATION_M_S2);
+    let supervisor = SafetySupervisor::with_capability(
         SafetyLimits {
             travel_min_m: spec.limits.position_min,
             travel_max_m: spec.limits.position_max,
@@ -302,7 +317,7 @@ pub fn simulate_validation_move(
             velocity_max_m_s: spec.limits.v_max,
             following_error_max_m,
         },
-        a_stop,
+        capability,
     )?;
     let stop_limits = Limits {
         a_max: a_stop,

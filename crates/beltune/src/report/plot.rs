@@ -269,6 +269,62 @@ type Chart<'a> = ChartContext<
     >,
 >;
 
+/// Height of a figure's head (title and legend rows), display px; `left` is
+/// where the title and the legend start.
+fn head_height(legend: &[Style], left: u32) -> u32 {
+    let rows = legend_rows(legend, px(WIDTH) as i32, px(left) as i32);
+    CAPTION + 12 + rows * (SMALL + 6) + 4
+}
+
+/// Draw the title and the legend at the top of `root`; returns the area below them.
+fn draw_head<'b>(
+    root: &DrawingArea<SVGBackend<'b>, Shift>,
+    title: &str,
+    legend: &[Style],
+    left: u32,
+) -> Result<DrawingArea<SVGBackend<'b>, Shift>> {
+    root.draw(&Text::new(
+        title.to_string(),
+        (px(left) as i32, px(6) as i32),
+        font(CAPTION),
+    ))
+    .map_err(err)?;
+    let (top, body) = root.split_vertically(px(head_height(legend, left)));
+    let (_, leg) = top.split_vertically(px(CAPTION + 12));
+    draw_legend(&leg, legend, px(left) as i32)?;
+    Ok(body)
+}
+
+/// A chart builder on one panel with the report's margins: room for the x
+/// tick labels and the axis description (`x_label`) or the ticks only, and
+/// `y_label_px` (display px) for the y labels.
+fn panel<'a, 'b>(
+    area: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    x_label: bool,
+    y_label_px: u32,
+) -> ChartBuilder<'a, 'b, SVGBackend<'b>> {
+    let mut b = ChartBuilder::on(area);
+    b.margin_left(px(8))
+        .margin_right(px(16))
+        .margin_top(px(4))
+        .x_label_area_size(px(if x_label { 36 } else { 18 }))
+        .y_label_area_size(px(y_label_px));
+    b
+}
+
+/// The report's mesh style on a `configure_mesh()`: y tick count, fonts and
+/// the grid lines (a macro: plotters' mesh type is generic over both axes).
+macro_rules! report_mesh {
+    ($mesh:expr) => {
+        $mesh
+            .y_labels(Y_LABELS)
+            .label_style(font(SMALL))
+            .axis_desc_style(font(SMALL))
+            .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
+            .light_line_style(BLACK.mix(0.04).stroke_width(px(1) / 2))
+    };
+}
+
 fn draw_series_on(chart: &mut Chart, pts: Vec<(f64, f64)>, s: &Style) -> Result<()> {
     let color = s.color;
     if s.dots {
@@ -334,24 +390,14 @@ fn bode_panel(
         Panel::Magnitude => range_of(ranged.iter(), -60.0..20.0),
         Panel::Phase => phase_range(ranged.iter()),
     };
-    let mut chart = ChartBuilder::on(area)
-        .margin_left(px(8))
-        .margin_right(px(16))
-        .margin_top(px(4))
-        .x_label_area_size(px(if x_label { 36 } else { 18 }))
-        .y_label_area_size(px(62))
+    let mut chart = self::panel(area, x_label, 62)
         .build_cartesian_2d(fr.clone().log_scale(), yr.clone())
         .map_err(err)?;
     let mut mesh = chart.configure_mesh();
-    mesh.y_desc(match panel {
+    report_mesh!(mesh.y_desc(match panel {
         Panel::Magnitude => "magnitude / dB",
         Panel::Phase => "phase / deg",
-    })
-    .y_labels(Y_LABELS)
-    .label_style(font(SMALL))
-    .axis_desc_style(font(SMALL))
-    .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
-    .light_line_style(BLACK.mix(0.04).stroke_width(px(1) / 2))
+    }))
     .axis_style(BLACK.stroke_width(px(1) / 2))
     .x_label_formatter(&|f| format_hz(*f));
     if panel == Panel::Phase {
@@ -460,8 +506,7 @@ fn bode_figure(
 ) -> Result<(String, u32)> {
     register_font();
     let st: Vec<Style> = curves.iter().map(|(_, s)| s.clone()).collect();
-    let rows = legend_rows(&st, px(WIDTH) as i32, px(70) as i32);
-    let head = CAPTION + 12 + rows * (SMALL + 6) + 4;
+    let head = head_height(&st, 70);
     let mag_h = 250;
     let phase_h = if plot.magnitude_only { 0 } else { 210 };
     let extra_h = if extra_panel.is_some() { 170 } else { 0 };
@@ -470,15 +515,7 @@ fn bode_figure(
     {
         let root = SVGBackend::with_string(&mut out, (px(WIDTH), px(height))).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        root.draw(&Text::new(
-            plot.title.clone(),
-            (px(70) as i32, px(6) as i32),
-            font(CAPTION),
-        ))
-        .map_err(err)?;
-        let (top, body) = root.split_vertically(px(head));
-        let (_, legend) = top.split_vertically(px(CAPTION + 12));
-        draw_legend(&legend, &st, px(70) as i32)?;
+        let body = draw_head(&root, &plot.title, &st, 70)?;
         let refs: Vec<&BodeCurve> = curves
             .iter()
             .filter(|(_, s)| s.sets_range)
@@ -588,26 +625,16 @@ pub fn frf_svg(plot: &FrfPlot) -> Result<String> {
         ..BodePlot::default()
     };
     let coherence = |area: &DrawingArea<SVGBackend, Shift>, fr: &Range<f64>| -> Result<()> {
-        let mut chart = ChartBuilder::on(area)
-            .margin_left(px(8))
-            .margin_right(px(16))
-            .margin_top(px(4))
-            .x_label_area_size(px(36))
-            .y_label_area_size(px(62))
+        let mut chart = panel(area, true, 62)
             .build_cartesian_2d(fr.clone().log_scale(), 0.0..1.05)
             .map_err(err)?;
-        chart
+        report_mesh!(chart
             .configure_mesh()
             .x_desc("frequency / Hz")
-            .y_desc("coherence")
-            .y_labels(Y_LABELS)
-            .label_style(font(SMALL))
-            .axis_desc_style(font(SMALL))
-            .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
-            .light_line_style(BLACK.mix(0.04).stroke_width(px(1) / 2))
-            .x_label_formatter(&|f| format_hz(*f))
-            .draw()
-            .map_err(err)?;
+            .y_desc("coherence"))
+        .x_label_formatter(&|f| format_hz(*f))
+        .draw()
+        .map_err(err)?;
         for keep in [false, true] {
             let color = if keep { PALETTE[2] } else { GREY };
             let pts: Vec<(f64, f64)> = points(
@@ -659,17 +686,7 @@ pub fn friction_svg(plot: &FrictionPlot) -> Result<String> {
                 sets_range: true,
             },
         ];
-        let rows = legend_rows(&st, px(WIDTH) as i32, px(70) as i32);
-        let head = CAPTION + 12 + rows * (SMALL + 6) + 4;
-        root.draw(&Text::new(
-            "Friction: measured torque and fitted model".to_string(),
-            (px(70) as i32, px(6) as i32),
-            font(CAPTION),
-        ))
-        .map_err(err)?;
-        let (top, body) = root.split_vertically(px(head));
-        let (_, legend) = top.split_vertically(px(CAPTION + 12));
-        draw_legend(&legend, &st, px(70) as i32)?;
+        let body = draw_head(&root, "Friction: measured torque and fitted model", &st, 70)?;
         let vr = range_of(plot.velocity_rad_s.iter(), -100.0..100.0);
         let model = |w: f64| plot.viscous_nm_s_per_rad * w + plot.coulomb_nm * w.signum();
         let tr = range_of(
@@ -678,24 +695,15 @@ pub fn friction_svg(plot: &FrictionPlot) -> Result<String> {
                 .chain([model(vr.start), model(vr.end)].iter()),
             -1.0..1.0,
         );
-        let mut chart = ChartBuilder::on(&body)
-            .margin_left(px(8))
-            .margin_right(px(16))
-            .x_label_area_size(px(36))
-            .y_label_area_size(px(62))
+        let mut chart = panel(&body, true, 62)
             .build_cartesian_2d(vr.clone(), tr)
             .map_err(err)?;
-        chart
+        report_mesh!(chart
             .configure_mesh()
             .x_desc("motor velocity / (rad/s)")
-            .y_desc("torque / N m")
-            .y_labels(Y_LABELS)
-            .label_style(font(SMALL))
-            .axis_desc_style(font(SMALL))
-            .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
-            .light_line_style(BLACK.mix(0.04).stroke_width(px(1) / 2))
-            .draw()
-            .map_err(err)?;
+            .y_desc("torque / N m"))
+        .draw()
+        .map_err(err)?;
         chart
             .draw_series(
                 points(&plot.velocity_rad_s, &plot.torque_nm)
@@ -743,21 +751,11 @@ fn draw_time_panel(
         .chain(hlines.iter().map(|h| h.0 * scale))
         .collect();
     let yr = range_of(values.iter(), -1.0..1.0);
-    let mut chart = ChartBuilder::on(area)
-        .margin_left(px(8))
-        .margin_right(px(16))
-        .margin_top(px(4))
-        .x_label_area_size(px(if x_label { 36 } else { 18 }))
-        .y_label_area_size(px(70))
+    let mut chart = panel(area, x_label, 70)
         .build_cartesian_2d(t_range.clone(), yr.clone())
         .map_err(err)?;
     let mut mesh = chart.configure_mesh();
-    mesh.y_desc(y_desc)
-        .y_labels(Y_LABELS)
-        .label_style(font(SMALL))
-        .axis_desc_style(font(SMALL))
-        .bold_line_style(BLACK.mix(0.12).stroke_width(px(1) / 2))
-        .light_line_style(BLACK.mix(0.04).stroke_width(px(1) / 2));
+    report_mesh!(mesh.y_desc(y_desc));
     if x_label {
         mesh.x_desc("time / s");
     } else {
@@ -821,23 +819,14 @@ fn time_figure(
     panels: &[(&str, Vec<TimeSeries>, f64, Vec<(f64, String)>)],
 ) -> Result<String> {
     register_font();
-    let rows = legend_rows(legend, px(WIDTH) as i32, px(78) as i32);
-    let head = CAPTION + 12 + rows * (SMALL + 6) + 4;
+    let head = head_height(legend, 78);
     let panel_h = 190;
     let height = head + panel_h * panels.len() as u32 + 20;
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (px(WIDTH), px(height))).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        root.draw(&Text::new(
-            title.to_string(),
-            (px(78) as i32, px(6) as i32),
-            font(CAPTION),
-        ))
-        .map_err(err)?;
-        let (top, mut body) = root.split_vertically(px(head));
-        let (_, leg) = top.split_vertically(px(CAPTION + 12));
-        draw_legend(&leg, legend, px(78) as i32)?;
+        let mut body = draw_head(&root, title, legend, 78)?;
         let t_range = range_of(
             panels
                 .iter()

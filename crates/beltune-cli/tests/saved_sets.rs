@@ -1,0 +1,168 @@
+//! What `beltune serve` simulates and saves for a loaded commissioning folder
+//! (issues 15 and 16): the move runs on the plant the commissioning ran on
+//! (recorded in `commissioning.json` as `axis`), Save writes the report
+//! sections the commissioning's report has (or says why one is absent), and
+//! a folder commissioned in current units stays in current units.
+
+mod common;
+
+use beltune_cli::serve::api::Knobs;
+use beltune_cli::serve::library::{load_commissioning, LibraryTuner};
+use beltune_cli::serve::tuner::Tuner;
+use common::bench;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// The page's simulated move and the commissioning's validation move run the
+/// same plant, controller and trajectory through the same library function;
+/// they differ only in the noise realization and in the state the earlier
+/// stages leave the simulated axis in (measured: 0.6405 vs 0.6398 mm before the
+/// design rule and the Coulomb hold of main a9fc2f4; 0.5528 vs 0.5258 mm, 5.1 %,
+/// after them: the part of that left to the axis state is not yet explained).
+const SAME_MOVE_REL_TOL: f64 = 0.06;
+
+fn tmpdir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("beltune-saved-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(cmd: &mut std::process::Command) {
+    let o = cmd.output().unwrap();
+    assert!(
+        o.status.success(),
+        "{cmd:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn json_of(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The files of a Save with the default knobs, by name.
+fn save(tuner: &LibraryTuner) -> HashMap<String, String> {
+    tuner
+        .save_set(&Knobs::default())
+        .unwrap()
+        .into_iter()
+        .map(|f| (f.name, String::from_utf8(f.bytes).unwrap()))
+        .collect()
+}
+
+/// Every key of a JSON tree, with its path.
+fn keys(v: &serde_json::Value, at: &str, out: &mut Vec<String>) {
+    match v {
+        serde_json::Value::Object(m) => {
+            for (k, x) in m {
+                out.push(format!("{at}{k}"));
+                keys(x, &format!("{at}{k}."), out);
+            }
+        }
+        serde_json::Value::Array(xs) => xs.iter().for_each(|x| keys(x, at, out)),
+        _ => {}
+    }
+}
+
+#[test]
+fn a_loaded_egc70_folder_simulates_on_its_plant_and_saves_every_section_issue_16() {
+    let dir = tmpdir("egc70");
+    let out = dir.join("run");
+    run(bench::bin()
+        .args(["commission", "--quiet", "--out"])
+        .arg(&out));
+    let json = json_of(&out.join("commissioning.json"));
+    // what the commissioning ran on
+    let axis = &json["axis"];
+    assert_eq!(axis["kind"], "simulated", "{axis}");
+    assert_eq!(axis["name"], "egc70");
+    assert_eq!(axis["payload_kg"].as_f64(), Some(11.2));
+    assert_eq!(axis["plant"]["kind"], "physical");
+    assert_eq!(axis["plant"]["payload_kg"].as_f64(), Some(11.2));
+
+    let tuner = LibraryTuner::new(load_commissioning(&out).unwrap()).unwrap();
+    let r = tuner.tune(&Knobs::default()).unwrap();
+    let m = r.validation_move.expect("a simulated move");
+    assert!(m.plant.contains("egc70"), "{}", m.plant);
+    assert_eq!(m.payload_kg, 11.2);
+    let report_mm = json["validation"]["nonlinear"]["max_tracking_error_m"]
+        .as_f64()
+        .unwrap()
+        * 1e3;
+    let page_mm = m.max_error_m * 1e3;
+    assert!(
+        (page_mm - report_mm).abs() <= SAME_MOVE_REL_TOL * report_mm,
+        "page {page_mm} mm vs report {report_mm} mm"
+    );
+
+    let files = save(&tuner);
+    for f in ["excitation.csv", "friction.csv", "frf.csv", "moves.csv"] {
+        assert!(files.contains_key(f), "{f} not saved: {:?}", files.keys());
+    }
+    let html = &files["report.html"];
+    let original = std::fs::read_to_string(out.join("report.html")).unwrap();
+    for section in ["<figure id=\"excitation\">", "<figure id=\"friction\">"] {
+        assert!(
+            original.contains(section),
+            "commissioning report lacks {section}"
+        );
+        assert!(html.contains(section), "saved report lacks {section}");
+    }
+    assert!(!html.contains("Sections not in this report"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_folder_in_current_units_saves_in_current_units_issue_15() {
+    let dir = tmpdir("current");
+    let out = dir.join("run");
+    run(bench::on_record("commission")
+        .args([
+            "--quiet",
+            "--current-units",
+            "--torque-limit",
+            "15.3",
+            "--out",
+        ])
+        .arg(&out));
+    let json = json_of(&out.join("commissioning.json"));
+    assert_eq!(json["axis"]["kind"], "recorded", "{}", json["axis"]);
+
+    let tuner = LibraryTuner::new(load_commissioning(&out).unwrap()).unwrap();
+    let files = save(&tuner);
+    let torque_suffixes = ["_nm", "_nm_s_per_rad", "_nm_per_rad", "_kg_m2"];
+    let toml: toml::Value = toml::from_str(&files["controller.toml"]).unwrap();
+    assert_eq!(toml["units"].as_str(), Some("current"));
+    assert_eq!(toml["torque_max_a"].as_float(), Some(15.3));
+    let mut all = Vec::new();
+    keys(&serde_json::to_value(&toml).unwrap(), "", &mut all);
+    keys(
+        &serde_json::from_str(&files["commissioning.json"]).unwrap(),
+        "json:",
+        &mut all,
+    );
+    let torque_keys: Vec<&String> = all
+        .iter()
+        .filter(|k| torque_suffixes.iter().any(|s| k.ends_with(s)))
+        .collect();
+    assert!(
+        torque_keys.is_empty(),
+        "torque units in a current-units set: {torque_keys:?}"
+    );
+    // minijinja escapes `/` in text
+    let html = &files["report.html"].replace("&#x2f;", "/");
+    assert!(html.contains("A s/rad"), "K_P not in A s/rad");
+    for torque_unit in ["N m s/rad", "N m/rad", "N m)", "N m<"] {
+        let at = html.find(torque_unit);
+        assert!(
+            at.is_none(),
+            "torque unit `{torque_unit}` in the saved report: {}",
+            &html[at.unwrap().saturating_sub(300)..at.unwrap() + 50]
+        );
+    }
+    // the sections a recorded folder cannot have are named, with the reason
+    assert!(html.contains("Sections not in this report"));
+    assert!(html.contains("excitation.csv") && html.contains("friction.csv"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
