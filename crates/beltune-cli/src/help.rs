@@ -133,7 +133,15 @@ pub fn commission_after_help() -> String {
 pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
     (
         "Plant",
-        &["plant", "payload", "tilt", "seed", "start_position"],
+        &[
+            "plant",
+            "payload",
+            "tilt",
+            "seed",
+            "torque_noise",
+            "encoder_noise",
+            "start_position",
+        ],
     ),
     ("Safety", &["travel_window", "following_error_max"]),
     (

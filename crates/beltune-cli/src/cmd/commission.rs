@@ -55,9 +55,18 @@ pub struct Args {
     /// Tilt of the axis, degrees (0 horizontal, 90 vertical; within -90..90).
     #[arg(long, allow_negative_numbers = true)]
     pub tilt: Option<f64>,
-    /// Seed of the simulated measurement noise.
+    /// Seed of the simulated measurement noise: another seed, another
+    /// realization of the plant's noise (default 1).
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
+    /// Standard deviation of the simulated actual-torque noise, N m (default:
+    /// the plant's `[noise] torque_nm`; 0 for none).
+    #[arg(long, value_name = "NM", allow_negative_numbers = true)]
+    pub torque_noise: Option<f64>,
+    /// Standard deviation of the simulated motor-encoder noise before
+    /// quantization, counts (default: the plant's `[noise] encoder_counts`).
+    #[arg(long, value_name = "COUNTS", allow_negative_numbers = true)]
+    pub encoder_noise: Option<f64>,
     /// Output folder, written exactly (new or empty; a previous result needs
     /// --force). Without it: a new timestamped folder under commissioning/ per
     /// run, with commissioning/latest pointing at the newest.
@@ -245,11 +254,13 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
             args.friction_torque.is_some() || args.friction_position.is_some(),
         ),
     ];
-    let simulated_only: [(&str, bool); 12] = [
+    let simulated_only: [(&str, bool); 14] = [
         ("--plant", args.plant.is_some()),
         ("--payload", args.payload.is_some()),
         ("--tilt", args.tilt.is_some()),
         ("--seed", args.seed.is_some()),
+        ("--torque-noise", args.torque_noise.is_some()),
+        ("--encoder-noise", args.encoder_noise.is_some()),
         ("--travel-window", args.travel_window.is_some()),
         ("--start-position", args.start_position.is_some()),
         (
@@ -675,8 +686,15 @@ fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
         };
         return run_ethercat(&args, bus, &ds, &cfg, &limits);
     }
+    let plant_noise = plant.noise();
+    let noise = beltune::model::MeasurementNoise {
+        torque_nm: args.torque_noise.unwrap_or(plant_noise.torque_nm),
+        encoder_counts: args.encoder_noise.unwrap_or(plant_noise.encoder_counts),
+    };
+    noise.validate()?;
     let sim_cfg = SimConfig {
         seed: args.seed.unwrap_or(1),
+        noise: Some(noise),
         initial_cart_position_m: Some(start_position),
         ..SimConfig::default()
     };

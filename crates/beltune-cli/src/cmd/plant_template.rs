@@ -94,6 +94,30 @@ const TWO_MASS: &[Line] = &[
     Key("i_t", "i_t = r / i_g: motor angle to belt travel, m/rad"),
 ];
 
+/// The keys of the optional `[noise]` table (both plant kinds).
+const NOISE: &[Line] = &[
+    Key(
+        "torque_nm",
+        "standard deviation of the noise on the measured actual torque, N m (0: none)",
+    ),
+    Key(
+        "encoder_counts",
+        "standard deviation of the motor encoder noise before quantization, counts (0: ideal)",
+    ),
+];
+
+/// The `[noise]` table of `table` with its heading and comments.
+fn noise_section(out: &mut String, table: &toml::Table) -> anyhow::Result<()> {
+    let noise = table
+        .get("noise")
+        .and_then(|t| t.as_table())
+        .ok_or_else(|| anyhow::anyhow!("plant template: no [noise] table"))?;
+    out.push_str(
+        "\n# ---- measurement noise of the simulator (optional table; seeded by --seed) ----\n[noise]\n",
+    );
+    section(out, NOISE, noise, &[])
+}
+
 /// A float as TOML: 12 significant digits ([`term::tidy`]), always with a
 /// fraction or an exponent so that it reads back as a float.
 fn toml_float(v: f64) -> String {
@@ -164,15 +188,19 @@ pub fn template(plant: &Plant, name: &str) -> anyhow::Result<String> {
          kind = \"{kind}\"\n"
     );
     match plant {
-        Plant::Physical(_) => section(&mut out, PHYSICAL, &table, &["kind"])?,
+        Plant::Physical(_) => {
+            section(&mut out, PHYSICAL, &table, &["kind", "noise"])?;
+            noise_section(&mut out, &table)?;
+        }
         Plant::Linear(_) => {
-            section(&mut out, LINEAR, &table, &["kind", "two_mass"])?;
+            section(&mut out, LINEAR, &table, &["kind", "two_mass", "noise"])?;
             let two_mass = table
                 .get("two_mass")
                 .and_then(|t| t.as_table())
                 .ok_or_else(|| anyhow::anyhow!("plant template: no [two_mass] table"))?;
             out.push_str("\n# ---- two-mass model (thesis 2.33) ----\n[two_mass]\n");
             section(&mut out, TWO_MASS, two_mass, &[])?;
+            noise_section(&mut out, &table)?;
         }
     }
     Ok(out)

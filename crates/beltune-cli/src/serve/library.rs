@@ -474,6 +474,7 @@ impl LibraryTuner {
                     torque_max_nm: drive.torque_max_nm,
                     motor_rad_per_count: drive.motor_rad_per_count,
                     ts_s: self.input.ts_s,
+                    noise: beltune::model::MeasurementNoise::default(),
                 }))
             }
         }

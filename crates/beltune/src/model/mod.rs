@@ -13,6 +13,6 @@ pub mod rigs;
 pub mod three_mass;
 pub mod two_mass;
 
-pub use params::{BeltSegments, FrictionTotals, PhysicalParams, SegmentLengths};
+pub use params::{BeltSegments, FrictionTotals, MeasurementNoise, PhysicalParams, SegmentLengths};
 pub use rigs::{builtin, load_toml, LinearPlant, Plant, BUILTIN_NAMES};
 pub use two_mass::TwoMassParams;

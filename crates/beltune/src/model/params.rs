@@ -107,6 +107,70 @@ pub struct PhysicalParams {
     /// Sampling time of the drive, s.
     #[serde(alias = "sample_time_s")]
     pub ts_s: f64,
+
+    // ---- simulation ----
+    /// Measurement noise of the simulated drive (`[noise]` table, optional).
+    #[serde(default)]
+    pub noise: MeasurementNoise,
+}
+
+/// Measurement noise of a simulated drive, part of the plant (the `[noise]`
+/// table of a plant file): seeded Gaussian noise on the measured actual
+/// torque and on the motor encoder before quantization. The simulator's
+/// seed picks the realization; all zero gives noise-free measurements (the
+/// encoder then only quantizes).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MeasurementNoise {
+    /// Standard deviation of the noise on the measured actual torque, N m.
+    pub torque_nm: f64,
+    /// Standard deviation of the motor encoder's position noise before
+    /// quantization, counts (interpolation noise of a sin/cos encoder; 0 for
+    /// an ideal incremental encoder).
+    pub encoder_counts: f64,
+}
+
+/// Largest measurement-noise standard deviations accepted: torque, N m.
+pub const NOISE_TORQUE_MAX_NM: f64 = 10.0;
+/// Largest encoder noise accepted, counts.
+pub const NOISE_ENCODER_MAX_COUNTS: f64 = 1e3;
+
+impl Default for MeasurementNoise {
+    /// The built-in drives: 2 mN m of torque noise, an ideal encoder.
+    fn default() -> Self {
+        MeasurementNoise {
+            torque_nm: 2e-3,
+            encoder_counts: 0.0,
+        }
+    }
+}
+
+impl MeasurementNoise {
+    /// No noise at all.
+    pub const NONE: MeasurementNoise = MeasurementNoise {
+        torque_nm: 0.0,
+        encoder_counts: 0.0,
+    };
+
+    /// Typed error for a negative, non-finite or absurd level.
+    pub fn validate(&self) -> crate::Result<()> {
+        crate::error::require_range("noise.torque_nm", self.torque_nm, 0.0, NOISE_TORQUE_MAX_NM)?;
+        crate::error::require_range(
+            "noise.encoder_counts",
+            self.encoder_counts,
+            0.0,
+            NOISE_ENCODER_MAX_COUNTS,
+        )?;
+        Ok(())
+    }
+
+    /// Both levels times `factor` (the study's noise factor).
+    pub fn scaled(&self, factor: f64) -> Self {
+        MeasurementNoise {
+            torque_nm: self.torque_nm * factor,
+            encoder_counts: self.encoder_counts * factor,
+        }
+    }
 }
 
 /// Lengths of the three free belt segments at one cart position, m.
@@ -277,6 +341,7 @@ impl PhysicalParams {
     pub fn validate(&self) -> Result<()> {
         use crate::error::require_range;
         use bounds::*;
+        self.noise.validate()?;
         // Positivity first (the messages say "must be > 0"), then the
         // plausibility bounds: every quantity has an upper bound, so that no
         // derived frequency overflows and the simulator's sub-steps stay few.

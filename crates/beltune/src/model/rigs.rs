@@ -54,12 +54,16 @@ pub struct LinearPlant {
     /// Sampling time, s.
     #[serde(alias = "sample_time_s")]
     pub ts_s: f64,
+    /// Measurement noise of the simulated drive (`[noise]` table, optional).
+    #[serde(default)]
+    pub noise: super::params::MeasurementNoise,
 }
 
 impl LinearPlant {
     /// Typed error for non-physical values.
     pub fn validate(&self) -> Result<()> {
         self.two_mass.validate()?;
+        self.noise.validate()?;
         crate::error::require_non_negative("dead_time_s", self.dead_time_s)?;
         crate::error::require_positive("torque_max_nm", self.torque_max_nm)?;
         crate::error::require_positive("motor_rad_per_count", self.motor_rad_per_count)?;
@@ -145,6 +149,14 @@ impl Plant {
                 motor_rad_per_count: l.motor_rad_per_count,
                 torque_max_nm: l.torque_max_nm,
             },
+        }
+    }
+
+    /// Measurement noise of the simulated drive.
+    pub fn noise(&self) -> super::params::MeasurementNoise {
+        match self {
+            Plant::Physical(p) => p.noise,
+            Plant::Linear(l) => l.noise,
         }
     }
 
@@ -424,6 +436,7 @@ pub fn egc70_params(payload_kg: f64) -> PhysicalParams {
         torque_max_nm: 3.1,
         motor_rad_per_count: BELT_TRAVEL_PER_COUNT_M / r,
         ts_s: SAMPLE_TIME_S,
+        noise: super::params::MeasurementNoise::default(),
     }
 }
 
@@ -443,6 +456,7 @@ fn linear_set(two_mass: TwoMassParams) -> LinearPlant {
         torque_max_nm: 3.1,
         motor_rad_per_count: BELT_TRAVEL_PER_COUNT_M / two_mass.i_t,
         ts_s: SAMPLE_TIME_S,
+        noise: super::params::MeasurementNoise::default(),
     }
 }
 

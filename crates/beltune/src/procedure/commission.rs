@@ -2,9 +2,12 @@
 //! reporting progress and one log line:
 //!
 //! 1. plausibility of the data-sheet values;
-//! 2. take the axis (hold it while the integrator carries the load) and move
-//!    to the identification position (cart farthest from the motor, thesis 2.2);
-//! 3. holding torque (thesis chapter 7), friction-free from a slow run up and down;
+//! 2. take the axis (hold it while the integrator carries the load);
+//! 3. holding torque (thesis chapter 7), friction-free from slow runs up and
+//!    down at two speeds where the axis was taken, which also separate
+//!    Coulomb from viscous friction; the bootstrap controller is fitted to
+//!    the friction, then moves the axis to the identification position (cart
+//!    farthest from the motor, thesis 2.2);
 //! 4. excitation amplitude from small values upwards until the motion clears
 //!    friction and noise (thesis 3.4);
 //! 5. open-loop PRBS identification with averaging, coherence, dead time and
@@ -396,14 +399,23 @@ pub fn commission(
     let boot = taken.bootstrap;
     let id_pos = taken.identification_position_m;
 
-    // ---- 3. holding torque ----
+    // ---- 3. holding torque and friction where the axis was taken, the
+    // bootstrap fitted to the friction, the move to the worst case ----
+    let center = stages::holding_torque::run_center_m(st.runner.position_m(), datasheet);
     let held = stages::holding_torque::holding_torque_stage(
-        &mut st, &boot, id_pos, datasheet, torque_max,
+        &mut st, &boot, center, datasheet, torque_max,
     )?;
     let holding = held.holding_nm;
-    let mut boot_hold = boot;
+    let mut boot_hold = super::bootstrap::bootstrap_with_friction(
+        datasheet.rigid_inertia(),
+        datasheet.i_t_m,
+        ts,
+        torque_max,
+        held.viscous_nm_s_per_rad,
+    )?;
     boot_hold.torque_offset_nm = holding;
     st.runner.set_stop_controller(boot_hold);
+    stages::take_axis::move_to_worst_case(&mut st, &boot_hold, id_pos, datasheet)?;
 
     // ---- 4. excitation amplitude ----
     let ex = &cfg.excitation;
@@ -549,7 +561,7 @@ pub fn commission(
 
     // ---- 8. validation ----
     let val = stages::validation_moves::validation_moves(
-        &mut st, &feedback, &ident.fit, &fr.result, n_t, holding, datasheet, cfg,
+        &mut st, &feedback, &boot_hold, &ident.fit, &fr.result, n_t, holding, datasheet, cfg,
     )?;
     let verdict = super::acceptance::judge(
         &val.validation.nonlinear,

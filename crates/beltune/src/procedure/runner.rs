@@ -336,9 +336,26 @@ impl<'a> Runner<'a> {
             f64::NAN
         };
         self.open_loop = following_error_m.is_none();
-        if let Err(v) = self.supervisor.check(
+        // In closed loop the fast estimate, where the rigid-body estimate
+        // confirms it (issue 12: a chattering loop on a coarse encoder shows
+        // 0.5 m/s spikes over a creeping cart, which tripped the look-ahead);
+        // where the smaller rigid-body estimate is judged, the look-ahead
+        // adds its lag.
+        let (velocity, lag) = if self.open_loop {
+            (self.rigid_velocity_m_s, 0.0)
+        } else {
+            let v = stop_start_velocity(self.velocity_m_s, self.rigid_velocity_m_s);
+            let lag = if v.abs() < self.velocity_m_s.abs() {
+                RIGID_VELOCITY_WINDOW_S
+            } else {
+                0.0
+            };
+            (v, lag)
+        };
+        if let Err(v) = self.supervisor.check_lagged(
             self.position_m(),
-            self.supervised_velocity_m_s(),
+            velocity,
+            lag,
             torque,
             following_error_m,
         ) {
@@ -471,20 +488,19 @@ impl<'a> Runner<'a> {
     /// during the stop (it is the reaction), but the torque stays limited.
     pub fn stop(&mut self) -> Result<f64> {
         let ts = self.info.ts_s;
-        let v = self.supervised_velocity_m_s();
-        let v = if v.is_finite() { v } else { 0.0 };
+        let v = stop_start_velocity(self.supervised_velocity_m_s(), self.rigid_velocity_m_s);
         let p = self.position_m();
         // Brake with what the axis has in this direction (gravity, issue 12),
         // never harder than the configured stop limits.
-        let a_stop = self
-            .supervisor
-            .capability()
-            .deceleration_for(v)
-            .min(self.stop_limits.a_max.min(-self.stop_limits.a_min));
+        let a_stop = stop_deceleration(
+            self.supervisor.capability(),
+            self.supervisor.limits(),
+            self.stop_limits.a_max.min(-self.stop_limits.a_min),
+            p,
+            v,
+        );
         let jerk = super::safety::STOP_JERK_PER_DECELERATION * a_stop;
-        // Braking distance of a jerk-limited stop from (v, a = 0): the ramp to
-        // the deceleration adds `|v| a / (2 j)` to `v^2 / (2 a)`.
-        let rest = p + v.signum() * (v * v / (2.0 * a_stop) + v.abs() * a_stop / (2.0 * jerk));
+        let rest = p + v.signum() * stop_distance_m(v, a_stop);
         let limits = Limits {
             position_min: f64::NEG_INFINITY,
             position_max: f64::INFINITY,
@@ -500,7 +516,17 @@ impl<'a> Runner<'a> {
             acceleration: 0.0,
         };
         let traj = Trajectory::plan(&start, &State::at_rest(rest), &limits)?;
-        let mut ctrl = CascadeController::new(self.stop_controller)?;
+        // A designed cascade comes without feedforward (the validation adds
+        // it): the stop's deceleration is fed forward with the inertia the
+        // capability was computed for, so that the feedback does not have to
+        // build the braking torque from a growing error (issue 12: a heavy
+        // cart braking downhill overshot its stop by 20 mm).
+        let mut config = self.stop_controller;
+        let inertia = self.supervisor.capability().inertia_kg_m2;
+        if !config.feedforward.terms.inertia && inertia > 0.0 {
+            config.feedforward = beltune_rt::control::Feedforward::linear(inertia, 0.0);
+        }
+        let mut ctrl = CascadeController::new(config)?;
         ctrl.reset_to(self.motor_angle_rad());
         let n = ((traj.duration_s() + STOP_SETTLE_S) / ts).ceil() as u64;
         let limit = self.info.torque_max_nm;
@@ -528,6 +554,66 @@ impl<'a> Runner<'a> {
         }
         Ok(self.position_m())
     }
+}
+
+/// The velocity a stop starts its trajectory from: the supervised estimate,
+/// but never beyond the rigid-body estimate in magnitude, and zero when the
+/// two disagree in sign. Issue 12: a chattering closed loop on a coarse
+/// encoder showed 0.5 m/s spikes in the fast estimate while the cart crept
+/// at 0.02 m/s; the stop planned from the spike drove the axis 58 mm on,
+/// out of the window. A real motion shows in both (the rigid estimate lags
+/// a hard acceleration by its 20 ms window: the stop then starts slower
+/// and its controller brakes the difference).
+fn stop_start_velocity(supervised_m_s: f64, rigid_m_s: f64) -> f64 {
+    if !(supervised_m_s.is_finite() && rigid_m_s.is_finite()) || supervised_m_s * rigid_m_s <= 0.0 {
+        return 0.0;
+    }
+    supervised_m_s.signum() * supervised_m_s.abs().min(rigid_m_s.abs())
+}
+
+/// Braking distance of a jerk-limited stop from `(v, a = 0)` with the
+/// deceleration `a` and the jerk [`super::safety::STOP_JERK_PER_DECELERATION`]
+/// times it: the ramp adds `|v| a / (2 j)` to `v^2 / (2 a)`, m.
+fn stop_distance_m(velocity_m_s: f64, deceleration_m_s2: f64) -> f64 {
+    let v = velocity_m_s.abs();
+    v * v / (2.0 * deceleration_m_s2) + v / (2.0 * super::safety::STOP_JERK_PER_DECELERATION)
+}
+
+/// The deceleration of a stop from `position_m` at `velocity_m_s`: the
+/// planned one of the direction (at most `configured_m_s2`, the stop
+/// limits); if that stop would end closer than
+/// [`super::safety::STOP_EDGE_MARGIN_M`] to the window's edge (or beyond
+/// it), as much more as it takes to stop there, up to the capability's
+/// reserve (issue 12: the look-ahead trips when the planned stop would end
+/// outside, so a stop with the planned deceleration always did).
+fn stop_deceleration(
+    capability: &super::safety::StopCapability,
+    limits: &SafetyLimits,
+    configured_m_s2: f64,
+    position_m: f64,
+    velocity_m_s: f64,
+) -> f64 {
+    let v = velocity_m_s;
+    let planned = capability.deceleration_for(v).min(configured_m_s2);
+    if v == 0.0 {
+        return planned;
+    }
+    let edge = if v > 0.0 {
+        limits.travel_max_m - super::safety::STOP_EDGE_MARGIN_M
+    } else {
+        limits.travel_min_m + super::safety::STOP_EDGE_MARGIN_M
+    };
+    let room = (edge - position_m) * v.signum();
+    if stop_distance_m(v, planned) <= room {
+        return planned;
+    }
+    let reserve = capability.reserve_deceleration_for(v).max(planned);
+    // v^2 / (2 a) + |v| / (2 k) <= room
+    let braking_room = room - v.abs() / (2.0 * super::safety::STOP_JERK_PER_DECELERATION);
+    if braking_room <= 0.0 {
+        return reserve;
+    }
+    (v * v / (2.0 * braking_room)).clamp(planned, reserve)
 }
 
 #[cfg(test)]
@@ -678,6 +764,51 @@ mod tests {
             v = rv.step(0.3 * k as f64 * ts);
         }
         assert!((v - 0.3).abs() < 1e-9, "{v}");
+    }
+
+    /// Issue 12 (stops ending outside the window): the look-ahead trips when
+    /// the planned stop would end outside, so a stop with the planned
+    /// deceleration always did; it brakes with the reserve to end
+    /// STOP_EDGE_MARGIN_M inside instead, and with the planned one where
+    /// there is room.
+    #[test]
+    fn a_stop_near_the_edge_brakes_with_its_reserve_issue_12() {
+        use crate::procedure::safety::{StopCapability, STOP_EDGE_MARGIN_M};
+        let cap = StopCapability::from_axis(3.1, 2e-3, 0.0124, 0.3, 0.0).unwrap();
+        let limits = SafetyLimits {
+            travel_min_m: -0.01,
+            travel_max_m: 0.57,
+            torque_max_nm: 3.1,
+            velocity_max_m_s: 2.5,
+            following_error_max_m: 0.05,
+        };
+        let planned = cap.deceleration_negative_m_s2;
+        assert!(cap.reserve_deceleration_negative_m_s2 > planned);
+        // plenty of room: the planned deceleration
+        assert_eq!(stop_deceleration(&cap, &limits, 100.0, 0.3, -0.5), planned);
+        // downhill towards the lower edge, the planned stop ends outside
+        let (p, v) = (0.015, -0.5);
+        assert!(p - stop_distance_m(v, planned) < limits.travel_min_m + STOP_EDGE_MARGIN_M);
+        let a = stop_deceleration(&cap, &limits, 100.0, p, v);
+        assert!(a > planned && a <= cap.reserve_deceleration_negative_m_s2);
+        let rest = p - stop_distance_m(v, a);
+        assert!(
+            (rest - (limits.travel_min_m + STOP_EDGE_MARGIN_M)).abs() < 1e-9,
+            "rest {rest}"
+        );
+        // beyond the reserve: all of it
+        let a = stop_deceleration(&cap, &limits, 100.0, -0.005, -2.0);
+        assert_eq!(a, cap.reserve_deceleration_negative_m_s2);
+    }
+
+    /// Issue 12: a 0.5 m/s spike of the fast estimate over a creeping cart
+    /// starts no stop trajectory at 0.5 m/s; a real motion does.
+    #[test]
+    fn a_stop_starts_from_a_confirmed_velocity_issue_12() {
+        assert_eq!(stop_start_velocity(0.5, 0.02), 0.02);
+        assert_eq!(stop_start_velocity(-0.5, -0.6), -0.5);
+        assert_eq!(stop_start_velocity(0.5, -0.01), 0.0);
+        assert_eq!(stop_start_velocity(f64::NAN, 0.3), 0.0);
     }
 
     /// Keeps the record a safety stop hands over.

@@ -170,6 +170,21 @@ pub struct StopCapability {
     /// Time during which the axis keeps its speed before the deceleration
     /// builds up (dead time, velocity-filter lag, the stop's jerk ramp), s.
     pub reaction_time_s: f64,
+    /// Deceleration a stop may use towards +x when the planned one would end
+    /// outside the travel window (the whole command budget
+    /// [`STOP_COMMAND_FRACTION`] instead of [`STOP_TORQUE_FRACTION`]), m/s^2.
+    /// The look-ahead plans with the smaller deceleration above; this is
+    /// the stop's reserve (issue 12: stops that ended outside the window).
+    #[serde(default)]
+    pub reserve_deceleration_positive_m_s2: f64,
+    /// Reserve deceleration towards -x, m/s^2 (see above).
+    #[serde(default)]
+    pub reserve_deceleration_negative_m_s2: f64,
+    /// Rigid-body inertia the decelerations were computed for, kg m^2 (0:
+    /// unknown). The stop feeds its deceleration forward with it when the
+    /// stop controller has no inertia feedforward of its own.
+    #[serde(default)]
+    pub inertia_kg_m2: f64,
 }
 
 /// Fraction of the torque limit a stop may use (the rest is margin for the
@@ -188,6 +203,16 @@ pub const STOP_JERK_PER_DECELERATION: f64 = 20.0;
 /// Reaction time besides the stop's jerk ramp: the largest dead time the
 /// commissioning accepts (2 ms) and the supervision velocity filter (2 ms), s.
 pub const STOP_LATENCY_S: f64 = 4e-3;
+/// Largest reserve deceleration of a stop, m/s^2 (see
+/// [`StopCapability::reserve_deceleration_positive_m_s2`]).
+pub const STOP_RESERVE_DECELERATION_MAX_M_S2: f64 = 30.0;
+/// Distance a stop keeps from the window's edge when it has to use its
+/// reserve, m: the belt stretches by `m a / c` (25 kg at 10 m/s^2 on
+/// 100 kN/m: 2.5 mm) and the cart swings past the motor by that much.
+pub const STOP_EDGE_MARGIN_M: f64 = 3e-3;
+/// Smallest braking torque, as a fraction of the torque limit, a
+/// provisional capability assumes ([`StopCapability::provisional`]).
+pub const PROVISIONAL_MIN_FRACTION: f64 = 0.05;
 
 impl StopCapability {
     /// The same deceleration both ways, with the latency and jerk ramp.
@@ -196,6 +221,46 @@ impl StopCapability {
             deceleration_positive_m_s2: deceleration_m_s2,
             deceleration_negative_m_s2: deceleration_m_s2,
             reaction_time_s: STOP_LATENCY_S + 0.5 / STOP_JERK_PER_DECELERATION,
+            reserve_deceleration_positive_m_s2: deceleration_m_s2,
+            reserve_deceleration_negative_m_s2: deceleration_m_s2,
+            inertia_kg_m2: 0.0,
+        }
+    }
+
+    /// The capability while the holding torque is known only from the first
+    /// hold (stage 2: it still contains the static friction the sagging load
+    /// met): like [`StopCapability::from_axis`] but never refusing. The
+    /// braking torque in the weak direction is what the first hold leaves,
+    /// at least [`PROVISIONAL_MIN_FRACTION`] of the limit; the refusal is left
+    /// to the holding-torque stage, which measures gravity without friction
+    /// (issue 12: plants refused on the first hold that physics allows).
+    pub fn provisional(
+        torque_max_nm: f64,
+        inertia_kg_m2: f64,
+        i_t_m: f64,
+        first_hold_nm: f64,
+    ) -> Result<Self> {
+        match Self::from_axis(torque_max_nm, inertia_kg_m2, i_t_m, first_hold_nm, 0.0) {
+            Err(Error::Infeasible { .. }) => {
+                let total = STOP_COMMAND_FRACTION * torque_max_nm;
+                let floor = PROVISIONAL_MIN_FRACTION * torque_max_nm;
+                let budget = STOP_TORQUE_FRACTION * torque_max_nm;
+                let a = |tau: f64| {
+                    (tau.clamp(floor, budget) * i_t_m / inertia_kg_m2)
+                        .min(STOP_DECELERATION_MAX_M_S2)
+                };
+                let pos = a(total + first_hold_nm);
+                let neg = a(total - first_hold_nm);
+                Ok(StopCapability {
+                    deceleration_positive_m_s2: pos,
+                    deceleration_negative_m_s2: neg,
+                    reserve_deceleration_positive_m_s2: pos,
+                    reserve_deceleration_negative_m_s2: neg,
+                    inertia_kg_m2,
+                    ..StopCapability::symmetric(1.0)
+                })
+            }
+            other => other,
         }
     }
 
@@ -235,11 +300,30 @@ impl StopCapability {
                 ),
             });
         }
+        let reserve = |tau: f64| {
+            (tau * i_t_m / inertia_kg_m2)
+                .min(STOP_RESERVE_DECELERATION_MAX_M_S2)
+                .max(a(tau.min(budget)))
+        };
         Ok(StopCapability {
             deceleration_positive_m_s2: a(pos),
             deceleration_negative_m_s2: a(neg),
+            reserve_deceleration_positive_m_s2: reserve(total + holding_nm + friction),
+            reserve_deceleration_negative_m_s2: reserve(total - holding_nm + friction),
+            inertia_kg_m2,
             ..StopCapability::symmetric(1.0)
         })
+    }
+
+    /// Reserve deceleration available while moving with `velocity_m_s`, m/s^2.
+    pub fn reserve_deceleration_for(&self, velocity_m_s: f64) -> f64 {
+        let r = if velocity_m_s >= 0.0 {
+            self.reserve_deceleration_positive_m_s2
+        } else {
+            self.reserve_deceleration_negative_m_s2
+        };
+        // a capability read from an older file has no reserve
+        r.max(self.deceleration_for(velocity_m_s))
     }
 
     /// The smaller deceleration of the two directions, m/s^2.
@@ -267,6 +351,15 @@ impl StopCapability {
             self.deceleration_negative_m_s2,
         )?;
         require_finite("stop reaction time [s]", self.reaction_time_s)?;
+        crate::error::require_non_negative(
+            "stop reserve deceleration (+x) [m/s^2]",
+            self.reserve_deceleration_positive_m_s2,
+        )?;
+        crate::error::require_non_negative(
+            "stop reserve deceleration (-x) [m/s^2]",
+            self.reserve_deceleration_negative_m_s2,
+        )?;
+        crate::error::require_non_negative("stop inertia [kg m^2]", self.inertia_kg_m2)?;
         if self.reaction_time_s < 0.0 {
             return Err(Error::invalid(
                 "stop reaction time [s]",
@@ -336,6 +429,26 @@ impl SafetySupervisor {
         torque_command_nm: f64,
         following_error_m: Option<f64>,
     ) -> std::result::Result<(), Violation> {
+        self.check_lagged(
+            position_m,
+            velocity_m_s,
+            0.0,
+            torque_command_nm,
+            following_error_m,
+        )
+    }
+
+    /// [`SafetySupervisor::check`] for a velocity estimate that lags the
+    /// axis by `velocity_lag_s` (a smoothed estimate): the look-ahead adds
+    /// the distance the axis covers meanwhile.
+    pub fn check_lagged(
+        &self,
+        position_m: f64,
+        velocity_m_s: f64,
+        velocity_lag_s: f64,
+        torque_command_nm: f64,
+        following_error_m: Option<f64>,
+    ) -> std::result::Result<(), Violation> {
         let l = &self.limits;
         if !(position_m.is_finite() && velocity_m_s.is_finite() && torque_command_nm.is_finite()) {
             return Err(Violation::NonFinite);
@@ -358,6 +471,7 @@ impl SafetySupervisor {
                         / (2.0 * self.capability.deceleration_for(velocity_m_s))
             }
         };
+        let distance = distance + velocity_m_s.abs() * velocity_lag_s.max(0.0);
         let stop = position_m + velocity_m_s.signum() * distance;
         if stop < l.travel_min_m || stop > l.travel_max_m {
             return Err(Violation::TravelAhead {
@@ -497,6 +611,42 @@ mod tests {
             Err(Error::Infeasible { .. })
         ));
         assert!(StopCapability::from_axis(t_max, j, i_t, f64::NAN, 0.0).is_err());
+    }
+
+    /// Issue 12: the first hold (gravity plus the static friction a sagging
+    /// load meets) refuses no axis; the braking torque it leaves is assumed,
+    /// at least PROVISIONAL_MIN_FRACTION of the limit.
+    #[test]
+    fn a_provisional_capability_refuses_nothing_issue_12() {
+        let (t_max, j, i_t) = (3.1, 3e-3, 0.0124);
+        let first_hold = 2.4; // from_axis refuses: 0.9 * 3.1 - 2.4 < 0.15 * 3.1
+        assert!(StopCapability::from_axis(t_max, j, i_t, first_hold, 0.0).is_err());
+        let c = StopCapability::provisional(t_max, j, i_t, first_hold).unwrap();
+        let weak = (STOP_COMMAND_FRACTION * t_max - first_hold) * i_t / j;
+        assert!((c.deceleration_negative_m_s2 - weak).abs() < 1e-12, "{c:?}");
+        assert!(c.deceleration_positive_m_s2 > c.deceleration_negative_m_s2);
+        let c = StopCapability::provisional(t_max, j, i_t, 3.05).unwrap();
+        let floor = PROVISIONAL_MIN_FRACTION * t_max * i_t / j;
+        assert!((c.deceleration_negative_m_s2 - floor).abs() < 1e-12);
+        // where from_axis accepts, the same capability
+        assert_eq!(
+            StopCapability::provisional(t_max, j, i_t, 0.5).unwrap(),
+            StopCapability::from_axis(t_max, j, i_t, 0.5, 0.0).unwrap()
+        );
+        assert!(StopCapability::provisional(t_max, j, i_t, f64::NAN).is_err());
+    }
+
+    /// A lagging (smoothed) velocity estimate: the look-ahead adds the
+    /// distance covered during the lag.
+    #[test]
+    fn a_lagging_velocity_adds_its_distance_issue_12() {
+        let s = SafetySupervisor::with_capability(limits(), instant(10.0)).unwrap();
+        // 0.449 m at 0.99 m/s stops at 0.498 m; 20 ms of lag add 19.8 mm
+        assert!(s.check_lagged(0.449, 0.99, 0.0, 0.0, Some(0.0)).is_ok());
+        assert!(matches!(
+            s.check_lagged(0.449, 0.99, 0.02, 0.0, Some(0.0)),
+            Err(Violation::TravelAhead { .. })
+        ));
     }
 
     #[test]

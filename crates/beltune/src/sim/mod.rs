@@ -25,8 +25,8 @@
 mod linear;
 mod mech;
 
-use crate::error::{require_finite, require_non_negative, require_positive};
-use crate::model::params::{FrictionTotals, PhysicalParams};
+use crate::error::{require_finite, require_positive};
+use crate::model::params::{FrictionTotals, MeasurementNoise, PhysicalParams};
 use crate::model::three_mass::ThreeMassState;
 use crate::model::{Plant, TwoMassParams};
 use crate::plant::{Axis, AxisError, AxisInfo, Measurement};
@@ -52,14 +52,13 @@ pub enum SimModel {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct SimConfig {
-    /// Seed of the noise generator (Xoshiro256++): equal seeds, equal runs.
+    /// Seed of the noise generator (Xoshiro256++): equal seeds, equal runs;
+    /// another seed, another realization of the plant's measurement noise.
     pub seed: u64,
-    /// Standard deviation of the noise on the measured actual torque, N m.
-    pub torque_noise_nm: f64,
-    /// Standard deviation of the motor encoder's position noise before
-    /// quantization, counts (interpolation noise of a sin/cos encoder; 0 for
-    /// an ideal incremental encoder). Seeded like the torque noise.
-    pub encoder_noise_counts: f64,
+    /// Measurement noise instead of the plant's own
+    /// ([`crate::model::MeasurementNoise`], the plant file's `[noise]`);
+    /// `None`: the plant's.
+    pub noise: Option<MeasurementNoise>,
     /// Initial cart position, m (`None`: the middle of the stroke; 0 for a linear set).
     pub initial_cart_position_m: Option<f64>,
     /// Tilt override, rad (`None`: the plant's own tilt).
@@ -77,8 +76,7 @@ impl Default for SimConfig {
     fn default() -> Self {
         SimConfig {
             seed: 0x5EED,
-            torque_noise_nm: 2e-3,
-            encoder_noise_counts: 0.0,
+            noise: None,
             initial_cart_position_m: None,
             tilt_rad: None,
             model: SimModel::ThreeMass,
@@ -121,6 +119,7 @@ pub struct SimAxis {
     delay_pos: usize,
     applied_torque_nm: f64,
     rng: Xoshiro256PlusPlus,
+    noise: MeasurementNoise,
     steps: u64,
     phi_m_zero_rad: f64,
     rejected_commands: u64,
@@ -132,8 +131,9 @@ impl SimAxis {
     /// configuration (position outside the stroke, negative noise, ...).
     pub fn new(plant: &Plant, config: SimConfig) -> Result<Self> {
         plant.validate()?;
-        require_non_negative("torque_noise_nm", config.torque_noise_nm)?;
-        require_non_negative("encoder_noise_counts", config.encoder_noise_counts)?;
+        if let Some(n) = &config.noise {
+            n.validate()?;
+        }
         require_positive(
             "cart_encoder_resolution_m",
             config.cart_encoder_resolution_m,
@@ -156,6 +156,7 @@ impl SimAxis {
             plant.validate()?;
         }
         let info = plant.info();
+        let noise = config.noise.unwrap_or_else(|| plant.noise());
         let xi0 = match (&plant, config.initial_cart_position_m) {
             (Plant::Physical(p), None) => 0.5 * p.stroke_m,
             (Plant::Linear(_), None) => 0.0,
@@ -170,6 +171,7 @@ impl SimAxis {
             },
             plant,
             rng: Xoshiro256PlusPlus::seed_from_u64(config.seed),
+            noise,
             config,
             info,
             n_sub: 1,
@@ -254,6 +256,11 @@ impl SimAxis {
     /// The configuration.
     pub fn config(&self) -> &SimConfig {
         &self.config
+    }
+
+    /// The measurement noise simulated (the configuration's or the plant's).
+    pub fn noise(&self) -> MeasurementNoise {
+        self.noise
     }
 
     /// Simulated time, s (samples times `T_s`).
@@ -422,15 +429,15 @@ impl SimAxis {
         self.applied_torque_nm = tau;
         self.advance(tau);
         self.steps += 1;
-        let noise = if self.config.torque_noise_nm > 0.0 {
+        let noise = if self.noise.torque_nm > 0.0 {
             let z: f64 = StandardNormal.sample(&mut self.rng);
-            self.config.torque_noise_nm * z
+            self.noise.torque_nm * z
         } else {
             0.0
         };
-        let jitter = if self.config.encoder_noise_counts > 0.0 {
+        let jitter = if self.noise.encoder_counts > 0.0 {
             let z: f64 = StandardNormal.sample(&mut self.rng);
-            self.config.encoder_noise_counts * z
+            self.noise.encoder_counts * z
         } else {
             0.0
         };

@@ -108,7 +108,7 @@ fn linear_sets_frf_matches_transfer_function_1_to_400_hz() {
     for name in ["sim-a", "sim-b", "sim-c"] {
         let plant = builtin(name, None).unwrap();
         let cfg = SimConfig {
-            torque_noise_nm: 0.0,
+            noise: Some(MeasurementNoise::NONE),
             ..SimConfig::default()
         };
         let mut axis = SimAxis::new(&plant, cfg).unwrap();
@@ -136,7 +136,7 @@ fn three_mass_simulation_frf_matches_its_linearization() {
     };
     let xi = 0.55;
     let cfg = SimConfig {
-        torque_noise_nm: 0.0,
+        noise: Some(MeasurementNoise::NONE),
         initial_cart_position_m: Some(xi),
         ..SimConfig::default()
     };
@@ -171,7 +171,7 @@ fn two_mass_simulation_frf_matches_2_38() {
     };
     let xi = 0.5;
     let cfg = SimConfig {
-        torque_noise_nm: 0.0,
+        noise: Some(MeasurementNoise::NONE),
         initial_cart_position_m: Some(xi),
         model: SimModel::TwoMass,
         ..SimConfig::default()
@@ -411,7 +411,7 @@ fn tilted_axis_holding_torque() {
     let cfg = SimConfig {
         tilt_rad: Some(alpha),
         initial_cart_position_m: Some(0.3),
-        torque_noise_nm: 0.0,
+        noise: Some(MeasurementNoise::NONE),
         ..SimConfig::default()
     };
     let plant = Plant::Physical(base.clone());
@@ -535,7 +535,7 @@ fn lowest_resonances_with_cart_farthest_from_motor() {
 fn dead_time_and_saturation() {
     let plant = builtin("egc70", None).unwrap();
     let cfg = SimConfig {
-        torque_noise_nm: 0.0,
+        noise: Some(MeasurementNoise::NONE),
         ..SimConfig::default()
     };
     let mut axis = SimAxis::new(&plant, cfg).unwrap();
@@ -558,7 +558,10 @@ fn seeded_runs_are_reproducible() {
     let run = |seed: u64| {
         let cfg = SimConfig {
             seed,
-            torque_noise_nm: 0.01,
+            noise: Some(MeasurementNoise {
+                torque_nm: 0.01,
+                encoder_counts: 0.0,
+            }),
             ..SimConfig::default()
         };
         let mut axis = SimAxis::new(&plant, cfg).unwrap();
@@ -593,7 +596,10 @@ fn invalid_configurations_are_errors() {
             ..SimConfig::default()
         },
         SimConfig {
-            torque_noise_nm: -1.0,
+            noise: Some(MeasurementNoise {
+                torque_nm: -1.0,
+                encoder_counts: 0.0,
+            }),
             ..SimConfig::default()
         },
         SimConfig {
@@ -673,7 +679,7 @@ fn constant_velocity_run(
     };
     let cfg = SimConfig {
         model,
-        torque_noise_nm: 0.0,
+        noise: Some(MeasurementNoise::NONE),
         initial_cart_position_m: Some(start),
         ..SimConfig::default()
     };

@@ -6,7 +6,7 @@
 //! compliance x0.7-1.3). Plant `index` of seed `seed` is drawn from its own
 //! generator (`seed`, `index`), so any plant can be re-run alone.
 
-use crate::model::params::PhysicalParams;
+use crate::model::params::{MeasurementNoise, PhysicalParams};
 use crate::model::rigs::egc70_params;
 use crate::sim::SimConfig;
 use crate::Result;
@@ -62,6 +62,15 @@ pub const BASE_TORQUE_NOISE_NM: f64 = 2e-3;
 /// See [`BASE_TORQUE_NOISE_NM`].
 pub const BASE_ENCODER_NOISE_COUNTS: f64 = 0.1;
 
+/// The baseline axis' measurement noise, which the study scales by its noise
+/// factor.
+pub fn base_noise() -> MeasurementNoise {
+    MeasurementNoise {
+        torque_nm: BASE_TORQUE_NOISE_NM,
+        encoder_counts: BASE_ENCODER_NOISE_COUNTS,
+    }
+}
+
 /// One generated plant and the variations it was drawn with.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct GeneratedPlant {
@@ -90,12 +99,11 @@ pub struct GeneratedPlant {
 }
 
 impl GeneratedPlant {
-    /// The simulator settings: this plant's noise, its own noise seed.
+    /// The simulator settings: its own noise seed (the noise is the plant's,
+    /// [`GeneratedPlant::params`]`.noise`).
     pub fn sim_config(&self, initial_cart_position_m: f64) -> SimConfig {
         SimConfig {
             seed: self.noise_seed,
-            torque_noise_nm: BASE_TORQUE_NOISE_NM * self.noise_factor,
-            encoder_noise_counts: BASE_ENCODER_NOISE_COUNTS * self.noise_factor,
             initial_cart_position_m: Some(initial_cart_position_m),
             ..SimConfig::default()
         }
@@ -144,6 +152,7 @@ pub fn generate(seed: u64, index: u64, r: &Ranges) -> Result<GeneratedPlant> {
     p.stroke_m = stroke;
     p.cart_belt_span_m *= geometry;
     p.end_compliance_length_m *= geometry;
+    p.noise = base_noise().scaled(noise);
     p.validate()?;
     Ok(GeneratedPlant {
         seed,

@@ -7,8 +7,8 @@
 //! | stage | file |
 //! | --- | --- |
 //! | 1. plausibility of the data sheet, supervisor and bootstrap controller | [`plausibility`] |
-//! | 2. take the axis, move to the worst-case position | [`take_axis`] |
-//! | 3. holding torque | [`holding_torque`] |
+//! | 2. take the axis (first hold) | [`take_axis`] |
+//! | 3. holding torque and friction where the axis was taken, the bootstrap fitted to the friction, the move to the worst-case position | [`holding_torque`], [`take_axis::move_to_worst_case`] |
 //! | 4. excitation amplitude | [`amplitude`] |
 //! | 5. open-loop identification | [`identification`] |
 //! | 6. controller design | [`design`] |

@@ -1,7 +1,9 @@
 //! Stage 2: take the axis (hold it where it is until the integrator carries
-//! the load: a vertical axis sags first) for a first holding torque, then move
-//! to the identification position, the cart farthest from the motor (longest
-//! belt segment, lowest resonance: the worst case, thesis 2.2).
+//! the load: a vertical axis sags first) for a first holding torque; after
+//! the holding-torque runs (stage 3, where the axis was taken), move to the
+//! identification position, the cart farthest from the motor (longest belt
+//! segment, lowest resonance: the worst case, thesis 2.2), with the
+//! bootstrap controller fitted to the measured friction.
 
 use super::super::commission::{positioning_limits, DataSheet};
 use super::super::motion::move_to;
@@ -22,7 +24,8 @@ pub struct TakenAxis {
     pub identification_position_m: f64,
 }
 
-/// Stage 2: take the axis with `bootstrap` and move to the worst-case position.
+/// Stage 2: take the axis with `bootstrap` (the identification position is
+/// only computed; [`move_to_worst_case`] goes there after stage 3).
 pub fn take_axis(
     st: &mut Stages,
     bootstrap: CascadeConfig<f64>,
@@ -38,13 +41,14 @@ pub fn take_axis(
     boot.torque_offset_nm = first_hold;
     st.runner.set_stop_controller(boot);
     // The first holding torque is gravity (and friction): the stops brake
-    // with what is left of the torque in each direction (issue 12).
-    st.runner.set_stop_capability(StopCapability::from_axis(
+    // with what is left of the torque in each direction (issue 12). It is
+    // known only within the friction band, so it does not refuse the axis:
+    // the holding-torque stage does, on gravity measured without friction.
+    st.runner.set_stop_capability(StopCapability::provisional(
         torque_max_nm,
         datasheet.rigid_inertia(),
         datasheet.i_t_m,
         first_hold,
-        0.0,
     )?)?;
     let line = format!(
         "held at {:.1} mm (sag {:.2} mm) with {first_hold:+.3} N m",
@@ -53,13 +57,32 @@ pub fn take_axis(
     );
     st.finish("take axis", line);
 
-    let width = datasheet.travel_max_m - datasheet.travel_min_m;
-    let id_pos = datasheet.travel_max_m - (0.12 * width).max(0.05);
+    Ok(TakenAxis {
+        bootstrap: boot,
+        identification_position_m: identification_position_m(datasheet),
+    })
+}
+
+/// The identification position of `ds`: the cart far from the motor, 12 %
+/// of the window (at least 50 mm) inside its upper edge, m.
+pub fn identification_position_m(ds: &DataSheet) -> f64 {
+    let width = ds.travel_max_m - ds.travel_min_m;
+    ds.travel_max_m - (0.12 * width).max(0.05)
+}
+
+/// Stage 3b: move to the identification position `id_pos_m` with the
+/// bootstrap `ctrl` fitted to the measured friction.
+pub fn move_to_worst_case(
+    st: &mut Stages,
+    ctrl: &CascadeConfig<f64>,
+    id_pos_m: f64,
+    datasheet: &DataSheet,
+) -> Result<()> {
     st.start("move to worst-case position", 0);
     move_to(
         st.runner,
-        &boot,
-        id_pos,
+        ctrl,
+        id_pos_m,
         &positioning_limits(datasheet),
         0.1,
     )?;
@@ -68,10 +91,7 @@ pub fn take_axis(
         st.runner.position_m() * 1e3
     );
     st.finish("position", line);
-    Ok(TakenAxis {
-        bootstrap: boot,
-        identification_position_m: id_pos,
-    })
+    Ok(())
 }
 
 /// Hold the current position with `ctrl` for `duration_s` (no following-error

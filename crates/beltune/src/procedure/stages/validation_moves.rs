@@ -126,6 +126,27 @@ pub fn plan_validation_move(
     })
 }
 
+/// Limits of the unmeasured return to the validation start inside the
+/// window of `ds`: the validation move's `planned` limits with the
+/// acceleration at most half the stop deceleration `stop_deceleration_m_s2`
+/// (so that the look-ahead, which assumes the stop's deceleration after a
+/// reaction time, never trips on the return's own braking).
+pub fn return_limits(planned: &Limits, ds: &DataSheet, stop_deceleration_m_s2: f64) -> Limits {
+    let a = planned.a_max.min(0.5 * stop_deceleration_m_s2);
+    let v = planned.v_max;
+    let j = planned.j_max;
+    Limits {
+        v_max: v,
+        v_min: -v,
+        a_max: a,
+        a_min: -a,
+        j_max: j,
+        j_min: -j,
+        position_min: ds.travel_min_m,
+        position_max: ds.travel_max_m,
+    }
+}
+
 fn peak_velocity(t: &Trajectory) -> f64 {
     sampled(t).map(|s| s.velocity.abs()).fold(0.0, f64::max)
 }
@@ -140,11 +161,14 @@ fn sampled(t: &Trajectory) -> impl Iterator<Item = beltune_rt::trajectory::Sampl
 }
 
 /// Stage 8: the three validation moves with `feedback` plus each feedforward
-/// variant built from the fit and the friction of stage 7.
+/// variant built from the fit and the friction of stage 7. The unmeasured
+/// return to the start runs under `positioning` (the bootstrap controller
+/// with the holding torque, the one of the positioning moves of stages 2-5).
 #[allow(clippy::too_many_arguments)]
 pub fn validation_moves(
     st: &mut Stages,
     feedback: &CascadeConfig<f64>,
+    positioning: &CascadeConfig<f64>,
     fit: &TwoMassFit,
     friction: &FrictionResult,
     preview: usize,
@@ -179,25 +203,28 @@ pub fn validation_moves(
         limits: planned.limits,
         ..cfg.validation
     };
-    // The unmeasured return to the start runs without feedforward under the
-    // feedback alone, with the limits of the move fitted to the axis, to a
-    // point 15 mm inside the window from which it creeps to the start
-    // ([`super::super::validation::run_move`]): the soft loop's overshoot
-    // ends before that point, never at the window edge 10 mm behind the
-    // start (issue 12: at Table A.8's dynamics straight to the start it
-    // overshot into the edge).
-    let return_limits = Limits {
-        position_min: datasheet.travel_min_m,
-        position_max: datasheet.travel_max_m,
-        ..planned.limits
-    };
+    // The unmeasured return to the start runs under the positioning
+    // controller (the bootstrap cascade of stages 2-5, which moved the axis
+    // safely before) with the move's limits, braking with at most half the
+    // stop deceleration, to a point 15 mm
+    // inside the window from which it creeps to the start
+    // ([`super::super::validation::run_move`]). Issue 12: under the designed
+    // feedback without feedforward, a loop that is poorly damped on the real
+    // axis overshot and hunted at the torque limit on the way back, and the
+    // look-ahead stopped it 80 mm before the window's edge.
+    let worst_stop = st
+        .runner
+        .supervisor()
+        .capability()
+        .worst_deceleration_m_s2();
+    let return_limits = return_limits(&planned.limits, datasheet, worst_stop);
     for variant in FeedforwardVariant::ALL {
         // the same controller the tuning page simulates (issue 16)
         let c = validation_controller(feedback, m_e, friction, variant);
         // Return to the start with the thesis' own limits (it is not measured).
         moves.push(run_move(
             st.runner,
-            feedback,
+            positioning,
             &return_limits,
             &c,
             opts,

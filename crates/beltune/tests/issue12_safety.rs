@@ -1,0 +1,148 @@
+//! Issue 12, the safety defects of the excitation, holding-torque and
+//! validation stages: plants of the seeded study (seed 12) that ended in a
+//! travel stop or left their travel window, and the measurement noise as a
+//! plant parameter.
+
+use beltune::model::{rigs, MeasurementNoise};
+use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
+use beltune::procedure::NoProgress;
+use beltune::sim::{SimAxis, SimConfig};
+use beltune::study::{run_plant, Outcome, Ranges};
+
+fn plant(index: u64) -> Outcome {
+    run_plant(
+        12,
+        index,
+        &Ranges::default(),
+        &CommissioningConfig::default(),
+    )
+    .unwrap()
+}
+
+/// Plants #24 and #38 (15.7 and 16.1 kg, tilt +12 / +29 deg) ended "during
+/// validation moves: at 82.2 mm the axis could not stop before -10.3 mm",
+/// #38 with the cart 29.3 mm outside the window: the unmeasured return ran
+/// under the designed feedback, which on these axes hunts at the torque
+/// limit. It now runs under the bootstrap cascade at positioning limits.
+#[test]
+fn the_validation_return_ends_in_no_travel_stop_issue_12() {
+    for index in [24, 38] {
+        let o = plant(index);
+        assert!(!o.travel_violation, "#{index}: {:?}", o.travel_excess_m);
+        assert!(
+            !o.message.contains("travel window"),
+            "#{index}: {}",
+            o.message
+        );
+    }
+}
+
+/// Plant #8 (18.7 kg, tilt -66 deg) tripped in closed loop on a 0.5 m/s
+/// spike of the fast velocity estimate while the cart crept; the stop
+/// planned from the spike drove the cart 50 mm out of the window. The stop
+/// now starts from a velocity the rigid-body estimate confirms.
+#[test]
+fn a_stop_ends_inside_the_window_issue_12() {
+    let o = plant(8);
+    assert!(
+        !o.travel_violation,
+        "cart {:.1} mm outside: {}",
+        o.travel_excess_m * 1e3,
+        o.message
+    );
+}
+
+/// Plant #97 (16.7 kg, tilt +78 deg, 2.10 N m of gravity) was refused on
+/// its first hold (2.365 N m: gravity plus the static friction the sagging
+/// load met); physics lets it be stopped. The refusal is left to the
+/// holding-torque stage, which measures gravity without friction.
+#[test]
+fn the_first_hold_does_not_refuse_a_stoppable_axis_issue_12() {
+    let o = plant(97);
+    assert!(o.feasibility.feasible, "{:?}", o.feasibility);
+    assert!(!o.message.contains("take axis"), "{}", o.message);
+    assert!(!o.travel_violation);
+}
+
+fn commission_sim_c(seed: u64, noise: MeasurementNoise) -> (Vec<f64>, Vec<f64>, f64) {
+    let plant = rigs::builtin("sim-c", None).unwrap();
+    let start = 0.05;
+    let mut axis = SimAxis::new(
+        &plant,
+        SimConfig {
+            seed,
+            noise: Some(noise),
+            initial_cart_position_m: Some(start),
+            ..SimConfig::default()
+        },
+    )
+    .unwrap();
+    let ds = DataSheet::for_plant(&plant, start, None);
+    let run = commission(
+        &mut axis,
+        &ds,
+        &CommissioningConfig::default(),
+        &mut NoProgress,
+    )
+    .unwrap_or_else(|e| panic!("sim-c: {e}"));
+    (
+        run.excitation.position_m,
+        run.moves[2]
+            .record
+            .samples
+            .iter()
+            .map(|s| s.torque_actual_nm)
+            .collect(),
+        run.validation.nonlinear.max_tracking_error_m,
+    )
+}
+
+/// Issue 12: the noise is the plant's and `--seed` picks its realization:
+/// the same seed gives the same commissioning, another seed another
+/// record; without noise the seed changes nothing (the record is
+/// noise-free) and the actual torque is the command, delayed.
+#[test]
+fn the_seed_picks_the_noise_realization_issue_12() {
+    let noisy = MeasurementNoise {
+        torque_nm: 5e-3,
+        encoder_counts: 0.3,
+    };
+    let a = commission_sim_c(1, noisy);
+    let b = commission_sim_c(1, noisy);
+    let c = commission_sim_c(2, noisy);
+    assert_eq!(a, b);
+    assert_ne!(a.0, c.0, "another seed, the same excitation record");
+    let z1 = commission_sim_c(1, MeasurementNoise::NONE);
+    let z2 = commission_sim_c(2, MeasurementNoise::NONE);
+    assert_eq!(z1, z2, "noise-free records depend on the seed");
+    assert_ne!(z1.0, a.0);
+}
+
+/// The plant file's `[noise]` reaches the simulator; a configured noise
+/// replaces it; zero noise measures the delayed command exactly.
+#[test]
+fn the_plant_file_carries_the_noise_issue_12() {
+    let text = toml::to_string(&rigs::builtin("sim-a", None).unwrap()).unwrap();
+    assert!(text.contains("[noise]"), "{text}");
+    let with = text.replace("encoder_counts = 0.0", "encoder_counts = 0.25");
+    let plant: rigs::Plant = toml::from_str(&with).unwrap();
+    assert_eq!(plant.noise().encoder_counts, 0.25);
+    let axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
+    assert_eq!(axis.noise(), plant.noise());
+    let mut quiet = SimAxis::new(
+        &plant,
+        SimConfig {
+            noise: Some(MeasurementNoise::NONE),
+            ..SimConfig::default()
+        },
+    )
+    .unwrap();
+    for _ in 0..100 {
+        let m = quiet.step(0.5);
+        assert_eq!(m.torque_actual_nm, quiet.applied_torque_nm());
+    }
+    let bad = text.replace("encoder_counts = 0.0", "encoder_counts = -1.0");
+    let plant: rigs::Plant = toml::from_str(&bad).unwrap();
+    assert!(plant.validate().is_err());
+    assert!(SimAxis::new(&plant, SimConfig::default()).is_err());
+}
