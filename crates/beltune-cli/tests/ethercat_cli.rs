@@ -23,9 +23,14 @@ const FREQUENCY_TOLERANCE: f64 = 0.02;
 /// Thesis chapter 5: static positioning error.
 const STATIC_ERROR_M: f64 = 100e-6;
 /// The dynamic error over the wire against the direct simulation at the same
-/// 1 ms cycle (which itself misses the thesis' 1 mm at 1 kHz): one cycle of
-/// bus transport delay, as in-process.
+/// 1 ms cycle: one cycle of bus transport delay, as in-process ...
 const WIRE_ERROR_FACTOR: f64 = 1.25;
+/// ... plus this much, m: since the record is aligned (issue 14) both errors
+/// are near 0.15 mm, where the start at rest within the static error band
+/// alone moves them by a few tens of um.
+const WIRE_ERROR_ABS_M: f64 = 50e-6;
+/// Thesis chapter 5: the dynamic cart error limit, m.
+const MAX_TRACKING_ERROR_M: f64 = 1e-3;
 const START_M: f64 = 0.05;
 
 /// `beltune virtual-drive` as a child process inside the namespace, its
@@ -236,7 +241,7 @@ fn issue_14_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_ch
         static_err * 1e6
     );
     assert!(
-        max_err < WIRE_ERROR_FACTOR * d,
+        max_err < MAX_TRACKING_ERROR_M && max_err < WIRE_ERROR_FACTOR * d + WIRE_ERROR_ABS_M,
         "max cart error {:.3} mm, direct {:.3} mm",
         max_err * 1e3,
         d * 1e3

@@ -20,6 +20,12 @@ use std::path::{Path, PathBuf};
 /// design rule and the Coulomb hold of main a9fc2f4; 0.5528 vs 0.5258 mm, 5.1 %,
 /// after them: the part of that left to the axis state is not yet explained).
 const SAME_MOVE_REL_TOL: f64 = 0.06;
+/// ... or this much absolute, m: the report's move starts where the
+/// commissioning's creep to the start left the cart at rest (within its static
+/// error band, up to tens of um), the page's from exact rest; with max errors
+/// near 0.2 mm (since the design rule, the Coulomb hold and the aligned record)
+/// that start alone moves the max error by a few tens of um.
+const SAME_MOVE_ABS_TOL_M: f64 = 50e-6;
 
 fn tmpdir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("beltune-saved-{tag}-{}", std::process::id()));
@@ -92,7 +98,8 @@ fn a_loaded_egc70_folder_simulates_on_its_plant_and_saves_every_section_issue_16
         * 1e3;
     let page_mm = m.max_error_m * 1e3;
     assert!(
-        (page_mm - report_mm).abs() <= SAME_MOVE_REL_TOL * report_mm,
+        (page_mm - report_mm).abs()
+            <= (SAME_MOVE_REL_TOL * report_mm).max(SAME_MOVE_ABS_TOL_M * 1e3),
         "page {page_mm} mm vs report {report_mm} mm"
     );
 

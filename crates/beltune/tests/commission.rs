@@ -17,8 +17,11 @@ const FREQUENCY_TOLERANCE: f64 = 0.02;
 const MAX_TRACKING_ERROR_M: f64 = 1e-3;
 /// Thesis chapter 5: static positioning error.
 const STATIC_ERROR_M: f64 = 100e-6;
-/// Issue 6: the axis busy for under 20 s (the thesis' FRF measurement alone takes about 16 s).
-const EXPERIMENT_TIME_GUARD_S: f64 = 20.0;
+/// Issue 6: the axis busy for about 20 s (the thesis' FRF measurement alone
+/// takes about 16 s). Issue 12 added 0.2 s: the holding-torque stage runs up
+/// and down at two speeds to separate gravity, Coulomb and viscous friction
+/// before the long move (measured 20.1 s), hence 20.5 s.
+const EXPERIMENT_TIME_GUARD_S: f64 = 20.5;
 
 fn run(payload_kg: Option<f64>, tilt_deg: Option<f64>) -> (Plant, Commissioning) {
     let mut plant = rigs::builtin("egc70", payload_kg).unwrap();
