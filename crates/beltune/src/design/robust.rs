@@ -181,10 +181,6 @@ pub fn robust_design(
     let designed = designs.len();
     // Best first; the box is checked lazily until one candidate meets it.
     designs.sort_by(|a, b| integral_stiffness(b).total_cmp(&integral_stiffness(a)));
-    let ok = |g: &GuaranteedMargins| {
-        g.velocity_phase_margin_deg >= GUARANTEED_PHASE_MARGIN_DEG
-            && g.position_phase_margin_deg >= GUARANTEED_POSITION_PHASE_MARGIN_DEG
-    };
     let worst = |g: &GuaranteedMargins| {
         (g.velocity_phase_margin_deg - GUARANTEED_PHASE_MARGIN_DEG)
             .min(g.position_phase_margin_deg - GUARANTEED_POSITION_PHASE_MARGIN_DEG)
@@ -201,7 +197,7 @@ pub fn robust_design(
                 continue;
             }
         };
-        if ok(&g) {
+        if g.meets_guarantee() {
             return Ok(RobustDesign {
                 design: d,
                 guaranteed: g,
@@ -273,8 +269,7 @@ pub fn design_identified(
     };
     let guaranteed = guaranteed_margins(&d, &model, m_c_sigma_kg, c_sigma_n_per_m)?;
     Ok(RobustDesign {
-        meets_guarantee: guaranteed.velocity_phase_margin_deg >= GUARANTEED_PHASE_MARGIN_DEG
-            && guaranteed.position_phase_margin_deg >= GUARANTEED_POSITION_PHASE_MARGIN_DEG,
+        meets_guarantee: guaranteed.meets_guarantee(),
         design: d,
         guaranteed,
         candidates_designed: 1,
@@ -401,6 +396,15 @@ pub fn margins_on(design: &ControllerDesign, model: &TwoMassParams) -> Result<Ma
         position_phase_margin_deg: sign * pm_p,
         stable,
     })
+}
+
+impl GuaranteedMargins {
+    /// Whether these margins reach [`GUARANTEED_PHASE_MARGIN_DEG`] (velocity)
+    /// and [`GUARANTEED_POSITION_PHASE_MARGIN_DEG`] (position); false for NaN.
+    pub fn meets_guarantee(&self) -> bool {
+        self.velocity_phase_margin_deg >= GUARANTEED_PHASE_MARGIN_DEG
+            && self.position_phase_margin_deg >= GUARANTEED_POSITION_PHASE_MARGIN_DEG
+    }
 }
 
 /// The guaranteed margins of `design` over the box around `model` with

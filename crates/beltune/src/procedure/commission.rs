@@ -468,7 +468,6 @@ pub fn commission(
         cfg,
     )?;
     let feedback = designed.feedback;
-    let des_first = designed.design.clone();
 
     // ---- 7. friction ----
     let n_t = (ident.dead_time.seconds / ts).round() as usize;
@@ -503,8 +502,8 @@ pub fn commission(
         )
     })?;
     let guaranteed = robust.guaranteed;
-    let tried = if cfg.design_rule == DesignRule::Robust {
-        format!(
+    let tried = match cfg.design_rule {
+        DesignRule::Robust => format!(
             "{} candidate designs, {} checked over the uncertainty{}",
             robust.candidates_designed,
             robust.candidates_checked,
@@ -513,20 +512,13 @@ pub fn commission(
             } else {
                 "; none meets the guarantee, the most robust kept"
             }
-        )
-    } else if cfg.design_rule == DesignRule::Knobs {
-        "the configured knobs on the design model".into()
-    } else {
-        "the thesis design on the fit as identified".into()
+        ),
+        DesignRule::Knobs => "the configured knobs on the design model".into(),
+        DesignRule::Thesis => "the thesis design on the fit as identified".into(),
     };
     let designed = robust.design;
-    let feedback = if designed == des_first {
-        feedback
-    } else {
-        let f = cascade_from_design(&designed, torque_max, holding)?;
-        st.runner.set_stop_controller(f);
-        f
-    };
+    let feedback = cascade_from_design(&designed, torque_max, holding)?;
+    st.runner.set_stop_controller(feedback);
     st.start("robust design", 0);
     let robust_line = format!(
         "{} prefilter ({:.1} dB), K_P {:.4} N m s/rad, K_I {:.3} N m/rad, K_PP {:.2} 1/s, velocity loop {:.1} Hz / {:.1} deg nominal; guaranteed over the uncertainty: velocity {:.1} deg, position {:.1} deg",

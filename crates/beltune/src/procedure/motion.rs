@@ -79,13 +79,13 @@ pub fn track(
         ..Default::default()
     };
     rec.time_s.reserve(n);
+    let mut desired = traj.sample(0.0);
     for k in 0..n {
         let t = k as f64 * ts;
         let now = motor_sample(&conv, origin, traj, t);
         let ahead = motor_sample(&conv, origin, traj, t + opts.preview_samples as f64 * ts);
         let sp = Setpoint::with_preview(now, ahead);
         let out = ctrl.step(&sp, runner.motor_angle_rad());
-        let desired = traj.sample(t);
         let following = opts
             .check_following_error
             .then(|| desired.position - runner.position_m());
@@ -96,10 +96,10 @@ pub fn track(
         // the desired position at k T added up to v T to the tracking error
         // (1.36 mm at 1 ms for the Table A.8 move; issue 14).
         let t_end = (k + 1) as f64 * ts;
-        let desired_end = traj.sample(t_end);
+        desired = traj.sample(t_end);
         rec.time_s.push(t_end);
-        rec.desired_m.push(desired_end.position);
-        rec.desired_velocity_m_s.push(desired_end.velocity);
+        rec.desired_m.push(desired.position);
+        rec.desired_velocity_m_s.push(desired.velocity);
         rec.samples.push(sample);
     }
     Ok(rec)
