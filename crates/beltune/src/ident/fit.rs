@@ -144,6 +144,20 @@ pub struct TwoMassFit {
     pub model: FitModel,
 }
 
+impl TwoMassFit {
+    /// One-sigma uncertainty of the fitted `m_c` (kg, or the record's
+    /// units); NaN when the uncertainties could not be computed.
+    pub fn m_c_sigma(&self) -> f64 {
+        self.uncertainty.map(|u| u.m_c).unwrap_or(f64::NAN)
+    }
+
+    /// One-sigma uncertainty of the fitted `c`, N/m; NaN when the
+    /// uncertainties could not be computed.
+    pub fn c_sigma(&self) -> f64 {
+        self.uncertainty.map(|u| u.c).unwrap_or(f64::NAN)
+    }
+}
+
 /// Fit (2.42) to the usable lines of `frf` (torque or current -> motor angle).
 ///
 /// Errors: invalid settings, too few usable lines for the number of

@@ -74,15 +74,11 @@ pub fn commission_recorded(
             coulomb_nm: f.coulomb_nm,
         }),
     };
-    let (m_c_sigma, c_sigma) = fit
-        .uncertainty
-        .map(|u| (u.m_c, u.c))
-        .unwrap_or((f64::NAN, f64::NAN));
     let des = design_identified(
         &input,
         friction.as_ref().map(|f| f.viscous_nm_s_per_rad),
-        m_c_sigma,
-        c_sigma,
+        fit.m_c_sigma(),
+        fit.c_sigma(),
         knobs,
         rule,
     )?

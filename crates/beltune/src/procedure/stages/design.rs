@@ -71,10 +71,6 @@ pub fn design_rule(
     fit: &TwoMassFit,
     viscous_nm_s_per_rad: Option<f64>,
 ) -> Result<RobustDesign> {
-    let (m_c_sigma, c_sigma) = fit
-        .uncertainty
-        .map(|u| (u.m_c, u.c))
-        .unwrap_or((f64::NAN, f64::NAN));
     let rule = cfg.design_rule;
     let input = DesignInput {
         model: fit.params,
@@ -83,8 +79,8 @@ pub fn design_rule(
     design_identified(
         &input,
         viscous_nm_s_per_rad,
-        m_c_sigma,
-        c_sigma,
+        fit.m_c_sigma(),
+        fit.c_sigma(),
         &cfg.knobs,
         rule,
     )
