@@ -545,15 +545,35 @@ pub fn commission(
         }),
         ..designed.input
     };
+    // The feedforward's inertia: the rigid body the friction runs
+    // accelerated (issue 12: the FRF fit's m_c came out up to 38 % heavy on
+    // heavy payloads on soft belts, and the inertia feedforward's error was
+    // the largest part of the validation move's cart error), else the fit's.
+    let feedforward_inertia = fr
+        .rigid_inertia
+        .map(|m| m.inertia_kg_m2)
+        .unwrap_or_else(|| p.rigid_inertia());
     let des = ControllerDesign {
-        feedforward: crate::design::Feedforward::design(&p, input.friction.as_ref())?,
+        feedforward: crate::design::Feedforward {
+            inertia_kg_m2: feedforward_inertia,
+            ..crate::design::Feedforward::design(&p, input.friction.as_ref())?
+        },
         input,
         ..designed
     };
 
     // ---- 8. validation ----
     let val = stages::validation_moves::validation_moves(
-        &mut st, &feedback, &boot_hold, &ident.fit, &fr.result, n_t, holding, datasheet, cfg,
+        &mut st,
+        &feedback,
+        &boot_hold,
+        &ident.fit,
+        feedforward_inertia,
+        &fr.result,
+        n_t,
+        holding,
+        datasheet,
+        cfg,
     )?;
     let verdict = super::acceptance::judge(
         &val.validation.nonlinear,

@@ -7,6 +7,10 @@ use super::super::commission::{positioning_limits, CommissioningConfig, DataShee
 use super::super::motion::{move_to, track, TrackOptions, TrackRecord};
 use super::super::result::FrictionResult;
 use super::super::runner::Runner;
+use super::momentum::{
+    momentum_phase, plateau_middle, rigid_inertia_from_phases, MomentumPhase, RigidInertia,
+    VelocityWindow,
+};
 use super::Stages;
 use crate::ident::friction::{
     fit_constant_velocity, fit_viscous_only, ConstantVelocityRun, FrictionFit,
@@ -30,6 +34,10 @@ pub struct FrictionStage {
     pub fit: FrictionFit,
     /// The summary used by the feedforward.
     pub result: FrictionResult,
+    /// Rigid-body inertia `m_e` from the momentum balances between
+    /// consecutive runs ([`super::momentum`]); `None` when the runs do not
+    /// determine it.
+    pub rigid_inertia: Option<RigidInertia>,
 }
 
 /// Stage 7: runs at the configured speeds with `ctrl` (the feedback cascade
@@ -45,7 +53,8 @@ pub fn friction_stage(
     holding_nm: f64,
 ) -> Result<FrictionStage> {
     st.start("friction runs", 0);
-    let points = friction_runs(st.runner, ctrl, ds, cfg, preview, f_ring_hz)?;
+    let runs = friction_runs(st.runner, ctrl, ds, cfg, preview, f_ring_hz)?;
+    let points: Vec<ConstantVelocityRun> = runs.iter().map(|r| r.point).collect();
     let (fit, linear_fit) = st.compute(|| -> Result<_> {
         let mut fit = fit_constant_velocity(&points)?;
         let linear_fit = fit_viscous_only(&points)?;
@@ -69,20 +78,69 @@ pub fn friction_stage(
         relative_residual: fit.rms_residual_nm / torque_rms.max(f64::MIN_POSITIVE),
         holding_torque_nm: holding_nm,
     };
+    let phases: Vec<MomentumPhase> = phases_between_runs(&runs, preview)
+        .iter()
+        .map(|ph| {
+            ph.friction_compensated(holding_nm, result.viscous_nm_s_per_rad, result.coulomb_nm)
+        })
+        .collect();
+    let rigid_inertia = rigid_inertia_from_phases(&phases);
     let line = format!(
-        "d_v {:.3e} N m s/rad, tau_c {:.4} N m (viscous-only fit {:.3e}), {} runs, residual {:.3}",
+        "d_v {:.3e} N m s/rad, tau_c {:.4} N m (viscous-only fit {:.3e}), {} runs, residual {:.3}; {}",
         result.viscous_nm_s_per_rad,
         result.coulomb_nm,
         result.linear_viscous_nm_s_per_rad,
         points.len(),
-        result.relative_residual
+        result.relative_residual,
+        match rigid_inertia {
+            Some(m) => format!(
+                "rigid inertia from the runs' momentum balance {:.4e} kg m^2 (+-{:.1} %, FRF fit {:.4e})",
+                m.inertia_kg_m2,
+                100.0 * m.sigma_kg_m2 / m.inertia_kg_m2,
+                ctrl.feedforward.params.inertia_kg_m2
+            ),
+            None => "the runs do not determine the rigid inertia (FRF fit kept)".into(),
+        }
     );
     st.finish("friction", line);
     Ok(FrictionStage {
         points,
         fit,
         result,
+        rigid_inertia,
     })
+}
+
+/// A friction run: its constant-velocity point and the middle of its
+/// plateau (for the momentum balance between consecutive runs).
+struct FrictionRun {
+    point: ConstantVelocityRun,
+    record: TrackRecord,
+    middle: Option<VelocityWindow>,
+}
+
+/// The phases between the plateaus of consecutive friction runs `runs`
+/// (recorded back to back), `preview` samples of dead time.
+fn phases_between_runs(runs: &[FrictionRun], preview: usize) -> Vec<MomentumPhase> {
+    runs.windows(2)
+        .filter_map(|pair| {
+            let (r1, r2) = (&pair[0], &pair[1]);
+            let (a, b) = (r1.middle?, r2.middle?);
+            let ts = r1.record.time_s.get(1).copied()? - r1.record.time_s[0];
+            let n1 = r1.record.samples.len();
+            let mut samples = r1.record.samples[a.start..].to_vec();
+            samples.extend_from_slice(&r2.record.samples);
+            let a0 = VelocityWindow {
+                start: 0,
+                len: a.len,
+            };
+            let b0 = VelocityWindow {
+                start: n1 - a.start + b.start,
+                len: b.len,
+            };
+            momentum_phase(&samples, ts, a0, b0, preview)
+        })
+        .collect()
 }
 
 fn friction_runs(
@@ -92,7 +150,7 @@ fn friction_runs(
     cfg: &CommissioningConfig,
     preview: usize,
     f_ring_hz: f64,
-) -> Result<Vec<ConstantVelocityRun>> {
+) -> Result<Vec<FrictionRun>> {
     let center = 0.5 * (ds.travel_min_m + ds.travel_max_m);
     let half = 0.5 * cfg.friction_run_m;
     let a_run = RUN_ACCELERATION_M_S2;
@@ -129,9 +187,13 @@ fn friction_runs(
                 Some(ctrl.feedforward.params.inertia_kg_m2),
             ) {
                 // The torque offset (holding torque) is gravity, not friction (3.35).
-                points.push(ConstantVelocityRun {
-                    mean_torque_nm: p.mean_torque_nm - ctrl.torque_offset_nm,
-                    ..p
+                points.push(FrictionRun {
+                    point: ConstantVelocityRun {
+                        mean_torque_nm: p.mean_torque_nm - ctrl.torque_offset_nm,
+                        ..p
+                    },
+                    middle: plateau_middle(&rec, v, f_ring_hz),
+                    record: rec,
                 });
             }
         }

@@ -12,7 +12,7 @@
 //! | 4. excitation amplitude | [`amplitude`] |
 //! | 5. open-loop identification | [`identification`] |
 //! | 6. controller design | [`design`] |
-//! | 7. friction runs | [`friction`] |
+//! | 7. friction runs, the rigid inertia from their momentum balance | [`friction`], [`momentum`] |
 //! | 8. validation moves | [`validation_moves`] |
 
 pub mod amplitude;
@@ -20,6 +20,7 @@ pub mod design;
 pub mod friction;
 pub mod holding_torque;
 pub mod identification;
+pub mod momentum;
 pub mod plausibility;
 pub mod take_axis;
 pub mod validation_moves;

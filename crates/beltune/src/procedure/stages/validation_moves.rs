@@ -161,7 +161,9 @@ fn sampled(t: &Trajectory) -> impl Iterator<Item = beltune_rt::trajectory::Sampl
 }
 
 /// Stage 8: the three validation moves with `feedback` plus each feedforward
-/// variant built from the fit and the friction of stage 7. The unmeasured
+/// variant built from the fit (belt stretch), the rigid inertia
+/// `feedforward_inertia_kg_m2` (the friction runs' or the fit's, which also
+/// sizes the move's acceleration) and the friction of stage 7. The unmeasured
 /// return to the start runs under `positioning` (the bootstrap controller
 /// with the holding torque, the one of the positioning moves of stages 2-5).
 #[allow(clippy::too_many_arguments)]
@@ -170,6 +172,7 @@ pub fn validation_moves(
     feedback: &CascadeConfig<f64>,
     positioning: &CascadeConfig<f64>,
     fit: &TwoMassFit,
+    feedforward_inertia_kg_m2: f64,
     friction: &FrictionResult,
     preview: usize,
     holding_nm: f64,
@@ -178,7 +181,7 @@ pub fn validation_moves(
 ) -> Result<ValidationMoves> {
     let ts = st.runner.info().ts_s;
     let p = fit.params;
-    let m_e = p.rigid_inertia();
+    let m_e = feedforward_inertia_kg_m2;
     let opts = validation_track_options(&p, preview, holding_nm);
     let move_samples =
         ((cfg.validation.settle_s + 1.5) / ts) as u64 * FeedforwardVariant::ALL.len() as u64;
