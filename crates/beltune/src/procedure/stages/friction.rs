@@ -78,13 +78,16 @@ pub fn friction_stage(
         relative_residual: fit.rms_residual_nm / torque_rms.max(f64::MIN_POSITIVE),
         holding_torque_nm: holding_nm,
     };
-    let phases: Vec<MomentumPhase> = phases_between_runs(&runs, preview)
-        .iter()
-        .map(|ph| {
-            ph.friction_compensated(holding_nm, result.viscous_nm_s_per_rad, result.coulomb_nm)
-        })
-        .collect();
-    let rigid_inertia = rigid_inertia_from_phases(&phases);
+    // Inside `compute`: a real-time axis is held every cycle meanwhile.
+    let rigid_inertia = st.compute(|| {
+        let phases: Vec<MomentumPhase> = phases_between_runs(&runs, preview)
+            .iter()
+            .map(|ph| {
+                ph.friction_compensated(holding_nm, result.viscous_nm_s_per_rad, result.coulomb_nm)
+            })
+            .collect();
+        Ok(rigid_inertia_from_phases(&phases))
+    })?;
     let line = format!(
         "d_v {:.3e} N m s/rad, tau_c {:.4} N m (viscous-only fit {:.3e}), {} runs, residual {:.3}; {}",
         result.viscous_nm_s_per_rad,
