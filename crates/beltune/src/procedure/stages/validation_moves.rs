@@ -48,6 +48,14 @@ pub struct PlannedMove {
     pub reduced: bool,
 }
 
+/// Where the validation move of `spec` ends inside the travel window of
+/// `ds`, m: its target, at most [`TARGET_CLEARANCE_M`] below the window's
+/// upper edge. Known before any experiment, so that the belt stiffness can be
+/// measured there ([`super::identification::stiffness_at`]).
+pub fn validation_target_m(spec: &super::super::validation::MoveSpec, ds: &DataSheet) -> f64 {
+    spec.target_m.min(ds.travel_max_m - TARGET_CLEARANCE_M)
+}
+
 /// The validation move for an axis with rigid inertia `inertia_kg_m2`,
 /// transmission `i_t_m`, friction `friction` (at the motor), holding torque
 /// `holding_nm`, torque limit `torque_max_nm` and worst stop deceleration
@@ -64,7 +72,7 @@ pub fn plan_validation_move(
     stop_deceleration_m_s2: f64,
 ) -> Result<PlannedMove> {
     let start = spec.start_m.max(ds.travel_min_m + START_CLEARANCE_M);
-    let target = spec.target_m.min(ds.travel_max_m - TARGET_CLEARANCE_M);
+    let target = validation_target_m(spec, ds);
     if (target - start).partial_cmp(&0.05) != Some(std::cmp::Ordering::Greater) {
         return Err(Error::Infeasible {
             reason: format!(
@@ -161,7 +169,9 @@ fn sampled(t: &Trajectory) -> impl Iterator<Item = beltune_rt::trajectory::Sampl
 }
 
 /// Stage 8: the three validation moves with `feedback` plus each feedforward
-/// variant built from the fit and the friction of stage 7. The unmeasured
+/// variant built from the fit and the friction of stage 7, the static belt
+/// stretch with the stiffness `static_c_n_per_m` measured at the target
+/// (stage 5b). The unmeasured
 /// return to the start runs under `positioning` (the bootstrap controller
 /// with the holding torque, the one of the positioning moves of stages 2-5).
 #[allow(clippy::too_many_arguments)]
@@ -173,13 +183,14 @@ pub fn validation_moves(
     friction: &FrictionResult,
     preview: usize,
     holding_nm: f64,
+    static_c_n_per_m: f64,
     datasheet: &DataSheet,
     cfg: &CommissioningConfig,
 ) -> Result<ValidationMoves> {
     let ts = st.runner.info().ts_s;
     let p = fit.params;
     let m_e = p.rigid_inertia();
-    let opts = validation_track_options(&p, preview, holding_nm);
+    let opts = validation_track_options(&p, preview, holding_nm, static_c_n_per_m);
     let move_samples =
         ((cfg.validation.settle_s + 1.5) / ts) as u64 * FeedforwardVariant::ALL.len() as u64;
     st.start("validation moves", move_samples);
