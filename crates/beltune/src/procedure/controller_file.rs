@@ -149,12 +149,12 @@ pub struct SetpointSection {
     pub belt_stretch: bool,
     /// Moving mass `m_c`, kg.
     pub m_c_kg: f64,
-    /// Belt stiffness `c`, N/m.
+    /// Belt stiffness `c`, N/m: the one measured where the validation move
+    /// ended (commissioning stage 5b, `target_stiffness` in
+    /// `commissioning.json`), else the model's.
     pub c_n_per_m: f64,
-    /// Static belt stretch under the holding torque `tau_hold / (i_t c)`, m: the
-    /// motor setpoint leads the cart by this much. `c` is the stiffness
-    /// measured where the validation move ended (commissioning stage 5b,
-    /// `target_stiffness` in `commissioning.json`), else `c_n_per_m`.
+    /// Static belt stretch under the holding torque `tau_hold / (i_t c)`
+    /// with [`Self::c_n_per_m`], m: the motor setpoint leads the cart by this much.
     pub static_stretch_m: f64,
 }
 
@@ -162,8 +162,8 @@ impl ControllerFile {
     /// The controller commissioning validated: the design's gains and filters,
     /// conditional integration, nonlinear feedforward (4.16) with dead-time
     /// preview, filtered desired velocity, belt-stretch compensation, and the
-    /// static belt stretch under the holding torque with the stiffness at the
-    /// validation target (`target_stiffness`; `None`: the model's `c`).
+    /// static belt stretch under the holding torque, both with the stiffness
+    /// at the validation target (`target_stiffness`; `None`: the model's `c`).
     pub fn from_design(
         des: &ControllerDesign,
         friction: &FrictionResult,
@@ -185,6 +185,8 @@ impl ControllerFile {
         let sos = |s: &SosCoeffs<f64>| [s.b0, s.b1, s.b2, s.a1, s.a2];
         let v = cfg.velocity_filter;
         let model = des.input.model;
+        // the stiffness where the validated move decelerated and rests
+        let c_setpoint = target_stiffness.map_or(model.c, |t| t.c_n_per_m);
         let file = ControllerFile {
             schema_version: SCHEMA_VERSION,
             units,
@@ -228,9 +230,8 @@ impl ControllerFile {
                 i_t_m_per_rad: model.i_t,
                 belt_stretch: true,
                 m_c_kg: model.m_c,
-                c_n_per_m: model.c,
-                static_stretch_m: friction.holding_torque_nm
-                    / (model.i_t * target_stiffness.map_or(model.c, |t| t.c_n_per_m)),
+                c_n_per_m: c_setpoint,
+                static_stretch_m: friction.holding_torque_nm / (model.i_t * c_setpoint),
             },
             drive_form: DriveForm::of(des),
         };
@@ -522,8 +523,10 @@ mod tests {
         };
         let at_target = file(Some(&target)).setpoint;
         assert!((at_target.static_stretch_m - 0.31 / (0.0124141 * 250e3)).abs() < tol);
-        // the dynamic stretch compensation m_c a / c keeps the model's stiffness
-        assert_eq!(at_target.c_n_per_m, model.c_n_per_m);
+        // the dynamic stretch compensation m_c a / c uses it too, as the
+        // validation move did
+        assert_eq!(model.c_n_per_m, 203.74e3);
+        assert_eq!(at_target.c_n_per_m, 250e3);
     }
 
     #[test]
