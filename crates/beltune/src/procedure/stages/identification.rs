@@ -155,7 +155,7 @@ pub fn identification(
     let ts = st.runner.info().ts_s;
     let periods = ex.periods + ex.skip_periods;
     let period = Prbs::new(ex.prbs_order, ex.clock_samples(ts), amplitude_nm)?.period_samples();
-    st.start("identification (open loop)", period as u64 * periods as u64);
+    st.start("identification (open loop)", period * periods as u64);
     let e = excite(
         st,
         hold,
@@ -257,7 +257,7 @@ pub fn stiffness_at(
     let period = Prbs::new(TARGET_PRBS_ORDER, ex.clock_samples(ts), amplitude_nm)?.period_samples();
     st.start(
         "belt stiffness at the target (open loop)",
-        period as u64 * periods as u64,
+        period * periods as u64,
     );
     let e = excite(
         st,
