@@ -90,11 +90,6 @@ pub struct IdentifiedModel {
     pub lines_used: usize,
     /// Cart position at which the FRF was measured, m (NaN / `null`: unknown, e.g. recorded data).
     pub position_m: f64,
-    /// RMS motor velocity during the excitation the FRF implies, rad/s
-    /// ([`Frf::output_rate_rms`]; NaN / `null`: unknown): with the Coulomb
-    /// friction it bounds the friction's share of the fitted damping
-    /// ([`crate::design::robust::UncertaintyBox::for_fit`]).
-    pub excitation_velocity_rms_rad_s: f64,
 }
 
 /// What a file may hold: every field optional or with an old spelling.
@@ -132,8 +127,6 @@ struct RawModel {
     lines_used: Option<usize>,
     #[serde(default)]
     position_m: Option<f64>,
-    #[serde(default)]
-    excitation_velocity_rms_rad_s: Option<f64>,
 }
 
 impl TryFrom<RawModel> for IdentifiedModel {
@@ -173,7 +166,6 @@ impl TryFrom<RawModel> for IdentifiedModel {
             mean_coherence: r.mean_coherence.unwrap_or(nan),
             lines_used: r.lines_used.unwrap_or(0),
             position_m: r.position_m.unwrap_or(nan),
-            excitation_velocity_rms_rad_s: r.excitation_velocity_rms_rad_s.unwrap_or(nan),
         })
     }
 }
@@ -212,7 +204,6 @@ impl IdentifiedModel {
             mean_coherence,
             lines_used: fit.n_lines,
             position_m,
-            excitation_velocity_rms_rad_s: frf.output_rate_rms(),
         }
     }
 
@@ -349,7 +340,6 @@ const MODEL_KEYS: &[&str] = &[
     "lines_used",
     "n_lines",
     "position_m",
-    "excitation_velocity_rms_rad_s",
 ];
 /// Keys of a `friction` table (and the flat form's friction), with old spellings.
 const FRICTION_KEYS: &[&str] = &[
@@ -559,32 +549,13 @@ impl ModelFile {
         rule: super::robust::DesignRule,
     ) -> Result<super::robust::RobustDesign> {
         let input = self.design_input(ts_s)?;
-        super::robust::design_identified_in(
+        super::robust::design_identified(
             &input,
             input.friction.map(|f| f.viscous_nm_s_per_rad),
-            &self.uncertainty(),
-            knobs,
-            rule,
-        )
-    }
-
-    /// The identification's uncertainty box
-    /// ([`super::robust::UncertaintyBox::for_fit`]): the fit's sigmas and,
-    /// with the friction and the excitation's velocity known, the Coulomb
-    /// friction's share of the fitted damping.
-    pub fn uncertainty(&self) -> super::robust::UncertaintyBox {
-        let coulomb = self
-            .friction
-            .as_ref()
-            .map(|f| super::robust::CoulombExcitation {
-                coulomb_nm: f.coulomb_nm,
-                velocity_rms_rad_s: self.identified.excitation_velocity_rms_rad_s,
-            });
-        super::robust::UncertaintyBox::for_fit(
-            &self.params(),
             self.identified.m_c_sigma,
             self.identified.c_sigma,
-            coulomb.as_ref(),
+            knobs,
+            rule,
         )
     }
 }

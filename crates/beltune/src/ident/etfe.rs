@@ -129,36 +129,6 @@ impl Frf {
         2.0 * PI * self.freq_hz[i]
     }
 
-    /// RMS of the output's per-sample increment divided by `T_s` that the
-    /// response and the averaged input power imply, by Parseval over the
-    /// lines `k >= 1`: `sqrt(sum_k m_k P_k |G_k|^2 (2 sin(w_k T_s / 2) / T_s)^2)`
-    /// (`|1 - z^-1| / T_s` is the backward difference) with `m_k = 2` for
-    /// the lines that stand for a pair of conjugate FFT bins and 1 for the
-    /// Nyquist line. For a torque -> angle FRF this is the RMS motor velocity
-    /// (rad/s) of the linear part of the response to the excitation, without
-    /// its mean (the DC line). Lines that were not excited contribute nothing.
-    pub fn output_rate_rms(&self) -> f64 {
-        let nyquist = 0.5 / self.ts_s;
-        let sum: f64 = (1..self.freq_hz.len())
-            .map(|i| {
-                let pair = if (self.freq_hz[i] - nyquist).abs() <= 1e-9 * nyquist {
-                    1.0
-                } else {
-                    2.0
-                };
-                let diff = 2.0 * (0.5 * self.omega_rad_s(i) * self.ts_s).sin() / self.ts_s;
-                let r = self.response[i].norm() * diff;
-                let p = pair * self.input_power[i] * r * r;
-                if p.is_finite() {
-                    p
-                } else {
-                    0.0
-                }
-            })
-            .sum();
-        sum.sqrt()
-    }
-
     /// The "nearly log-spaced" subset `F_o` of the usable lines (Figure 3.9):
     /// for `n_o` logarithmically spaced target frequencies between the lowest
     /// and highest usable line, the nearest usable line; duplicates removed,
@@ -435,18 +405,6 @@ mod tests {
         }
         assert!(checked > 100, "only {checked} usable lines");
         assert_eq!(frf.line_status[0], LineStatus::Dc);
-        // Parseval: the RMS velocity the FRF implies is the RMS of the
-        // analysed increments / T_s about their mean (issue 12: the Coulomb
-        // share of the fitted resonance damping needs it).
-        let inc = &vel[2 * n..];
-        let mean = inc.iter().sum::<f64>() / inc.len() as f64;
-        let rms =
-            (inc.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / inc.len() as f64).sqrt() / ts;
-        assert!(
-            (frf.output_rate_rms() / rms - 1.0).abs() < TOL_REL,
-            "{} vs {rms}",
-            frf.output_rate_rms()
-        );
     }
 
     #[test]

@@ -110,7 +110,6 @@ mod tests {
             velocity_gain_margin_db: 8.0,
             position_phase_margin_deg: 70.0,
             models: 18,
-            friction_bound_velocity_phase_margin_deg: None,
         }
     }
 

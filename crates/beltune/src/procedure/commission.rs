@@ -499,10 +499,6 @@ pub fn commission(
             cfg,
             &ident.fit,
             Some(fr.result.viscous_nm_s_per_rad),
-            Some(&crate::design::robust::CoulombExcitation {
-                coulomb_nm: fr.result.coulomb_nm,
-                velocity_rms_rad_s: ident.identified.excitation_velocity_rms_rad_s,
-            }),
         )
     })?;
     let guaranteed = robust.guaranteed;

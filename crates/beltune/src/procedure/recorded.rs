@@ -5,7 +5,7 @@
 //! amplitude search, friction runs, validation moves) are skipped and say so.
 
 use super::result::{FrictionResult, IdentifiedModel};
-use crate::design::robust::{design_identified_in, CoulombExcitation, DesignRule, UncertaintyBox};
+use crate::design::robust::{design_identified, DesignRule};
 use crate::design::{ControllerDesign, DesignInput, DesignKnobs, FrictionParams};
 use crate::ident::{MotionFriction, RecordedIdentification};
 use crate::Result;
@@ -74,16 +74,11 @@ pub fn commission_recorded(
             coulomb_nm: f.coulomb_nm,
         }),
     };
-    // the same box as `beltune design` on the record written below
-    let coulomb = friction.as_ref().map(|f| CoulombExcitation {
-        coulomb_nm: f.coulomb_nm,
-        velocity_rms_rad_s: identification.frf.output_rate_rms(),
-    });
-    let uncertainty = UncertaintyBox::for_fit(&p, fit.m_c_sigma(), fit.c_sigma(), coulomb.as_ref());
-    let des = design_identified_in(
+    let des = design_identified(
         &input,
         friction.as_ref().map(|f| f.viscous_nm_s_per_rad),
-        &uncertainty,
+        fit.m_c_sigma(),
+        fit.c_sigma(),
         knobs,
         rule,
     )?

@@ -4,9 +4,7 @@
 
 use super::super::commission::{cascade_from_design, CommissioningConfig};
 use super::Stages;
-use crate::design::robust::{
-    design_identified_in, CoulombExcitation, RobustDesign, UncertaintyBox,
-};
+use crate::design::robust::{design_identified, RobustDesign};
 use crate::design::{ControllerDesign, DesignInput};
 use crate::ident::fit::TwoMassFit;
 use crate::Result;
@@ -42,9 +40,7 @@ pub fn design_stage(
         ts_s: ts,
         friction: None,
     };
-    let des = st
-        .compute(|| design_rule(&input, cfg, fit, None, None))?
-        .design;
+    let des = st.compute(|| design_rule(&input, cfg, fit, None))?.design;
     let feedback = cascade_from_design(&des, torque_max_nm, holding_nm)?;
     st.runner.set_stop_controller(feedback);
     let line = format!(
@@ -67,22 +63,25 @@ pub fn design_stage(
 
 /// The configured design rule on `fit` with the measured viscous friction
 /// `viscous_nm_s_per_rad` (N m s/rad at the motor; `None` before the friction
-/// runs) and the Coulomb friction the excitation met (`None` before the
-/// friction runs: the damping box of [`UncertaintyBox::new`]):
-/// [`crate::design::robust::design_identified_in`] with
-/// [`CommissioningConfig::design_rule`] over [`UncertaintyBox::for_fit`].
+/// runs): [`crate::design::robust::design_identified`] with
+/// [`CommissioningConfig::design_rule`].
 pub fn design_rule(
     input: &DesignInput,
     cfg: &CommissioningConfig,
     fit: &TwoMassFit,
     viscous_nm_s_per_rad: Option<f64>,
-    coulomb: Option<&CoulombExcitation>,
 ) -> Result<RobustDesign> {
     let rule = cfg.design_rule;
     let input = DesignInput {
         model: fit.params,
         ..*input
     };
-    let uncertainty = UncertaintyBox::for_fit(&fit.params, fit.m_c_sigma(), fit.c_sigma(), coulomb);
-    design_identified_in(&input, viscous_nm_s_per_rad, &uncertainty, &cfg.knobs, rule)
+    design_identified(
+        &input,
+        viscous_nm_s_per_rad,
+        fit.m_c_sigma(),
+        fit.c_sigma(),
+        &cfg.knobs,
+        rule,
+    )
 }
