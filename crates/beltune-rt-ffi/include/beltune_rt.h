@@ -141,6 +141,10 @@ typedef struct {
    */
   double coulomb_deadband_rad_s;
   /**
+   * Breakaway threshold of the Coulomb hold, rad (0: off).
+   */
+  double coulomb_breakaway_rad;
+  /**
    * Constant torque offset (holding torque), N m.
    */
   double torque_offset_nm;

@@ -103,6 +103,8 @@ pub struct BtCascadeConfig {
     pub coulomb_nm: f64,
     /// Dead band of `sign(omega_d)`, rad/s.
     pub coulomb_deadband_rad_s: f64,
+    /// Breakaway threshold of the Coulomb hold, rad (0: off).
+    pub coulomb_breakaway_rad: f64,
     /// Constant torque offset (holding torque), N m.
     pub torque_offset_nm: f64,
     /// Refinement (a): desired velocity through the low-pass part of `G_R`.
@@ -147,6 +149,7 @@ impl BtCascadeConfig {
                     viscous_nm_s_per_rad: self.viscous_nm_s_per_rad,
                     coulomb_nm: self.coulomb_nm,
                     coulomb_deadband_rad_s: self.coulomb_deadband_rad_s,
+                    coulomb_breakaway_rad: self.coulomb_breakaway_rad,
                 },
                 terms: FeedforwardTerms {
                     inertia: self.ff_inertia,
@@ -189,6 +192,7 @@ impl BtCascadeConfig {
             viscous_nm_s_per_rad: p.viscous_nm_s_per_rad,
             coulomb_nm: p.coulomb_nm,
             coulomb_deadband_rad_s: p.coulomb_deadband_rad_s,
+            coulomb_breakaway_rad: p.coulomb_breakaway_rad,
             torque_offset_nm: c.torque_offset_nm,
             filter_desired_velocity: c.filter_desired_velocity,
             feedforward_preview: c.feedforward_preview,

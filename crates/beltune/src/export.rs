@@ -75,6 +75,10 @@ pub fn values(file: &ControllerFile) -> Vec<(String, Value)> {
             Real(f.coulomb_deadband_rad_s),
         ),
         (
+            "ff_coulomb_breakaway_rad".into(),
+            Real(f.coulomb_breakaway_rad),
+        ),
+        (
             "filter_desired_velocity".into(),
             Flag(f.filter_desired_velocity),
         ),
@@ -233,7 +237,7 @@ pub fn rust_module(file: &ControllerFile) -> String {
     };
     let _ = write!(
         s,
-        "\n/// The commissioned controller.\npub const CASCADE: CascadeConfig<f64> = CascadeConfig {{\n    ts_s: TS_S,\n    gains: CascadeGains {{\n        k_pp_per_s: K_PP_PER_S,\n        k_p_nm_s_per_rad: {kp},\n        k_i_nm_per_rad: {ki},\n        k_v: K_V,\n    }},\n    velocity_filter: FirstOrderCoeffs {{\n        b0: VELOCITY_FILTER_B0,\n        b1: VELOCITY_FILTER_B1,\n        a1: VELOCITY_FILTER_A1,\n    }},\n    prefilter: [\n        {s1},\n        {s2},\n    ],\n    torque_max_nm: {tmax},\n    anti_windup: {aw},\n    feedforward: Feedforward {{\n        params: FeedforwardParams {{\n            inertia_kg_m2: {ffi},\n            viscous_nm_s_per_rad: {ffv},\n            coulomb_nm: {ffc},\n            coulomb_deadband_rad_s: FF_COULOMB_DEADBAND_RAD_S,\n        }},\n        terms: FeedforwardTerms {{\n            inertia: FF_INERTIA,\n            viscous: FF_VISCOUS,\n            coulomb: FF_COULOMB,\n        }},\n    }},\n    torque_offset_nm: {toff},\n    filter_desired_velocity: FILTER_DESIRED_VELOCITY,\n    feedforward_preview: FEEDFORWARD_PREVIEW,\n}};\n",
+        "\n/// The commissioned controller.\npub const CASCADE: CascadeConfig<f64> = CascadeConfig {{\n    ts_s: TS_S,\n    gains: CascadeGains {{\n        k_pp_per_s: K_PP_PER_S,\n        k_p_nm_s_per_rad: {kp},\n        k_i_nm_per_rad: {ki},\n        k_v: K_V,\n    }},\n    velocity_filter: FirstOrderCoeffs {{\n        b0: VELOCITY_FILTER_B0,\n        b1: VELOCITY_FILTER_B1,\n        a1: VELOCITY_FILTER_A1,\n    }},\n    prefilter: [\n        {s1},\n        {s2},\n    ],\n    torque_max_nm: {tmax},\n    anti_windup: {aw},\n    feedforward: Feedforward {{\n        params: FeedforwardParams {{\n            inertia_kg_m2: {ffi},\n            viscous_nm_s_per_rad: {ffv},\n            coulomb_nm: {ffc},\n            coulomb_deadband_rad_s: FF_COULOMB_DEADBAND_RAD_S,\n            coulomb_breakaway_rad: FF_COULOMB_BREAKAWAY_RAD,\n        }},\n        terms: FeedforwardTerms {{\n            inertia: FF_INERTIA,\n            viscous: FF_VISCOUS,\n            coulomb: FF_COULOMB,\n        }},\n    }},\n    torque_offset_nm: {toff},\n    filter_desired_velocity: FILTER_DESIRED_VELOCITY,\n    feedforward_preview: FEEDFORWARD_PREVIEW,\n}};\n",
         kp = name("k_p_nm_s_per_rad"),
         ki = name("k_i_nm_per_rad"),
         s1 = sos(1),
@@ -274,7 +278,7 @@ pub fn c_header(file: &ControllerFile) -> String {
     };
     let _ = write!(
         s,
-        "\n/* The commissioned controller. */\nstatic const BtCascadeConfig BELTUNE_CASCADE = {{\n    .ts_s = BELTUNE_TS_S,\n    .k_pp_per_s = BELTUNE_K_PP_PER_S,\n    .k_p_nm_s_per_rad = {kp},\n    .k_i_nm_per_rad = {ki},\n    .k_v = BELTUNE_K_V,\n    .velocity_filter = {{BELTUNE_VELOCITY_FILTER_B0, BELTUNE_VELOCITY_FILTER_B1, BELTUNE_VELOCITY_FILTER_A1}},\n    .prefilter = {{\n        {s1},\n        {s2},\n    }},\n    .torque_max_nm = {tmax},\n    .anti_windup = {aw},\n    .ff_inertia = BELTUNE_FF_INERTIA,\n    .ff_viscous = BELTUNE_FF_VISCOUS,\n    .ff_coulomb = BELTUNE_FF_COULOMB,\n    .inertia_kg_m2 = {ffi},\n    .viscous_nm_s_per_rad = {ffv},\n    .coulomb_nm = {ffc},\n    .coulomb_deadband_rad_s = BELTUNE_FF_COULOMB_DEADBAND_RAD_S,\n    .torque_offset_nm = {toff},\n    .filter_desired_velocity = BELTUNE_FILTER_DESIRED_VELOCITY,\n    .feedforward_preview = BELTUNE_FEEDFORWARD_PREVIEW,\n}};\n\n/* The cart -> motor setpoint conversion. */\nstatic const BtSetpointConfig BELTUNE_SETPOINT = {{\n    .i_t_m_per_rad = BELTUNE_I_T_M_PER_RAD,\n    .belt_stretch = BELTUNE_BELT_STRETCH_ON,\n    .m_c_kg = {mc},\n    .c_n_per_m = {c},\n}};\n\n#endif /* BELTUNE_CONTROLLER_H */\n",
+        "\n/* The commissioned controller. */\nstatic const BtCascadeConfig BELTUNE_CASCADE = {{\n    .ts_s = BELTUNE_TS_S,\n    .k_pp_per_s = BELTUNE_K_PP_PER_S,\n    .k_p_nm_s_per_rad = {kp},\n    .k_i_nm_per_rad = {ki},\n    .k_v = BELTUNE_K_V,\n    .velocity_filter = {{BELTUNE_VELOCITY_FILTER_B0, BELTUNE_VELOCITY_FILTER_B1, BELTUNE_VELOCITY_FILTER_A1}},\n    .prefilter = {{\n        {s1},\n        {s2},\n    }},\n    .torque_max_nm = {tmax},\n    .anti_windup = {aw},\n    .ff_inertia = BELTUNE_FF_INERTIA,\n    .ff_viscous = BELTUNE_FF_VISCOUS,\n    .ff_coulomb = BELTUNE_FF_COULOMB,\n    .inertia_kg_m2 = {ffi},\n    .viscous_nm_s_per_rad = {ffv},\n    .coulomb_nm = {ffc},\n    .coulomb_deadband_rad_s = BELTUNE_FF_COULOMB_DEADBAND_RAD_S,\n    .coulomb_breakaway_rad = BELTUNE_FF_COULOMB_BREAKAWAY_RAD,\n    .torque_offset_nm = {toff},\n    .filter_desired_velocity = BELTUNE_FILTER_DESIRED_VELOCITY,\n    .feedforward_preview = BELTUNE_FEEDFORWARD_PREVIEW,\n}};\n\n/* The cart -> motor setpoint conversion. */\nstatic const BtSetpointConfig BELTUNE_SETPOINT = {{\n    .i_t_m_per_rad = BELTUNE_I_T_M_PER_RAD,\n    .belt_stretch = BELTUNE_BELT_STRETCH_ON,\n    .m_c_kg = {mc},\n    .c_n_per_m = {c},\n}};\n\n#endif /* BELTUNE_CONTROLLER_H */\n",
         kp = name("k_p_nm_s_per_rad"),
         ki = name("k_i_nm_per_rad"),
         s1 = sec(1),

@@ -14,34 +14,6 @@ const PLANTS: u64 = 24;
 /// Issue 12: the true-plant velocity margin never below this, deg.
 const MIN_TRUE_PHASE_MARGIN_DEG: f64 = 30.0;
 
-/// What already holds on the sample (issue 12, the safety part): the true
-/// cart stays inside its window, and every delivered controller, whether
-/// its move met the limits or not, is stable on the true linearized plant
-/// with at least 30 deg velocity-loop phase margin.
-#[test]
-fn the_seeded_ci_sample_is_safe_and_its_controllers_keep_their_margins_issue_12() {
-    let cfg = CommissioningConfig::default();
-    let ranges = Ranges::default();
-    for i in 0..PLANTS {
-        let o = run_plant(SEED, i, &ranges, &cfg).unwrap();
-        assert!(
-            !o.travel_violation,
-            "plant #{}: the cart left the window by {:.1} mm ({})",
-            o.index,
-            o.travel_excess_m * 1e3,
-            o.message
-        );
-        if let Some(pm) = o.true_velocity_phase_margin_deg {
-            assert!(
-                pm >= MIN_TRUE_PHASE_MARGIN_DEG,
-                "plant #{}: {pm:.1} deg on the true plant ({})",
-                o.index,
-                o.message
-            );
-        }
-    }
-}
-
 /// Issue 12, the static error: plant #4 of the sample (3 kg, tilted 26 deg,
 /// Coulomb friction x1.44) ended 189 um short of its target with the cart
 /// stuck, because the Coulomb feedforward dropped with the trajectory's
@@ -55,9 +27,33 @@ fn the_coulomb_hold_brings_a_sticking_cart_to_its_target_issue_12() {
     assert!(e < 100e-6, "static error {:.1} um ({})", e * 1e6, o.message);
 }
 
+/// Issue 12, the static error: plant #252 (13.3 kg, horizontal, slow loops)
+/// overshot its target by 0.38 mm at the motor and stuck there, 440 um from
+/// the target at the cart, while the integrator built the breakaway torque at
+/// 0.01 N m per 100 ms; with the controller's Coulomb breakaway (beltune-rt,
+/// refinement (c): the hold re-engages toward the target beyond 20 um) it
+/// meets the thesis' 100 um (24 um).
 #[test]
-#[ignore = "issue 12 is not closed: the seeded sample still has static-error defects (README, robustness study); run with --ignored"]
-fn the_seeded_ci_sample_has_no_defects_issue_12() {
+fn the_coulomb_breakaway_brings_an_overshooting_cart_back_issue_12() {
+    let o = run_plant(
+        SEED,
+        252,
+        &Ranges::default(),
+        &CommissioningConfig::default(),
+    )
+    .unwrap();
+    let e = o.static_error_m.expect("a controller");
+    assert!(e < 100e-6, "static error {:.1} um ({})", e * 1e6, o.message);
+}
+
+/// The issue's check: on the sample every failure is a correct refusal of an
+/// infeasible plant (no defect: the static error and the max cart error meet
+/// the thesis' limits on every feasible plant), the true cart stays inside
+/// its window, and every delivered controller, whether its move met the
+/// limits or not, is stable on the true linearized plant with at least 30 deg
+/// velocity-loop phase margin.
+#[test]
+fn the_seeded_ci_sample_has_no_defects_and_keeps_its_margins_issue_12() {
     let cfg = CommissioningConfig::default();
     let ranges = Ranges::default();
     let outcomes: Vec<_> = (0..PLANTS)
@@ -73,14 +69,19 @@ fn the_seeded_ci_sample_has_no_defects_issue_12() {
             o.travel_excess_m * 1e3,
             o.message
         );
-        if o.kind == OutcomeKind::Success {
-            let pm = o.true_velocity_phase_margin_deg.unwrap();
+        if let Some(pm) = o.true_velocity_phase_margin_deg {
             assert!(
                 pm >= MIN_TRUE_PHASE_MARGIN_DEG,
-                "plant #{}: {pm:.1} deg on the true plant",
-                o.index
+                "plant #{}: {pm:.1} deg on the true plant ({})",
+                o.index,
+                o.message
             );
         }
         assert_ne!(o.class, Class::Defect, "plant #{}: {:?}", o.index, o);
     }
+    let successes = outcomes
+        .iter()
+        .filter(|o| o.kind == OutcomeKind::Success)
+        .count();
+    assert!(successes >= 16, "{successes} successes of {PLANTS}");
 }

@@ -9,10 +9,12 @@
 use beltune::procedure::result::MoveSummary;
 use serde::Serialize;
 
-/// Thesis chapter 5: largest cart tracking error of the validation move, m.
-pub const THESIS_MAX_TRACKING_ERROR_M: f64 = 1e-3;
-/// Thesis chapter 5: static positioning error after the move, m.
-pub const THESIS_MAX_STATIC_ERROR_M: f64 = 100e-6;
+/// Thesis chapter 5: largest cart tracking error of the validation move, m
+/// (the library's [`beltune::procedure::acceptance::MAX_TRACKING_ERROR_M`]).
+pub const THESIS_MAX_TRACKING_ERROR_M: f64 = beltune::procedure::acceptance::MAX_TRACKING_ERROR_M;
+/// Thesis chapter 5: static positioning error after the move, m
+/// ([`beltune::procedure::acceptance::MAX_STATIC_ERROR_M`]).
+pub const THESIS_MAX_STATIC_ERROR_M: f64 = beltune::procedure::acceptance::MAX_STATIC_ERROR_M;
 
 /// The limits on the command line (`--max-tracking-error`, `--max-static-error`).
 #[derive(clap::Args, Clone, Debug)]

@@ -35,6 +35,7 @@ pub const FF_INERTIA_KG_M2: f64 = 0.0019792374707967952;
 pub const FF_VISCOUS_NM_S_PER_RAD: f64 = 0.004059822856759293;
 pub const FF_COULOMB_NM: f64 = 0.1097152210431989;
 pub const FF_COULOMB_DEADBAND_RAD_S: f64 = 0.001;
+pub const FF_COULOMB_BREAKAWAY_RAD: f64 = 0.0016110731556071253;
 pub const FILTER_DESIRED_VELOCITY: bool = true;
 pub const FEEDFORWARD_PREVIEW: bool = true;
 pub const PREVIEW_SAMPLES: usize = 10;
@@ -91,6 +92,7 @@ pub const CASCADE: CascadeConfig<f64> = CascadeConfig {
             viscous_nm_s_per_rad: FF_VISCOUS_NM_S_PER_RAD,
             coulomb_nm: FF_COULOMB_NM,
             coulomb_deadband_rad_s: FF_COULOMB_DEADBAND_RAD_S,
+            coulomb_breakaway_rad: FF_COULOMB_BREAKAWAY_RAD,
         },
         terms: FeedforwardTerms {
             inertia: FF_INERTIA,

@@ -36,18 +36,27 @@
 //! from the small standing error (`K_I K_PP e` per second). The hold `h` keeps
 //! the direction of the last motion (`+1`/`-1`) at standstill of the
 //! trajectory as long as the position error `phi_d - phi_m` points that way,
-//! and releases it (`h = 0`) for good when the error reaches zero or changes
-//! sign, until the trajectory moves again. It is a one-shot completion of the
-//! move, not a feedback: with an accurate `tau_c` the axis finishes its move
-//! as if frictionless under the cascade's feedback, and stops at the target
-//! where the hold lets go. It acts only with the Coulomb term switched on.
+//! and releases it (`h = 0`) when the error reaches zero or changes sign. With
+//! an accurate `tau_c` the axis finishes its move as if frictionless under the
+//! cascade's feedback, and stops at the target where the hold lets go. It acts
+//! only with the Coulomb term switched on.
+//!
+//! The breakaway (`FeedforwardParams::coulomb_breakaway_rad > 0`, issue 12)
+//! engages the hold again, toward the target, when the axis rests with an
+//! error beyond the threshold: after an overshoot, or when it stuck before
+//! the target. Without it the integrator alone must build the breakaway
+//! torque `2 tau_c` from the standing error, which took seconds on slow loops
+//! (the cart then rested 100-450 um from its target at the end of the
+//! validation record). The threshold is a dead zone: inside it the
+//! integrator finishes the positioning without the Coulomb push, so the hold
+//! cannot chatter about the target.
 //!
 //! [`CascadeController::reset_to`] assumes the axis at rest (`omega_d = 0`); the
 //! desired-velocity low-pass starts from zero.
 //!
 //! Cost per sample: the velocity filter (2 multiplications), the desired-velocity
 //! low-pass (3), two second-order sections (5 each), feedforward (2), Coulomb
-//! hold (1 multiplication, 3 comparisons), position loop, PI and anti-windup
+//! hold and breakaway (1 multiplication, 7 comparisons), position loop, PI and anti-windup
 //! (about 8): about 26 multiplications, no division, no allocation, no panic. Measured (crate README): 140 instructions, about 80 ns
 //! per step in f64 on the development machine (137 instructions in f32).
 
@@ -460,7 +469,17 @@ impl<T: Real> CascadeController<T> {
             self.coulomb_hold = T::ONE;
         } else if v_ff < -band {
             self.coulomb_hold = -T::ONE;
-        } else if self.coulomb_hold != T::ZERO {
+        } else {
+            // Breakaway: at rest, an error beyond the threshold engages the
+            // hold toward the target (only with the Coulomb term on).
+            let th = self.ff.coulomb_breakaway_rad;
+            if self.coulomb_hold == T::ZERO && th > T::ZERO && self.ff.coulomb_nm > T::ZERO {
+                if e_phi > th {
+                    self.coulomb_hold = T::ONE;
+                } else if e_phi < -th {
+                    self.coulomb_hold = -T::ONE;
+                }
+            }
             if e_phi * self.coulomb_hold > T::ZERO {
                 tau_ff += self.coulomb_hold * self.ff.coulomb_nm;
             } else {
@@ -609,7 +628,7 @@ mod tests {
             assert_eq!(c.step(&stop, 0.999).feedforward_nm, tau_c);
         }
         // It reaches the target: released, and stays released even if the
-        // axis then rests short again (no chattering feedback).
+        // axis then rests short again (no breakaway configured).
         assert_eq!(c.step(&stop, 1.0).feedforward_nm, 0.0);
         assert_eq!(c.coulomb_hold(), 0.0);
         assert_eq!(c.step(&stop, 0.999).feedforward_nm, 0.0);
@@ -632,6 +651,49 @@ mod tests {
         let mut c = CascadeController::new(lin).unwrap();
         c.step(&moving(0.0), 0.0);
         assert_eq!(c.step(&stop, 0.5).feedforward_nm, 0.0);
+    }
+
+    /// Refinement (c) with the breakaway (issue 12, static error): an axis
+    /// resting beyond the threshold from its target, after an overshoot or
+    /// short of it, gets the Coulomb push toward the target; inside the
+    /// threshold nothing is pushed (dead zone), and the push ends at the
+    /// target.
+    #[test]
+    fn the_coulomb_breakaway_pushes_a_resting_axis_back_toward_its_target_issue_12() {
+        let tau_c = 0.1;
+        let th = 2e-3;
+        let mut cfg = config();
+        cfg.feedforward = Feedforward::nonlinear(0.0, 0.0, tau_c);
+        cfg.feedforward.params.coulomb_breakaway_rad = th;
+        let mut c = CascadeController::new(cfg).unwrap();
+        let stop = Setpoint::hold(1.0);
+        // At rest inside the dead zone: no push either way.
+        assert_eq!(c.step(&stop, 1.0 - 0.5 * th).feedforward_nm, 0.0);
+        assert_eq!(c.step(&stop, 1.0 + 0.5 * th).feedforward_nm, 0.0);
+        assert_eq!(c.coulomb_hold(), 0.0);
+        // Overshot beyond it: pushed back (-), until the target is reached.
+        for _ in 0..5 {
+            assert_eq!(c.step(&stop, 1.0 + 2.0 * th).feedforward_nm, -tau_c);
+        }
+        assert_eq!(c.step(&stop, 1.0 + 0.5 * th).feedforward_nm, -tau_c);
+        assert_eq!(c.step(&stop, 1.0).feedforward_nm, 0.0);
+        assert_eq!(c.coulomb_hold(), 0.0);
+        // Stuck short beyond it: pushed on (+).
+        assert_eq!(c.step(&stop, 1.0 - 2.0 * th).feedforward_nm, tau_c);
+        assert_eq!(c.coulomb_hold(), 1.0);
+        // Without the Coulomb term there is no breakaway.
+        let mut lin = config();
+        lin.feedforward = Feedforward::linear(1e-3, 1e-3);
+        lin.feedforward.params.coulomb_breakaway_rad = th;
+        let mut c = CascadeController::new(lin).unwrap();
+        assert_eq!(c.step(&stop, 1.0 + 2.0 * th).feedforward_nm, 0.0);
+        // A negative or non-finite threshold is refused.
+        for bad in [-1e-3, f64::NAN] {
+            let mut cfg = config();
+            cfg.feedforward = Feedforward::nonlinear(0.0, 0.0, tau_c);
+            cfg.feedforward.params.coulomb_breakaway_rad = bad;
+            assert!(CascadeController::new(cfg).is_err());
+        }
     }
 
     #[test]

@@ -30,6 +30,11 @@ pub struct FeedforwardParams<T = f64> {
     /// Half-width of the dead band of `sign(omega_d)` in rad/s
     /// (see [`DEFAULT_COULOMB_DEADBAND_RAD_S`]).
     pub coulomb_deadband_rad_s: T,
+    /// Breakaway threshold of the Coulomb hold, rad (refinement (c) of
+    /// [`crate::control::cascade`]): with the trajectory at rest, a position
+    /// error `|phi_d - phi_m|` beyond it engages the hold toward the target.
+    /// `0` switches the breakaway off (the hold then only completes a move).
+    pub coulomb_breakaway_rad: T,
 }
 
 impl<T: Real> Default for FeedforwardParams<T> {
@@ -40,6 +45,7 @@ impl<T: Real> Default for FeedforwardParams<T> {
             viscous_nm_s_per_rad: T::ZERO,
             coulomb_nm: T::ZERO,
             coulomb_deadband_rad_s: T::from_f64(DEFAULT_COULOMB_DEADBAND_RAD_S),
+            coulomb_breakaway_rad: T::ZERO,
         }
     }
 }
@@ -126,6 +132,7 @@ impl<T: Real> Feedforward<T> {
                 "feedforward.coulomb_deadband_rad_s",
                 p.coulomb_deadband_rad_s,
             ),
+            ("feedforward.coulomb_breakaway_rad", p.coulomb_breakaway_rad),
         ] {
             if !(v.is_finite() && v >= T::ZERO) {
                 return Err(Error::InvalidParameter {
@@ -146,6 +153,7 @@ impl<T: Real> Feedforward<T> {
             viscous_nm_s_per_rad: on(self.terms.viscous, p.viscous_nm_s_per_rad),
             coulomb_nm: on(self.terms.coulomb, p.coulomb_nm),
             coulomb_deadband_rad_s: p.coulomb_deadband_rad_s,
+            coulomb_breakaway_rad: p.coulomb_breakaway_rad,
         }
     }
 
@@ -165,6 +173,7 @@ impl<T: Real> Feedforward<T> {
                 viscous_nm_s_per_rad: U::from_f64(p.viscous_nm_s_per_rad.to_f64()),
                 coulomb_nm: U::from_f64(p.coulomb_nm.to_f64()),
                 coulomb_deadband_rad_s: U::from_f64(p.coulomb_deadband_rad_s.to_f64()),
+                coulomb_breakaway_rad: U::from_f64(p.coulomb_breakaway_rad.to_f64()),
             },
             terms: self.terms,
         }

@@ -127,6 +127,10 @@ pub struct FeedforwardSection {
     pub coulomb_nm: f64,
     /// Dead band of `sign(omega_d)`, rad/s.
     pub coulomb_deadband_rad_s: f64,
+    /// Breakaway threshold of the Coulomb hold, rad (0: off; absent in files
+    /// written before issue 12's breakaway, which then behave as before).
+    #[serde(default)]
+    pub coulomb_breakaway_rad: f64,
     /// Viscous-only coefficient of the "linear" feedforward (information), N m s/rad.
     pub linear_viscous_nm_s_per_rad: f64,
     /// Refinement (b): the feedforward uses the trajectory `preview_samples` ahead.
@@ -213,6 +217,7 @@ impl ControllerFile {
                 viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
                 coulomb_nm: friction.coulomb_nm,
                 coulomb_deadband_rad_s: beltune_rt::control::DEFAULT_COULOMB_DEADBAND_RAD_S,
+                coulomb_breakaway_rad: super::validation::coulomb_breakaway_rad(model.i_t),
                 linear_viscous_nm_s_per_rad: friction.linear_viscous_nm_s_per_rad,
                 preview: true,
                 preview_samples: (des.input.dead_time_s / des.input.ts_s).round() as usize,
@@ -268,6 +273,7 @@ impl ControllerFile {
                     viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
                     coulomb_nm: f.coulomb_nm,
                     coulomb_deadband_rad_s: f.coulomb_deadband_rad_s,
+                    coulomb_breakaway_rad: f.coulomb_breakaway_rad,
                 },
                 terms: FeedforwardTerms {
                     inertia: f.inertia,
@@ -424,6 +430,8 @@ mod tests {
             f.viscous_nm_s_per_rad,
             f.coulomb_nm,
         );
+        // the breakaway of the validation: 20 um at the cart
+        c.feedforward.params.coulomb_breakaway_rad = 20e-6 / des.input.model.i_t;
         c.filter_desired_velocity = true;
         c.feedforward_preview = true;
         c
@@ -524,6 +532,17 @@ mod tests {
         assert!(ControllerFile::parse(&neg, "c.toml").is_err());
         let extra = text.replace("ts_s =", "bogus = 1\nts_s =");
         assert!(ControllerFile::parse(&extra, "c.toml").is_err());
+        // A file from before the breakaway (issue 12) loads with it off.
+        assert!(text.contains("coulomb_breakaway_rad = "), "{text}");
+        let before: String = text
+            .lines()
+            .filter(|l| !l.starts_with("coulomb_breakaway_rad"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let old = ControllerFile::parse(&before, "c.toml").unwrap();
+        assert_eq!(old.feedforward.coulomb_breakaway_rad, 0.0);
+        let off = old.cascade_config().unwrap();
+        assert_eq!(off.feedforward.params.coulomb_breakaway_rad, 0.0);
         let mut unstable = file.clone();
         unstable.prefilter.sections[0][4] = 1.5;
         let e = ControllerFile::parse(&unstable.to_toml().unwrap(), "c.toml").unwrap_err();

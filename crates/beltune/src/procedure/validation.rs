@@ -186,6 +186,21 @@ pub fn run_move(
     summarize(record)
 }
 
+/// Breakaway threshold of the Coulomb hold at the cart, m (beltune-rt
+/// cascade refinement (c)): a fifth of the thesis' static limit, so that the
+/// integrator alone finishes the positioning inside it, and at least two
+/// counts of the coarsest motor encoder of the robustness study (4x egc70's,
+/// 10 um at the cart). Issue 12: without it an axis that rested after an
+/// overshoot or stuck short of its target waited for the integrator to build
+/// the breakaway torque, seconds on slow loops (47 of 109 static-error
+/// failures of the 1000-plant study).
+pub const COULOMB_BREAKAWAY_CART_M: f64 = 20e-6;
+
+/// [`COULOMB_BREAKAWAY_CART_M`] in motor angle for transmission `i_t` (m/rad), rad.
+pub fn coulomb_breakaway_rad(i_t_m_per_rad: f64) -> f64 {
+    COULOMB_BREAKAWAY_CART_M / i_t_m_per_rad
+}
+
 /// The three feedforward variants of the validation (chapter 5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -219,11 +234,14 @@ impl FeedforwardVariant {
 /// The controller of a validation move: `feedback` (the designed cascade with
 /// its torque offset, no feedforward) with the variant's feedforward for the
 /// rigid inertia `m_e_kg_m2` and `friction`, the desired velocity filtered by
-/// `G_R` and the feedforward previewed by the current-loop dead time. Stage 8
-/// of the commissioning and the tuning page's simulated move both use it.
+/// `G_R` and the feedforward previewed by the current-loop dead time; the
+/// nonlinear variant with the Coulomb breakaway ([`coulomb_breakaway_rad`] for
+/// transmission `i_t_m_per_rad`). Stage 8 of the commissioning and the tuning
+/// page's simulated move both use it.
 pub fn validation_controller(
     feedback: &CascadeConfig<f64>,
     m_e_kg_m2: f64,
+    i_t_m_per_rad: f64,
     friction: &super::result::FrictionResult,
     variant: FeedforwardVariant,
 ) -> CascadeConfig<f64> {
@@ -234,11 +252,15 @@ pub fn validation_controller(
         FeedforwardVariant::Linear => {
             Feedforward::linear(m_e_kg_m2, friction.linear_viscous_nm_s_per_rad)
         }
-        FeedforwardVariant::Nonlinear => Feedforward::nonlinear(
-            m_e_kg_m2,
-            friction.viscous_nm_s_per_rad,
-            friction.coulomb_nm,
-        ),
+        FeedforwardVariant::Nonlinear => {
+            let mut f = Feedforward::nonlinear(
+                m_e_kg_m2,
+                friction.viscous_nm_s_per_rad,
+                friction.coulomb_nm,
+            );
+            f.params.coulomb_breakaway_rad = coulomb_breakaway_rad(i_t_m_per_rad);
+            f
+        }
     };
     c.filter_desired_velocity = true;
     c.feedforward_preview = true;
@@ -337,7 +359,13 @@ pub fn simulate_validation_move(
         stop_limits,
     )?;
     let model = des.input.model;
-    let controller = validation_controller(&feedback, model.rigid_inertia(), friction, variant);
+    let controller = validation_controller(
+        &feedback,
+        model.rigid_inertia(),
+        model.i_t,
+        friction,
+        variant,
+    );
     let preview = (des.input.dead_time_s / des.input.ts_s).round() as usize;
     let opts = validation_track_options(&model, preview, 0.0);
     run_move(
