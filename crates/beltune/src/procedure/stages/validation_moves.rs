@@ -2,7 +2,7 @@
 //! and nonlinear feedforward, each from the same start; the unmeasured return
 //! to the start runs under the feedback cascade.
 
-use super::super::commission::{CommissioningConfig, DataSheet};
+use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
 use super::super::result::{FrictionResult, Validation};
 use super::super::validation::{
     run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
@@ -135,14 +135,27 @@ pub fn plan_validation_move(
 }
 
 /// Limits of the unmeasured return to the validation start inside the
-/// window of `ds`: the validation move's `planned` limits with the
-/// acceleration at most half the stop deceleration `stop_deceleration_m_s2`
-/// (so that the look-ahead, which assumes the stop's deceleration after a
-/// reaction time, never trips on the return's own braking).
+/// window of `ds`: the validation move's `planned` limits, at most those of
+/// the positioning moves the positioning controller ran in stages 2-5, with
+/// the acceleration at most half the stop deceleration
+/// `stop_deceleration_m_s2` (so that the look-ahead, which assumes the
+/// stop's deceleration after a reaction time, never trips on the return's
+/// own braking).
+///
+/// Issue 12 (travel stops of feasible plants): at the validation move's
+/// 1.1 m/s the slow bootstrap loop, without Coulomb feedforward, lagged a
+/// light cart with high friction by 30 mm and its integrator, wound up
+/// against the friction, carried the cart 18 mm past the approach point,
+/// 15 mm inside the window, to 3 mm outside the start: the look-ahead
+/// stopped it.
 pub fn return_limits(planned: &Limits, ds: &DataSheet, stop_deceleration_m_s2: f64) -> Limits {
-    let a = planned.a_max.min(0.5 * stop_deceleration_m_s2);
-    let v = planned.v_max;
-    let j = planned.j_max;
+    let positioning = positioning_limits(ds);
+    let a = planned
+        .a_max
+        .min(positioning.a_max)
+        .min(0.5 * stop_deceleration_m_s2);
+    let v = planned.v_max.min(positioning.v_max);
+    let j = planned.j_max.min(positioning.j_max);
     Limits {
         v_max: v,
         v_min: -v,
@@ -216,8 +229,9 @@ pub fn validation_moves(
     };
     // The unmeasured return to the start runs under the positioning
     // controller (the bootstrap cascade of stages 2-5, which moved the axis
-    // safely before) with the move's limits, braking with at most half the
-    // stop deceleration, to a point 15 mm
+    // safely before) with the move's limits within the positioning limits
+    // it ran under there, braking with at most half the stop deceleration,
+    // to a point 15 mm
     // inside the window from which it creeps to the start
     // ([`super::super::validation::run_move`]). Issue 12: under the designed
     // feedback without feedforward, a loop that is poorly damped on the real
