@@ -57,3 +57,73 @@ fn egc70_with_25_kg_meets_its_limits_issue_12() {
     assert!(run.verdict.guaranteed.models > 0);
     assert!(run.log.iter().any(|l| l.starts_with("verdict:")));
 }
+
+/// Largest relative error of the belt stiffness measured at the validation
+/// target: the target's FRF is fitted like the main identification (whose
+/// f_z and m_c targets are 2 % and 5 %, i.e. c = m_c w_z^2 within about
+/// 5 %); on the first 40 static-error defects of seed 12 the measured
+/// stiffness was within 2.1 % rms of the truth, and on this plant -1.1 %.
+const TARGET_STIFFNESS_TOLERANCE: f64 = 0.05;
+/// Thesis chapter 5: static positioning error.
+const STATIC_ERROR_M: f64 = 100e-6;
+
+/// Issue 12: the static belt stretch the motor setpoint leads by used the
+/// stiffness identified at the worst-case position (far end of the stroke),
+/// 21 % below the true replacement stiffness (2.26) at the validation target
+/// of plant 131 of seed 12 (19 kg on an axis tilted 59 deg: a 0.9 mm
+/// stretch), and the cart rested 160 um short of the target. Stage 5b
+/// measures the stiffness at the target; with it the static error passes.
+#[test]
+fn static_stretch_uses_the_stiffness_measured_at_the_target_issue_12() {
+    use beltune::study::{generate, Ranges};
+    let g = generate(12, 131, &Ranges::default()).unwrap();
+    let plant = rigs::Plant::Physical(g.params.clone());
+    let start = 0.05;
+    let ds = DataSheet::for_plant(&plant, start, None);
+    let mut axis = SimAxis::new(&plant, g.sim_config(start)).unwrap();
+    let run = commission(
+        &mut axis,
+        &ds,
+        &CommissioningConfig::default(),
+        &mut NoProgress,
+    )
+    .unwrap_or_else(|e| panic!("plant 131: {e}"));
+    let t = run.target_stiffness;
+    assert!(t.measured, "{t:?}");
+    assert!((t.position_m - 0.5).abs() < 1e-9, "{t:?}");
+    let c_true = g.params.replacement_stiffness_n_per_m(t.position_m);
+    let c_ident = g
+        .params
+        .replacement_stiffness_n_per_m(run.identification_position_m);
+    assert!(
+        c_true > 1.15 * c_ident,
+        "the plant shows the defect: c {c_true:.0} N/m at the target, {c_ident:.0} N/m where identified"
+    );
+    assert!(
+        (t.c_n_per_m / c_true - 1.0).abs() < TARGET_STIFFNESS_TOLERANCE,
+        "measured {:.0} N/m, true {c_true:.0} N/m",
+        t.c_n_per_m
+    );
+    assert!(run
+        .log
+        .iter()
+        .any(|l| l.starts_with("belt stiffness: at 500.0 mm")));
+    let nl = &run.validation.nonlinear;
+    assert!(
+        nl.static_error_m < STATIC_ERROR_M,
+        "static error {:.1} um",
+        nl.static_error_m * 1e6
+    );
+}
+
+/// Where the validation target is the identification position (egc70: the
+/// target 500 mm, identified at 500.4 mm), the main fit's stiffness stands
+/// for it and no second experiment runs.
+#[test]
+fn egc70_reuses_the_identified_stiffness_at_its_target_issue_12() {
+    let run = commission_builtin("egc70", None);
+    let t = run.target_stiffness;
+    assert!(!t.measured, "{t:?}");
+    assert_eq!(t.c_n_per_m, run.fit.params.c);
+    assert!(run.verdict.meets_limits, "{:?}", run.verdict);
+}

@@ -7,7 +7,7 @@ use beltune::model::{rigs, MeasurementNoise};
 use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::procedure::NoProgress;
 use beltune::sim::{SimAxis, SimConfig};
-use beltune::study::{run_plant, Outcome, Ranges};
+use beltune::study::{run_plant, Class, Outcome, OutcomeKind, Ranges};
 
 fn plant(index: u64) -> Outcome {
     run_plant(
@@ -62,6 +62,54 @@ fn the_first_hold_does_not_refuse_a_stoppable_axis_issue_12() {
     assert!(o.feasibility.feasible, "{:?}", o.feasibility);
     assert!(!o.message.contains("take axis"), "{}", o.message);
     assert!(!o.travel_violation);
+}
+
+/// Plants #530, #597, #777, #804 and #839 (23.7-25.9 kg, tilt +68 to +86
+/// deg: 2.90-3.11 N m of gravity towards the lower edge, torque limit 3.1
+/// N m) ended "during take axis: safety stop: ... axis stopped at" -66 to
+/// -294 mm, up to 284 mm outside the window: the slow bootstrap loop let
+/// the load fall for 60 ms to 0.31 m/s, which the 0.2 N m left of the limit
+/// cannot brake in 60 mm, and the stop then dropped the torque that held
+/// it. #949 and #983 (gravity towards +x) fell 125 mm and ended in the
+/// holding-torque runs with "record too short" and a following-error stop.
+/// The take now catches the load with the holding torque its first fall
+/// shows, the stop keeps the torque that held it, and a first hold beyond
+/// the stop's command budget is refused there, inside the window.
+#[test]
+fn heavy_steep_loads_are_caught_and_refused_inside_the_window_issue_12() {
+    for index in [530, 597, 777, 804, 839, 949, 983] {
+        let o = plant(index);
+        assert!(!o.feasibility.feasible, "#{index}: {:?}", o.feasibility);
+        assert!(
+            !o.travel_violation && o.travel_excess_m == 0.0,
+            "#{index}: {:.1} mm outside ({})",
+            o.travel_excess_m * 1e3,
+            o.message
+        );
+        assert_eq!(o.class, Class::CorrectRefusal, "#{index}: {}", o.message);
+        assert!(
+            o.message.starts_with("during take axis: infeasible")
+                && o.message.contains("to hold its load"),
+            "#{index}: {}",
+            o.message
+        );
+    }
+}
+
+/// Plants #822 and #959 (1.3 and 1.7 kg, Coulomb friction 0.25 and 0.30
+/// N m, feasible) ended "during validation moves: safety stop: at -3.0 mm
+/// the axis could not stop before -10.0 mm": the unmeasured return ran the
+/// slow positioning loop at the validation move's 1.1 m/s, lagged 30 mm and
+/// overshot its approach point 15 mm inside the window by 18 mm. It now
+/// runs within the positioning limits the loop moved the axis with before.
+#[test]
+fn the_return_of_a_light_cart_with_high_friction_ends_in_no_travel_stop_issue_12() {
+    for index in [822, 959] {
+        let o = plant(index);
+        assert!(o.feasibility.feasible, "#{index}: {:?}", o.feasibility);
+        assert!(!o.travel_violation, "#{index}: {}", o.message);
+        assert_ne!(o.kind, OutcomeKind::Failed, "#{index}: {}", o.message);
+    }
 }
 
 fn commission_sim_c(seed: u64, noise: MeasurementNoise) -> (Vec<f64>, Vec<f64>, f64) {

@@ -455,7 +455,14 @@ fn run_recorded(args: &Args, csv: &std::path::Path, knobs: &DesignKnobs) -> anyh
             )));
         }
     }
-    let toml = controller_toml(&run.design, &friction, torque_limit, units, provenance)?;
+    let toml = controller_toml(
+        &run.design,
+        &friction,
+        None,
+        torque_limit,
+        units,
+        provenance,
+    )?;
     let html = render_html(&report)?;
     let data = recorded_data_files(&run)?;
     let files = write_outputs_with_data(&target(args), &json, &toml, &html, &data)?;
@@ -728,6 +735,7 @@ fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
     let toml = controller_toml(
         &run.design,
         &run.friction,
+        Some(&run.target_stiffness),
         ds.torque_max_nm,
         ModelUnits::Torque,
         provenance,
@@ -847,6 +855,7 @@ fn run_ethercat(
     let toml = controller_toml(
         &run.design,
         &run.friction,
+        Some(&run.target_stiffness),
         ds.torque_max_nm,
         ModelUnits::Torque,
         provenance,

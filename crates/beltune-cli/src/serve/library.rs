@@ -30,7 +30,7 @@ use beltune::procedure::commission::{commission, Commissioning, CommissioningCon
 use beltune::procedure::outputs::{self, AxisRecord};
 use beltune::procedure::plots::{self, FrfLines};
 use beltune::procedure::report_build;
-use beltune::procedure::result::{FrictionResult, MoveSummary};
+use beltune::procedure::result::{FrictionResult, MoveSummary, TargetStiffness};
 use beltune::procedure::validation::{
     simulate_validation_move, FeedforwardVariant, MoveResult, MoveSpec,
 };
@@ -125,6 +125,10 @@ pub struct DesignModel {
     pub m_c_sigma: f64,
     /// One-sigma uncertainty of the identified `c`, N/m (NaN: unknown, 5 %).
     pub c_sigma: f64,
+    /// The belt stiffness at the validation target (`commissioning.json` key
+    /// `target_stiffness`), which the static stretch of a saved controller
+    /// uses as the commissioning's did; `None`: the model's `c`.
+    pub target_stiffness: Option<TargetStiffness>,
 }
 
 /// Read `dir/commissioning.json` (and `dir/frf.csv` when present); every
@@ -177,6 +181,17 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
                 .map_err(|e| anyhow::anyhow!("{}: `axis`: {e}", path.display()))?,
         ),
     };
+    let target_stiffness = match json.get("target_stiffness") {
+        None | Some(serde_json::Value::Null) => None,
+        Some(t) => Some(
+            serde_json::from_value::<TargetStiffness>(t.clone())
+                .map_err(|e| anyhow::anyhow!("{}: `target_stiffness`: {e}", path.display()))?,
+        ),
+    };
+    if let Some(t) = &target_stiffness {
+        beltune::error::require_positive("target_stiffness.c_n_per_m [N/m]", t.c_n_per_m)
+            .with_context(|| format!("{}: target_stiffness", path.display()))?;
+    }
     if let Some(AxisRecord::Simulated { plant, .. }) = &axis {
         plant
             .validate()
@@ -215,6 +230,7 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         axis,
         excitation,
         friction_runs,
+        target_stiffness,
     })
 }
 
@@ -377,6 +393,7 @@ impl LibraryTuner {
             axis: Some(axis),
             excitation: report.excitation,
             friction_runs: report.friction,
+            target_stiffness: Some(run.target_stiffness),
         };
         LibraryTuner::new(model)
     }
@@ -790,6 +807,7 @@ impl LibraryTuner {
         let body = outputs::controller_toml(
             d,
             &self.friction,
+            self.model.target_stiffness.as_ref(),
             self.torque_max_nm,
             self.model.units,
             Provenance::of_this_process(None),

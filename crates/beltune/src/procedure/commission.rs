@@ -327,6 +327,9 @@ pub struct Commissioning {
     pub identification_position_m: f64,
     /// Holding torque, N m.
     pub holding_torque_nm: f64,
+    /// The belt stiffness where the validation move ends (stage 5b), which
+    /// the static belt stretch uses.
+    pub target_stiffness: super::result::TargetStiffness,
     /// PRBS amplitude `A_PRBS` used (values +-A/2), N m.
     pub excitation_amplitude_nm: f64,
     /// FRF from the torque command to the motor angle.
@@ -433,6 +436,19 @@ pub fn commission(
     let mut ident = stages::identification::identification(
         &mut st,
         &boot_hold,
+        id_pos,
+        &pos_limits,
+        holding,
+        amplitude,
+        ex,
+        datasheet,
+    )?;
+    // ---- 5b. belt stiffness where the validation move ends (issue 12) ----
+    let target_stiffness = stages::identification::stiffness_at(
+        &mut st,
+        &boot_hold,
+        stages::validation_moves::validation_target_m(&cfg.validation, datasheet),
+        &ident.fit,
         id_pos,
         &pos_limits,
         holding,
@@ -572,6 +588,7 @@ pub fn commission(
         &fr.result,
         n_t,
         holding,
+        target_stiffness.c_n_per_m,
         datasheet,
         cfg,
     )?;
@@ -601,6 +618,7 @@ pub fn commission(
         datasheet: *datasheet,
         identification_position_m: id_pos,
         holding_torque_nm: holding,
+        target_stiffness,
         excitation_amplitude_nm: amplitude,
         frf: ident.frf,
         fit: ident.fit,

@@ -12,7 +12,7 @@
 
 use crate::design::{ControllerDesign, DriveForm, Prefilter, SCHEMA_VERSION};
 use crate::ident::ModelUnits;
-use crate::procedure::result::FrictionResult;
+use crate::procedure::result::{FrictionResult, TargetStiffness};
 use crate::provenance::Provenance;
 use crate::units::{current_key, relabel_keys, torque_key};
 use crate::{Error, Result};
@@ -153,20 +153,25 @@ pub struct SetpointSection {
     pub belt_stretch: bool,
     /// Moving mass `m_c`, kg.
     pub m_c_kg: f64,
-    /// Belt stiffness `c`, N/m.
+    /// Belt stiffness `c`, N/m: the one measured where the validation move
+    /// ended (commissioning stage 5b, `target_stiffness` in
+    /// `commissioning.json`), else the model's.
     pub c_n_per_m: f64,
-    /// Static belt stretch under the holding torque `tau_hold / (i_t c)`, m: the
-    /// motor setpoint leads the cart by this much.
+    /// Static belt stretch under the holding torque `tau_hold / (i_t c)`
+    /// with [`Self::c_n_per_m`], m: the motor setpoint leads the cart by this much.
     pub static_stretch_m: f64,
 }
 
 impl ControllerFile {
     /// The controller commissioning validated: the design's gains and filters,
     /// conditional integration, nonlinear feedforward (4.16) with dead-time
-    /// preview, filtered desired velocity, belt-stretch compensation.
+    /// preview, filtered desired velocity, belt-stretch compensation, and the
+    /// static belt stretch under the holding torque, both with the stiffness
+    /// at the validation target (`target_stiffness`; `None`: the model's `c`).
     pub fn from_design(
         des: &ControllerDesign,
         friction: &FrictionResult,
+        target_stiffness: Option<&TargetStiffness>,
         torque_max_nm: f64,
         units: ModelUnits,
         provenance: Provenance,
@@ -184,6 +189,8 @@ impl ControllerFile {
         let sos = |s: &SosCoeffs<f64>| [s.b0, s.b1, s.b2, s.a1, s.a2];
         let v = cfg.velocity_filter;
         let model = des.input.model;
+        // the stiffness where the validated move decelerated and rests
+        let c_setpoint = target_stiffness.map_or(model.c, |t| t.c_n_per_m);
         let file = ControllerFile {
             schema_version: SCHEMA_VERSION,
             units,
@@ -228,8 +235,8 @@ impl ControllerFile {
                 i_t_m_per_rad: model.i_t,
                 belt_stretch: true,
                 m_c_kg: model.m_c,
-                c_n_per_m: model.c,
-                static_stretch_m: friction.holding_torque_nm / (model.i_t * model.c),
+                c_n_per_m: c_setpoint,
+                static_stretch_m: friction.holding_torque_nm / (model.i_t * c_setpoint),
             },
             drive_form: DriveForm::of(des),
         };
@@ -464,6 +471,7 @@ mod tests {
             let file = ControllerFile::from_design(
                 &des,
                 &f,
+                None,
                 3.1,
                 ModelUnits::Torque,
                 Provenance::now(vec!["beltune".into()], Some(1)),
@@ -492,12 +500,50 @@ mod tests {
         }
     }
 
+    /// Issue 12: the file's setpoint leads by the static stretch of the
+    /// stiffness measured where the validation move ended, not of the
+    /// worst-case position's (the cart rested short by the difference).
+    #[test]
+    fn static_stretch_uses_the_stiffness_at_the_validation_target() {
+        let des = designed(PrefilterKind::Butterworth);
+        let f = friction();
+        let file = |t: Option<&TargetStiffness>| {
+            ControllerFile::from_design(
+                &des,
+                &f,
+                t,
+                3.1,
+                ModelUnits::Torque,
+                Provenance::now(vec![], None),
+            )
+            .unwrap()
+        };
+        // 0.31 N m / 0.0124141 m/rad = 24.97 N: 122.6 um on the model's
+        // 203.74 kN/m, 99.9 um on 250 kN/m
+        let tol = 1e-9;
+        let model = file(None).setpoint;
+        assert!((model.static_stretch_m - 0.31 / (0.0124141 * 203.74e3)).abs() < tol);
+        let target = TargetStiffness {
+            position_m: 0.5,
+            c_n_per_m: 250e3,
+            f_z_hz: 22.0,
+            measured: true,
+        };
+        let at_target = file(Some(&target)).setpoint;
+        assert!((at_target.static_stretch_m - 0.31 / (0.0124141 * 250e3)).abs() < tol);
+        // the dynamic stretch compensation m_c a / c uses it too, as the
+        // validation move did
+        assert_eq!(model.c_n_per_m, 203.74e3);
+        assert_eq!(at_target.c_n_per_m, 250e3);
+    }
+
     #[test]
     fn current_units_relabel_every_torque_key() {
         let des = designed(PrefilterKind::Butterworth);
         let file = ControllerFile::from_design(
             &des,
             &friction(),
+            None,
             15.0,
             ModelUnits::Current,
             Provenance::now(vec![], None),
@@ -519,6 +565,7 @@ mod tests {
         let file = ControllerFile::from_design(
             &des,
             &friction(),
+            None,
             3.1,
             ModelUnits::Torque,
             Provenance::now(vec![], None),

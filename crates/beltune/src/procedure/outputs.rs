@@ -7,7 +7,7 @@
 use super::commission::Commissioning;
 use super::controller_file::ControllerFile;
 use super::recorded::RecordedCommissioning;
-use super::result::{FrictionResult, IdentifiedModel, Truth, Validation};
+use super::result::{FrictionResult, IdentifiedModel, TargetStiffness, Truth, Validation};
 use crate::design::{ControllerDesign, DesignSummary, DriveForm, SCHEMA_VERSION};
 use crate::ident::ModelUnits;
 use crate::provenance::Provenance;
@@ -45,6 +45,9 @@ pub struct CommissioningJson {
     pub excitation_amplitude_nm: Option<f64>,
     /// Where the FRF was measured, m (`null` for recorded data).
     pub identification_position_m: Option<f64>,
+    /// The belt stiffness where the validation move ends, which the static
+    /// belt stretch of `controller.toml` uses (`null` for recorded data).
+    pub target_stiffness: Option<TargetStiffness>,
     /// For a simulated plant: the true values at the identification position.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub truth: Option<Truth>,
@@ -126,16 +129,26 @@ impl CommissioningJson {
     }
 }
 
-/// `controller.toml` for a design, friction (with the holding torque) and torque
+/// `controller.toml` for a design, friction (with the holding torque), the
+/// belt stiffness at the validation target (the static stretch) and torque
 /// limit, in `units`: [`ControllerFile::from_design`] as text.
 pub fn controller_toml(
     des: &ControllerDesign,
     friction: &FrictionResult,
+    target_stiffness: Option<&TargetStiffness>,
     torque_max_nm: f64,
     units: ModelUnits,
     provenance: Provenance,
 ) -> Result<String> {
-    ControllerFile::from_design(des, friction, torque_max_nm, units, provenance)?.to_toml()
+    ControllerFile::from_design(
+        des,
+        friction,
+        target_stiffness,
+        torque_max_nm,
+        units,
+        provenance,
+    )?
+    .to_toml()
 }
 
 /// `commissioning.json` for a run.
@@ -163,6 +176,7 @@ pub fn commissioning_json(
         computation_time_s: run.computation_time_s,
         excitation_amplitude_nm: Some(run.excitation_amplitude_nm),
         identification_position_m: Some(run.identification_position_m),
+        target_stiffness: Some(run.target_stiffness),
         truth,
         axis,
         log: run.log.clone(),
@@ -280,6 +294,7 @@ pub fn recorded_outputs(
         computation_time_s: run.computation_time_s,
         excitation_amplitude_nm: None,
         identification_position_m: None,
+        target_stiffness: None,
         truth: None,
         axis: AxisRecord::Recorded {
             source: source.to_string(),

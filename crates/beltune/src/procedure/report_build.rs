@@ -548,6 +548,23 @@ pub fn build_report(
                 None,
                 4,
             ),
+            // issue 12: the static belt stretch the setpoint leads by uses it
+            row(
+                &format!(
+                    "belt stiffness c at the validation target ({:.0} mm{})",
+                    run.target_stiffness.position_m * 1e3,
+                    if run.target_stiffness.measured {
+                        ", measured there"
+                    } else {
+                        ", identification position"
+                    }
+                ),
+                "kN/m",
+                None,
+                run.target_stiffness.c_n_per_m / 1e3,
+                None,
+                1,
+            ),
         ],
     );
     let nl = &run.validation.nonlinear;

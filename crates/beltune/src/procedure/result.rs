@@ -54,3 +54,22 @@ pub struct Truth {
     #[serde(alias = "coulomb")]
     pub coulomb_nm: f64,
 }
+
+/// The belt stiffness where the validation move ends (issue 12): the static
+/// belt stretch the motor setpoint leads by (`tau_hold / (i_t c)`) is that
+/// of the stiffness where the cart rests, and the replacement stiffness
+/// (2.26) changes along the stroke (up to 30 % between the identification
+/// position and the validation target).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TargetStiffness {
+    /// Cart position the stiffness holds for, m.
+    pub position_m: f64,
+    /// Replacement belt stiffness `c` there, N/m.
+    pub c_n_per_m: f64,
+    /// Antiresonance `f_z` measured there, Hz.
+    pub f_z_hz: f64,
+    /// Whether it was measured by its own experiment at `position_m`;
+    /// `false`: the identification position is close enough and its fit's
+    /// `c` is used.
+    pub measured: bool,
+}

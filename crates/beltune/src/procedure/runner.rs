@@ -483,6 +483,26 @@ impl<'a> Runner<'a> {
         Error::SafetyStop { reason }
     }
 
+    /// Mean torque command of the last [`RIGID_VELOCITY_WINDOW_S`] (the
+    /// samples the history holds), N m: what has been holding the load, the
+    /// loop's vibration and an excitation averaged out; 0 before any sample.
+    fn recent_torque_nm(&self) -> f64 {
+        let n = ((RIGID_VELOCITY_WINDOW_S / self.info.ts_s).round() as usize).max(1);
+        let (sum, count) = self
+            .history
+            .iter()
+            .rev()
+            .take(n)
+            .fold((0.0, 0usize), |(s, c), h| {
+                (s + h.sample.torque_command_nm, c + 1)
+            });
+        if count == 0 || !sum.is_finite() {
+            0.0
+        } else {
+            sum / count as f64
+        }
+    }
+
     /// Bring the axis to rest with a jerk-limited stop under the stop
     /// controller; returns the rest position, m. The supervisor is not asked
     /// during the stop (it is the reaction), but the torque stays limited.
@@ -527,7 +547,15 @@ impl<'a> Runner<'a> {
             config.feedforward = beltune_rt::control::Feedforward::linear(inertia, 0.0);
         }
         let mut ctrl = CascadeController::new(config)?;
-        ctrl.reset_to(self.motor_angle_rad());
+        // Bumpless: the stop continues from the torque the axis was getting
+        // (issue 12: a reset integrator dropped the 3.1 N m that held a
+        // heavy vertical load, which fell 65 mm instead of 10 mm).
+        let w0 = v / self.i_t;
+        let feedforward = config.feedforward.torque_nm(w0, 0.0);
+        ctrl.reset_to_holding(
+            self.motor_angle_rad(),
+            self.recent_torque_nm() - feedforward,
+        );
         let n = ((traj.duration_s() + STOP_SETTLE_S) / ts).ceil() as u64;
         let limit = self.info.torque_max_nm;
         // Hold on after the settling time until the axis is at rest (an
@@ -799,6 +827,76 @@ mod tests {
         // beyond the reserve: all of it
         let a = stop_deceleration(&cap, &limits, 100.0, -0.005, -2.0);
         assert_eq!(a, cap.reserve_deceleration_negative_m_s2);
+    }
+
+    /// Issue 12 (a heavy load fell 65 mm in its stop, 56.8 mm out of the
+    /// window: plant #839): the stop continues from the torque that held
+    /// the load (the mean of the last 20 ms of commands), not from a reset
+    /// integrator and the stop controller's offset. A 20 kg cart on a
+    /// vertical egc70 held by its holding torque (2.5 N m) stays where it
+    /// is when stopped; from zero torque it would fall until the loop
+    /// built 2.5 N m again.
+    #[test]
+    fn a_stop_keeps_the_torque_that_held_the_load_issue_12() {
+        let mut p = rigs::egc70_params(20.0);
+        p.tilt_rad = 90f64.to_radians();
+        let hold = -p.i_t() * p.gravity_force_n();
+        assert!(hold.abs() > 2.0, "{hold}");
+        let plant = rigs::Plant::Physical(p.clone());
+        let info = plant.info();
+        let start = 0.3;
+        let mut axis = SimAxis::new(
+            &plant,
+            SimConfig {
+                initial_cart_position_m: Some(start),
+                ..SimConfig::default()
+            },
+        )
+        .unwrap();
+        let j = plant.worst_case_two_mass().unwrap().rigid_inertia();
+        let boot = bootstrap_controller(j, p.i_t(), info.ts_s, info.torque_max_nm).unwrap();
+        assert_eq!(boot.torque_offset_nm, 0.0);
+        let limits = SafetyLimits {
+            travel_min_m: 0.0,
+            travel_max_m: 0.6,
+            torque_max_nm: info.torque_max_nm,
+            velocity_max_m_s: 2.5,
+            following_error_max_m: 0.05,
+        };
+        let supervisor = SafetySupervisor::new(limits, 5.0).unwrap();
+        let stop_limits = Limits {
+            v_max: 0.5,
+            v_min: -0.5,
+            a_max: 5.0,
+            a_min: -5.0,
+            j_max: 100.0,
+            j_min: -100.0,
+            position_min: 0.0,
+            position_max: 0.6,
+        };
+        let mut progress = NoProgress;
+        let mut runner = Runner::new(
+            &mut axis,
+            &mut progress,
+            supervisor,
+            p.i_t(),
+            start,
+            boot,
+            stop_limits,
+        )
+        .unwrap();
+        // held open loop by its holding torque until the belt has settled
+        for _ in 0..(0.5 / info.ts_s) as usize {
+            runner.step(hold, None).unwrap();
+        }
+        let before = runner.position_m();
+        let rest = runner.stop().unwrap();
+        assert!(
+            (rest - before).abs() < 1e-3,
+            "held at {:.2} mm, stopped at {:.2} mm",
+            before * 1e3,
+            rest * 1e3
+        );
     }
 
     /// Issue 12: a 0.5 m/s spike of the fast estimate over a creeping cart

@@ -229,11 +229,19 @@ impl StopCapability {
 
     /// The capability while the holding torque is known only from the first
     /// hold (stage 2: it still contains the static friction the sagging load
-    /// met): like [`StopCapability::from_axis`] but never refusing. The
-    /// braking torque in the weak direction is what the first hold leaves,
-    /// at least [`PROVISIONAL_MIN_FRACTION`] of the limit; the refusal is left
-    /// to the holding-torque stage, which measures gravity without friction
-    /// (issue 12: plants refused on the first hold that physics allows).
+    /// met): like [`StopCapability::from_axis`] but refusing only a load
+    /// whose first hold takes more than the stop's whole command budget
+    /// ([`STOP_COMMAND_FRACTION`] of the limit): the stop has nothing left
+    /// to brake it downhill. The braking torque in the weak direction is
+    /// what the first hold leaves, at least [`PROVISIONAL_MIN_FRACTION`] of
+    /// the limit; the finer refusal is left to the holding-torque stage,
+    /// which measures gravity without friction (issue 12: plants refused on
+    /// the first hold that physics allows). A plant refused here is
+    /// infeasible unless its first hold overstates gravity by more than
+    /// `STOP_MIN_FRACTION T_max - tau_c / 2` (from_axis accepts up to
+    /// `(STOP_COMMAND_FRACTION - STOP_MIN_FRACTION) T_max + tau_c / 2`;
+    /// issue 12: such loads were run until a stop or a following error
+    /// ended the holding-torque runs).
     pub fn provisional(
         torque_max_nm: f64,
         inertia_kg_m2: f64,
@@ -241,6 +249,18 @@ impl StopCapability {
         first_hold_nm: f64,
     ) -> Result<Self> {
         match Self::from_axis(torque_max_nm, inertia_kg_m2, i_t_m, first_hold_nm, 0.0) {
+            Err(Error::Infeasible { .. })
+                if first_hold_nm.abs() > STOP_COMMAND_FRACTION * torque_max_nm =>
+            {
+                Err(Error::Infeasible {
+                    reason: format!(
+                        "the axis needs {:.3} N m to hold its load (first hold), more than {:.0} % of the torque limit {:.3} N m: nothing is left to stop it downhill",
+                        first_hold_nm.abs(),
+                        STOP_COMMAND_FRACTION * 100.0,
+                        torque_max_nm
+                    ),
+                })
+            }
             Err(Error::Infeasible { .. }) => {
                 let total = STOP_COMMAND_FRACTION * torque_max_nm;
                 let floor = PROVISIONAL_MIN_FRACTION * torque_max_nm;
@@ -614,10 +634,11 @@ mod tests {
     }
 
     /// Issue 12: the first hold (gravity plus the static friction a sagging
-    /// load meets) refuses no axis; the braking torque it leaves is assumed,
-    /// at least PROVISIONAL_MIN_FRACTION of the limit.
+    /// load meets) refuses no axis within the stop's command budget that
+    /// from_axis would; the braking torque it leaves is assumed, at least
+    /// PROVISIONAL_MIN_FRACTION of the limit.
     #[test]
-    fn a_provisional_capability_refuses_nothing_issue_12() {
+    fn a_provisional_capability_refuses_nothing_within_the_budget_issue_12() {
         let (t_max, j, i_t) = (3.1, 3e-3, 0.0124);
         let first_hold = 2.4; // from_axis refuses: 0.9 * 3.1 - 2.4 < 0.15 * 3.1
         assert!(StopCapability::from_axis(t_max, j, i_t, first_hold, 0.0).is_err());
@@ -625,7 +646,7 @@ mod tests {
         let weak = (STOP_COMMAND_FRACTION * t_max - first_hold) * i_t / j;
         assert!((c.deceleration_negative_m_s2 - weak).abs() < 1e-12, "{c:?}");
         assert!(c.deceleration_positive_m_s2 > c.deceleration_negative_m_s2);
-        let c = StopCapability::provisional(t_max, j, i_t, 3.05).unwrap();
+        let c = StopCapability::provisional(t_max, j, i_t, 2.75).unwrap();
         let floor = PROVISIONAL_MIN_FRACTION * t_max * i_t / j;
         assert!((c.deceleration_negative_m_s2 - floor).abs() < 1e-12);
         // where from_axis accepts, the same capability
@@ -634,6 +655,26 @@ mod tests {
             StopCapability::from_axis(t_max, j, i_t, 0.5, 0.0).unwrap()
         );
         assert!(StopCapability::provisional(t_max, j, i_t, f64::NAN).is_err());
+    }
+
+    /// Issue 12 (heavy loads run until a stop): a first hold beyond the
+    /// stop's whole command budget leaves nothing to brake downhill; it is
+    /// refused at once, in either direction of gravity, while a first hold
+    /// just inside it is still left to the holding-torque stage.
+    #[test]
+    fn a_first_hold_beyond_the_command_budget_is_refused_issue_12() {
+        let (t_max, j, i_t) = (3.1, 3.9e-3, 0.0124);
+        let budget = STOP_COMMAND_FRACTION * t_max;
+        for hold in [budget + 1e-3, 2.9, 3.05, 3.1] {
+            for sign in [1.0, -1.0] {
+                assert!(matches!(
+                    StopCapability::provisional(t_max, j, i_t, sign * hold),
+                    Err(Error::Infeasible { .. })
+                ));
+            }
+        }
+        assert!(StopCapability::provisional(t_max, j, i_t, budget - 1e-3).is_ok());
+        assert!(StopCapability::provisional(t_max, j, i_t, -(budget - 1e-3)).is_ok());
     }
 
     /// A lagging (smoothed) velocity estimate: the look-ahead adds the

@@ -385,6 +385,80 @@ mod tests {
         assert!((without.m_c_kg / two.m_c - 1.0).abs() < 1e-6);
     }
 
+    /// Issue 12, the yardstick checked independently: the two-mass fit
+    /// (data-sheet `Theta_e`, the commissioning's lines and band) of the
+    /// exact frequency response of the simulator's linear three-mass model
+    /// (no friction, no noise) finds the truth's `f_z` (the motor-locked
+    /// mode) within 0.05 % on a loaded cart and +1.8 % on the empty one, and
+    /// an `m_c` below the truth's rigid-body `m_c + Theta_r / r^2`: -1.3 % at
+    /// 11.2 and 25 kg, -7.2 % on the empty cart (0.96 kg, where the end
+    /// pulley's 0.15 kg is 14 % of the moving mass). A two-mass model with the
+    /// data sheet's motor inertia cannot carry both the three-mass rigid
+    /// inertia and its mode pair; on loaded carts the fit's `m_c` is the cart
+    /// alone. That structural part of the `m_c` error (measured -1.2 to
+    /// -4.2 % over 72 study plants, median -1.9 %) is the model's, not the
+    /// identification's.
+    #[test]
+    fn identification_truth_is_what_a_fit_of_the_exact_three_mass_frf_shows_issue_12() {
+        use crate::ident::{fit_two_mass, FitConfig, Frf, LineStatus};
+        for payload in [0.0, 11.2, 25.0] {
+            let p = crate::model::rigs::egc70_params(payload);
+            let xi = p.stroke_m - 0.05;
+            let lin = crate::model::three_mass::ThreeMass::new(&p)
+                .unwrap()
+                .linearize(xi);
+            // the commissioning's grid: PRBS order 9, clock 16 samples at 10 kHz
+            let (ts, n) = (1e-4, 511 * 16);
+            let df = 1.0 / (n as f64 * ts);
+            let lines = n / 2 + 1;
+            let freq_hz: Vec<f64> = (0..lines).map(|k| k as f64 * df).collect();
+            let frf = Frf {
+                response: freq_hz
+                    .iter()
+                    .map(|&f| {
+                        if f > 0.0 {
+                            lin.frf_motor_angle(2.0 * std::f64::consts::PI * f)
+                        } else {
+                            crate::lti::C64::new(0.0, 0.0)
+                        }
+                    })
+                    .collect(),
+                coherence: vec![1.0; lines],
+                line_status: freq_hz
+                    .iter()
+                    .map(|&f| {
+                        if (3.0..=625.0).contains(&f) {
+                            LineStatus::Usable
+                        } else {
+                            LineStatus::OutsideBand
+                        }
+                    })
+                    .collect(),
+                input_power: vec![1.0; lines],
+                freq_hz,
+                ts_s: ts,
+                n_periods: 2,
+            };
+            let fit = fit_two_mass(
+                &frf,
+                &FitConfig {
+                    theta_e: Some(p.theta_e()),
+                    i_t: p.i_t(),
+                    n_log_lines: 60,
+                    ..FitConfig::default()
+                },
+            )
+            .unwrap();
+            let truth = identification_truth(&p, xi).unwrap();
+            let f_z = fit.f_z_hz / truth.f_z_hz - 1.0;
+            let m_c = fit.params.m_c / truth.m_c_kg - 1.0;
+            // measured: f_z +1.8 % at 0 kg, -0.04 % at 11.2 and 25 kg;
+            // m_c -7.2 %, -1.3 %, -1.3 %
+            assert!(f_z.abs() < 0.025, "{payload} kg: f_z {f_z:+.4}");
+            assert!((-0.08..0.0).contains(&m_c), "{payload} kg: m_c {m_c:+.4}");
+        }
+    }
+
     #[test]
     fn the_generator_is_seeded_and_stays_in_its_ranges() {
         let r = Ranges::default();

@@ -5,7 +5,7 @@
 
 use super::super::commission::{DataSheet, ExcitationConfig};
 use super::super::motion::move_to;
-use super::super::result::IdentifiedModel;
+use super::super::result::{IdentifiedModel, TargetStiffness};
 use super::Stages;
 use crate::ident::dead_time::{estimate_dead_time, DeadTime};
 use crate::ident::etfe::{etfe, EtfeConfig, Frf};
@@ -36,6 +36,109 @@ pub struct Identification {
     pub excitation_position_m: Vec<f64>,
 }
 
+/// One open-loop PRBS experiment as recorded.
+struct Excitation {
+    /// Busy time of the axis at the first sample, s.
+    t_start_s: f64,
+    /// PRBS period, samples.
+    period: usize,
+    /// Torque command (holding torque plus PRBS), N m.
+    cmd: Vec<f64>,
+    /// Torque the drive reports, N m.
+    act: Vec<f64>,
+    /// Motor angle, rad.
+    ang: Vec<f64>,
+    /// Motor-side position, m.
+    pos: Vec<f64>,
+}
+
+/// Move to `center_m` under `hold` and excite the axis open loop around
+/// `holding_nm` with a PRBS of `order` (the clock of `ex`) and amplitude
+/// `amplitude_nm` for `periods` periods.
+#[allow(clippy::too_many_arguments)]
+fn excite(
+    st: &mut Stages,
+    hold: &CascadeConfig<f64>,
+    center_m: f64,
+    limits: &Limits,
+    holding_nm: f64,
+    amplitude_nm: f64,
+    order: u32,
+    periods: usize,
+    ex: &ExcitationConfig,
+) -> Result<Excitation> {
+    let ts = st.runner.info().ts_s;
+    let mut prbs = Prbs::new(order, ex.clock_samples(ts), amplitude_nm)?;
+    let period = prbs.period_samples() as usize;
+    let n = period * periods;
+    move_to(st.runner, hold, center_m, limits, 0.05)?;
+    let mut e = Excitation {
+        t_start_s: st.runner.busy_time_s(),
+        period,
+        cmd: Vec::with_capacity(n),
+        act: Vec::with_capacity(n),
+        ang: Vec::with_capacity(n),
+        pos: Vec::with_capacity(n),
+    };
+    for _ in 0..n {
+        let tau = holding_nm + prbs.step();
+        let s = st.runner.step(tau, None)?;
+        e.cmd.push(s.torque_command_nm);
+        e.act.push(s.torque_actual_nm);
+        e.ang.push(s.motor_angle_rad);
+        e.pos.push(s.position_m);
+    }
+    Ok(e)
+}
+
+/// The ETFE settings of an excitation with `period` samples per period
+/// and `skip_periods` transient periods: Clary's method II, the band from
+/// the fit's lower limit to 0.4 f_s (below it the PRBS spectrum and the
+/// Tustin/ZOH effects stay mild) or the PRBS clock frequency.
+fn etfe_config(ts: f64, period: usize, skip_periods: usize, ex: &ExcitationConfig) -> EtfeConfig {
+    let f_max = 0.4 / ts;
+    let clock = ex.clock_samples(ts);
+    EtfeConfig {
+        ts_s: ts,
+        period_samples: period,
+        skip_periods,
+        integrator: true,
+        band_hz: Some((ex.fit_band_min_hz, f_max.min(1.0 / (clock as f64 * ts)))),
+        ..EtfeConfig::default()
+    }
+}
+
+/// The two-mass fit of `frf` (the data-sheet `Theta_e`), refused when the
+/// fitted model has no resonance inside the measured band.
+fn fit_frf(
+    frf: &Frf,
+    ecfg: &EtfeConfig,
+    ex: &ExcitationConfig,
+    datasheet: &DataSheet,
+) -> Result<TwoMassFit> {
+    let fcfg = FitConfig {
+        theta_e: Some(datasheet.theta_e_kg_m2),
+        i_t: datasheet.i_t_m,
+        n_log_lines: ex.n_log_lines,
+        ..FitConfig::default()
+    };
+    let fit = fit_two_mass(frf, &fcfg)?;
+    let f_band = ecfg.band_hz.map(|b| b.1).unwrap_or(0.5 / ecfg.ts_s);
+    if !(fit.f_z_hz.is_finite()
+        && fit.f_r_hz.is_finite()
+        && fit.f_r_hz < f_band
+        && fit.f_z_hz > 0.0)
+    {
+        return Err(Error::FitFailed {
+            reason: format!(
+                "the fitted model (f_r {:.3e} Hz, f_z {:.3e} Hz) has no resonance inside the measured band up to {:.0} Hz; check the excitation and the data sheet",
+                fit.f_r_hz, fit.f_z_hz, f_band
+            ),
+        });
+    }
+    Ok(fit)
+}
+
 /// Stage 5: excite around `holding_nm` with amplitude `amplitude_nm` at
 /// `center_m` (held there by `hold` between the moves) and identify.
 #[allow(clippy::too_many_arguments)]
@@ -50,58 +153,25 @@ pub fn identification(
     datasheet: &DataSheet,
 ) -> Result<Identification> {
     let ts = st.runner.info().ts_s;
-    let clock = ex.clock_samples(ts);
-    let mut prbs = Prbs::new(ex.prbs_order, clock, amplitude_nm)?;
-    let period = prbs.period_samples() as usize;
-    let n = period * (ex.periods + ex.skip_periods);
-    st.start("identification (open loop)", n as u64);
-    move_to(st.runner, hold, center_m, limits, 0.05)?;
-    let mut cmd = Vec::with_capacity(n);
-    let mut act = Vec::with_capacity(n);
-    let mut ang = Vec::with_capacity(n);
-    let mut pos = Vec::with_capacity(n);
-    let t_start = st.runner.busy_time_s();
-    for _ in 0..n {
-        let tau = holding_nm + prbs.step();
-        let s = st.runner.step(tau, None)?;
-        cmd.push(s.torque_command_nm);
-        act.push(s.torque_actual_nm);
-        ang.push(s.motor_angle_rad);
-        pos.push(s.position_m);
-    }
+    let periods = ex.periods + ex.skip_periods;
+    let period = Prbs::new(ex.prbs_order, ex.clock_samples(ts), amplitude_nm)?.period_samples();
+    st.start("identification (open loop)", period * periods as u64);
+    let e = excite(
+        st,
+        hold,
+        center_m,
+        limits,
+        holding_nm,
+        amplitude_nm,
+        ex.prbs_order,
+        periods,
+        ex,
+    )?;
     let (frf, fit, dead_time) = st.compute(|| -> Result<_> {
-        // Below 0.4 f_s the PRBS spectrum and the Tustin/ZOH effects stay mild.
-        let f_max = 0.4 / ts;
-        let ecfg = EtfeConfig {
-            ts_s: ts,
-            period_samples: period,
-            skip_periods: ex.skip_periods,
-            integrator: true,
-            band_hz: Some((ex.fit_band_min_hz, f_max.min(1.0 / (clock as f64 * ts)))),
-            ..EtfeConfig::default()
-        };
-        let frf = etfe(&cmd, &ang, &ecfg)?;
-        let frf_actual = etfe(&act, &ang, &ecfg)?;
-        let fcfg = FitConfig {
-            theta_e: Some(datasheet.theta_e_kg_m2),
-            i_t: datasheet.i_t_m,
-            n_log_lines: ex.n_log_lines,
-            ..FitConfig::default()
-        };
-        let fit = fit_two_mass(&frf, &fcfg)?;
-        let f_band = ecfg.band_hz.map(|b| b.1).unwrap_or(0.5 / ts);
-        if !(fit.f_z_hz.is_finite()
-            && fit.f_r_hz.is_finite()
-            && fit.f_r_hz < f_band
-            && fit.f_z_hz > 0.0)
-        {
-            return Err(Error::FitFailed {
-                reason: format!(
-                    "the fitted model (f_r {:.3e} Hz, f_z {:.3e} Hz) has no resonance inside the measured band up to {:.0} Hz; check the excitation and the data sheet",
-                    fit.f_r_hz, fit.f_z_hz, f_band
-                ),
-            });
-        }
+        let ecfg = etfe_config(ts, e.period, ex.skip_periods, ex);
+        let frf = etfe(&e.cmd, &e.ang, &ecfg)?;
+        let frf_actual = etfe(&e.act, &e.ang, &ecfg)?;
+        let fit = fit_frf(&frf, &ecfg, ex, datasheet)?;
         let max_dt = (MAX_DEAD_TIME_S / ts) as usize;
         let dead_time = estimate_dead_time(&frf, &frf_actual, fit.f_r_hz, max_dt)?;
         Ok((frf, fit, dead_time))
@@ -121,13 +191,125 @@ pub fn identification(
         identified.mean_coherence
     );
     st.finish("identification", line);
+    let n = e.cmd.len();
     Ok(Identification {
         frf,
         fit,
         dead_time,
         identified,
-        excitation_time_s: (0..n).map(|k| t_start + k as f64 * ts).collect(),
-        excitation_torque_nm: cmd,
-        excitation_position_m: pos,
+        excitation_time_s: (0..n).map(|k| e.t_start_s + k as f64 * ts).collect(),
+        excitation_torque_nm: e.cmd,
+        excitation_position_m: e.pos,
     })
+}
+
+/// Distance between the identification position and the validation target
+/// below which the main fit's stiffness stands for the target's, m. The
+/// replacement stiffness (2.26) changes by about `dxi / (l_1 + l_e)` along
+/// the stroke, a few percent per 100 mm on the simulated axes; 5 mm keep the
+/// error of a 1.5 mm static stretch (a heavy vertical axis) near 10 um.
+pub const SAME_POSITION_M: f64 = 0.005;
+/// PRBS order of the stiffness measurement at the validation target.
+pub const TARGET_PRBS_ORDER: u32 = 9;
+
+/// Stage 5b (issue 12): the belt stiffness at `target_m`, where the
+/// validation move ends. A second open-loop PRBS of amplitude `amplitude_nm`
+/// around `holding_nm` there (one transient period and the two periods the
+/// coherence needs, order [`TARGET_PRBS_ORDER`]), fitted like the main
+/// identification; the stiffness is `c = m_c w_z^2` (2.45) with the target's
+/// antiresonance `w_z` and the main fit's `m_c` (the same cart: the
+/// feedforward and the stretch compensation use that mass). Skipped, with
+/// the main fit's `c`, when the target is within [`SAME_POSITION_M`] of the
+/// identification position `ident_position_m`.
+#[allow(clippy::too_many_arguments)]
+pub fn stiffness_at(
+    st: &mut Stages,
+    hold: &CascadeConfig<f64>,
+    target_m: f64,
+    main: &TwoMassFit,
+    ident_position_m: f64,
+    limits: &Limits,
+    holding_nm: f64,
+    amplitude_nm: f64,
+    ex: &ExcitationConfig,
+    datasheet: &DataSheet,
+) -> Result<TargetStiffness> {
+    if (target_m - ident_position_m).abs() < SAME_POSITION_M {
+        st.start("belt stiffness at the target", 0);
+        st.finish(
+            "belt stiffness",
+            format!(
+                "the target {:.1} mm is the identification position: c {:.1} kN/m",
+                target_m * 1e3,
+                main.params.c / 1e3
+            ),
+        );
+        return Ok(TargetStiffness {
+            position_m: ident_position_m,
+            c_n_per_m: main.params.c,
+            f_z_hz: main.f_z_hz,
+            measured: false,
+        });
+    }
+    let ts = st.runner.info().ts_s;
+    let skip = ex.skip_periods;
+    let periods = skip + 2;
+    let period = Prbs::new(TARGET_PRBS_ORDER, ex.clock_samples(ts), amplitude_nm)?.period_samples();
+    st.start(
+        "belt stiffness at the target (open loop)",
+        period * periods as u64,
+    );
+    let e = excite(
+        st,
+        hold,
+        target_m,
+        limits,
+        holding_nm,
+        amplitude_nm,
+        TARGET_PRBS_ORDER,
+        periods,
+        ex,
+    )?;
+    let fitted = st.compute(|| -> Result<_> {
+        let ecfg = etfe_config(ts, e.period, skip, ex);
+        let frf = etfe(&e.cmd, &e.ang, &ecfg)?;
+        fit_frf(&frf, &ecfg, ex, datasheet)
+    });
+    let (out, line) = match fitted {
+        Ok(fit) => (
+            TargetStiffness {
+                position_m: target_m,
+                c_n_per_m: fit.params.c,
+                f_z_hz: fit.f_z_hz,
+                measured: true,
+            },
+            format!(
+                "at {:.1} mm: f_z {:.2} Hz, c {:.1} kN/m (at the identification position {:.1} mm: {:.1} kN/m)",
+                target_m * 1e3,
+                fit.f_z_hz,
+                fit.params.c / 1e3,
+                ident_position_m * 1e3,
+                main.params.c / 1e3,
+            ),
+        ),
+        // The main identification stands: a target FRF that does not fit
+        // leaves the stiffness of the identification position (the static
+        // stretch as before this stage), and the log says so.
+        Err(e @ (Error::FitFailed { .. } | Error::TooShort { .. } | Error::NoExcitation { .. })) => (
+            TargetStiffness {
+                position_m: ident_position_m,
+                c_n_per_m: main.params.c,
+                f_z_hz: main.f_z_hz,
+                measured: false,
+            },
+            format!(
+                "not measured at {:.1} mm ({e}); the identification position's {:.1} kN/m is used",
+                target_m * 1e3,
+                main.params.c / 1e3
+            ),
+        ),
+        Err(e) => return Err(e),
+    };
+    st.finish("belt stiffness", line);
+    Ok(out)
 }

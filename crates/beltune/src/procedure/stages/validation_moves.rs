@@ -2,7 +2,7 @@
 //! and nonlinear feedforward, each from the same start; the unmeasured return
 //! to the start runs under the feedback cascade.
 
-use super::super::commission::{CommissioningConfig, DataSheet};
+use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
 use super::super::result::{FrictionResult, Validation};
 use super::super::validation::{
     run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
@@ -48,6 +48,14 @@ pub struct PlannedMove {
     pub reduced: bool,
 }
 
+/// Where the validation move of `spec` ends inside the travel window of
+/// `ds`, m: its target, at most [`TARGET_CLEARANCE_M`] below the window's
+/// upper edge. Known before any experiment, so that the belt stiffness can be
+/// measured there ([`super::identification::stiffness_at`]).
+pub fn validation_target_m(spec: &super::super::validation::MoveSpec, ds: &DataSheet) -> f64 {
+    spec.target_m.min(ds.travel_max_m - TARGET_CLEARANCE_M)
+}
+
 /// The validation move for an axis with rigid inertia `inertia_kg_m2`,
 /// transmission `i_t_m`, friction `friction` (at the motor), holding torque
 /// `holding_nm`, torque limit `torque_max_nm` and worst stop deceleration
@@ -64,7 +72,7 @@ pub fn plan_validation_move(
     stop_deceleration_m_s2: f64,
 ) -> Result<PlannedMove> {
     let start = spec.start_m.max(ds.travel_min_m + START_CLEARANCE_M);
-    let target = spec.target_m.min(ds.travel_max_m - TARGET_CLEARANCE_M);
+    let target = validation_target_m(spec, ds);
     if (target - start).partial_cmp(&0.05) != Some(std::cmp::Ordering::Greater) {
         return Err(Error::Infeasible {
             reason: format!(
@@ -127,14 +135,27 @@ pub fn plan_validation_move(
 }
 
 /// Limits of the unmeasured return to the validation start inside the
-/// window of `ds`: the validation move's `planned` limits with the
-/// acceleration at most half the stop deceleration `stop_deceleration_m_s2`
-/// (so that the look-ahead, which assumes the stop's deceleration after a
-/// reaction time, never trips on the return's own braking).
+/// window of `ds`: the validation move's `planned` limits, at most those of
+/// the positioning moves the positioning controller ran in stages 2-5, with
+/// the acceleration at most half the stop deceleration
+/// `stop_deceleration_m_s2` (so that the look-ahead, which assumes the
+/// stop's deceleration after a reaction time, never trips on the return's
+/// own braking).
+///
+/// Issue 12 (travel stops of feasible plants): at the validation move's
+/// 1.1 m/s the slow bootstrap loop, without Coulomb feedforward, lagged a
+/// light cart with high friction by 30 mm and its integrator, wound up
+/// against the friction, carried the cart 18 mm past the approach point,
+/// 15 mm inside the window, to 3 mm outside the start: the look-ahead
+/// stopped it.
 pub fn return_limits(planned: &Limits, ds: &DataSheet, stop_deceleration_m_s2: f64) -> Limits {
-    let a = planned.a_max.min(0.5 * stop_deceleration_m_s2);
-    let v = planned.v_max;
-    let j = planned.j_max;
+    let positioning = positioning_limits(ds);
+    let a = planned
+        .a_max
+        .min(positioning.a_max)
+        .min(0.5 * stop_deceleration_m_s2);
+    let v = planned.v_max.min(positioning.v_max);
+    let j = planned.j_max.min(positioning.j_max);
     Limits {
         v_max: v,
         v_min: -v,
@@ -163,7 +184,9 @@ fn sampled(t: &Trajectory) -> impl Iterator<Item = beltune_rt::trajectory::Sampl
 /// Stage 8: the three validation moves with `feedback` plus each feedforward
 /// variant built from the fit (belt stretch), the rigid inertia
 /// `feedforward_inertia_kg_m2` (the friction runs' or the fit's, which also
-/// sizes the move's acceleration) and the friction of stage 7. The unmeasured
+/// sizes the move's acceleration) and the friction of stage 7, the static
+/// belt stretch with the stiffness `static_c_n_per_m` measured at the target
+/// (stage 5b). The unmeasured
 /// return to the start runs under `positioning` (the bootstrap controller
 /// with the holding torque, the one of the positioning moves of stages 2-5).
 #[allow(clippy::too_many_arguments)]
@@ -176,13 +199,14 @@ pub fn validation_moves(
     friction: &FrictionResult,
     preview: usize,
     holding_nm: f64,
+    static_c_n_per_m: f64,
     datasheet: &DataSheet,
     cfg: &CommissioningConfig,
 ) -> Result<ValidationMoves> {
     let ts = st.runner.info().ts_s;
     let p = fit.params;
     let m_e = feedforward_inertia_kg_m2;
-    let opts = validation_track_options(&p, preview, holding_nm);
+    let opts = validation_track_options(&p, preview, holding_nm, static_c_n_per_m);
     let move_samples =
         ((cfg.validation.settle_s + 1.5) / ts) as u64 * FeedforwardVariant::ALL.len() as u64;
     st.start("validation moves", move_samples);
@@ -208,8 +232,9 @@ pub fn validation_moves(
     };
     // The unmeasured return to the start runs under the positioning
     // controller (the bootstrap cascade of stages 2-5, which moved the axis
-    // safely before) with the move's limits, braking with at most half the
-    // stop deceleration, to a point 15 mm
+    // safely before) with the move's limits within the positioning limits
+    // it ran under there, braking with at most half the stop deceleration,
+    // to a point 15 mm
     // inside the window from which it creeps to the start
     // ([`super::super::validation::run_move`]). Issue 12: under the designed
     // feedback without feedforward, a loop that is poorly damped on the real
