@@ -654,6 +654,36 @@ mod tests {
     use crate::procedure::safety::SafetyLimits;
     use crate::sim::{SimAxis, SimConfig};
 
+    /// Stop limits of the runner tests (window 0 .. 0.6 m).
+    const TEST_STOP_LIMITS: Limits = Limits {
+        v_max: 0.5,
+        v_min: -0.5,
+        a_max: 5.0,
+        a_min: -5.0,
+        j_max: 100.0,
+        j_min: -100.0,
+        position_min: 0.0,
+        position_max: 0.6,
+    };
+
+    /// The supervisor of the runner tests: window 0 .. 0.6 m, torque limit
+    /// `torque_max_nm`, speed `velocity_max_m_s` and following error
+    /// `following_error_max_m` limits, stop deceleration 5 m/s^2.
+    fn test_supervisor(
+        torque_max_nm: f64,
+        velocity_max_m_s: f64,
+        following_error_max_m: f64,
+    ) -> SafetySupervisor {
+        let limits = SafetyLimits {
+            travel_min_m: 0.0,
+            travel_max_m: 0.6,
+            torque_max_nm,
+            velocity_max_m_s,
+            following_error_max_m,
+        };
+        SafetySupervisor::new(limits, 5.0).unwrap()
+    }
+
     /// A simulated axis that claims real time and counts its exchanges.
     struct RealTime {
         sim: SimAxis,
@@ -856,24 +886,7 @@ mod tests {
         let j = plant.worst_case_two_mass().unwrap().rigid_inertia();
         let boot = bootstrap_controller(j, p.i_t(), info.ts_s, info.torque_max_nm).unwrap();
         assert_eq!(boot.torque_offset_nm, 0.0);
-        let limits = SafetyLimits {
-            travel_min_m: 0.0,
-            travel_max_m: 0.6,
-            torque_max_nm: info.torque_max_nm,
-            velocity_max_m_s: 2.5,
-            following_error_max_m: 0.05,
-        };
-        let supervisor = SafetySupervisor::new(limits, 5.0).unwrap();
-        let stop_limits = Limits {
-            v_max: 0.5,
-            v_min: -0.5,
-            a_max: 5.0,
-            a_min: -5.0,
-            j_max: 100.0,
-            j_min: -100.0,
-            position_min: 0.0,
-            position_max: 0.6,
-        };
+        let supervisor = test_supervisor(info.torque_max_nm, 2.5, 0.05);
         let mut progress = NoProgress;
         let mut runner = Runner::new(
             &mut axis,
@@ -882,7 +895,7 @@ mod tests {
             p.i_t(),
             start,
             boot,
-            stop_limits,
+            TEST_STOP_LIMITS,
         )
         .unwrap();
         // held open loop by its holding torque until the belt has settled
@@ -943,25 +956,9 @@ mod tests {
             rigs::Plant::Physical(p) => p.i_t(),
         };
         let j = plant.worst_case_two_mass().unwrap().rigid_inertia();
-        let limits = SafetyLimits {
-            travel_min_m: 0.0,
-            travel_max_m: 0.6,
-            torque_max_nm: info.torque_max_nm,
-            velocity_max_m_s: 2.5,
-            following_error_max_m: 0.05,
-        };
-        let supervisor = SafetySupervisor::new(limits, 5.0).unwrap();
+        let supervisor = test_supervisor(info.torque_max_nm, 2.5, 0.05);
+        let limits = *supervisor.limits();
         let boot = bootstrap_controller(j, i_t, info.ts_s, info.torque_max_nm).unwrap();
-        let stop_limits = Limits {
-            v_max: 0.5,
-            v_min: -0.5,
-            a_max: 5.0,
-            a_min: -5.0,
-            j_max: 100.0,
-            j_min: -100.0,
-            position_min: 0.0,
-            position_max: 0.6,
-        };
         let mut rec = Recorder::default();
         let mut runner = Runner::new(
             &mut axis,
@@ -970,7 +967,7 @@ mod tests {
             i_t,
             start,
             boot,
-            stop_limits,
+            TEST_STOP_LIMITS,
         )
         .unwrap();
         // A tiny torque first (well under a second of it), then a push.
@@ -1080,24 +1077,8 @@ mod tests {
         let i_t = 0.078 / (2.0 * std::f64::consts::PI);
         let j = 1.4e-4 + i_t * i_t * 12.16;
         let boot = bootstrap_controller(j, i_t, info.ts_s, info.torque_max_nm).unwrap();
-        let limits = SafetyLimits {
-            travel_min_m: 0.0,
-            travel_max_m: 0.6,
-            torque_max_nm: info.torque_max_nm,
-            velocity_max_m_s: 1.0,
-            following_error_max_m: 0.01,
-        };
-        let supervisor = SafetySupervisor::new(limits, 5.0).unwrap();
-        let stop_limits = Limits {
-            v_max: 0.5,
-            v_min: -0.5,
-            a_max: 5.0,
-            a_min: -5.0,
-            j_max: 100.0,
-            j_min: -100.0,
-            position_min: 0.0,
-            position_max: 0.6,
-        };
+        let supervisor = test_supervisor(info.torque_max_nm, 1.0, 0.01);
+        let limits = *supervisor.limits();
         let mut rec = FailureRecorder::default();
         let mut runner = Runner::new(
             &mut axis,
@@ -1106,7 +1087,7 @@ mod tests {
             i_t,
             start,
             boot,
-            stop_limits,
+            TEST_STOP_LIMITS,
         )
         .unwrap();
         let mut steps = 0u64;
