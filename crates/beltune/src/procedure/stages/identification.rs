@@ -52,12 +52,13 @@ struct Excitation {
     pos: Vec<f64>,
 }
 
-/// Move to `center_m` under `hold` and excite the axis open loop around
-/// `holding_nm` with a PRBS of `order` (the clock of `ex`) and amplitude
-/// `amplitude_nm` for `periods` periods.
+/// Start the progress stage `stage`, move to `center_m` under `hold` and
+/// excite the axis open loop around `holding_nm` with a PRBS of `order` (the
+/// clock of `ex`) and amplitude `amplitude_nm` for `periods` periods.
 #[allow(clippy::too_many_arguments)]
 fn excite(
     st: &mut Stages,
+    stage: &str,
     hold: &CascadeConfig<f64>,
     center_m: f64,
     limits: &Limits,
@@ -71,6 +72,7 @@ fn excite(
     let mut prbs = Prbs::new(order, ex.clock_samples(ts), amplitude_nm)?;
     let period = prbs.period_samples() as usize;
     let n = period * periods;
+    st.start(stage, n as u64);
     move_to(st.runner, hold, center_m, limits, 0.05)?;
     let mut e = Excitation {
         t_start_s: st.runner.busy_time_s(),
@@ -153,18 +155,16 @@ pub fn identification(
     datasheet: &DataSheet,
 ) -> Result<Identification> {
     let ts = st.runner.info().ts_s;
-    let periods = ex.periods + ex.skip_periods;
-    let period = Prbs::new(ex.prbs_order, ex.clock_samples(ts), amplitude_nm)?.period_samples();
-    st.start("identification (open loop)", period * periods as u64);
     let e = excite(
         st,
+        "identification (open loop)",
         hold,
         center_m,
         limits,
         holding_nm,
         amplitude_nm,
         ex.prbs_order,
-        periods,
+        ex.periods + ex.skip_periods,
         ex,
     )?;
     let (frf, fit, dead_time) = st.compute(|| -> Result<_> {
@@ -216,11 +216,11 @@ pub const TARGET_PRBS_ORDER: u32 = 9;
 /// validation move ends. A second open-loop PRBS of amplitude `amplitude_nm`
 /// around `holding_nm` there (one transient period and the two periods the
 /// coherence needs, order [`TARGET_PRBS_ORDER`]), fitted like the main
-/// identification; the stiffness is `c = m_c w_z^2` (2.45) with the target's
-/// antiresonance `w_z` and the main fit's `m_c` (the same cart: the
-/// feedforward and the stretch compensation use that mass). Skipped, with
-/// the main fit's `c`, when the target is within [`SAME_POSITION_M`] of the
-/// identification position `ident_position_m`.
+/// identification; the stiffness is that fit's `c` (2.1 % rms against
+/// (2.26) on the study's plants; `m_c w_z^2` with the main fit's `m_c` was
+/// 3.4 %). Skipped, with the main fit's `c`, when the target is within
+/// [`SAME_POSITION_M`] of the identification position `ident_position_m`;
+/// a target FRF that does not fit falls back to it too, and the log says so.
 #[allow(clippy::too_many_arguments)]
 pub fn stiffness_at(
     st: &mut Stages,
@@ -234,6 +234,13 @@ pub fn stiffness_at(
     ex: &ExcitationConfig,
     datasheet: &DataSheet,
 ) -> Result<TargetStiffness> {
+    // The identification position's stiffness, where the target's is not measured.
+    let unmeasured = TargetStiffness {
+        position_m: ident_position_m,
+        c_n_per_m: main.params.c,
+        f_z_hz: main.f_z_hz,
+        measured: false,
+    };
     if (target_m - ident_position_m).abs() < SAME_POSITION_M {
         st.start("belt stiffness at the target", 0);
         st.finish(
@@ -244,30 +251,20 @@ pub fn stiffness_at(
                 main.params.c / 1e3
             ),
         );
-        return Ok(TargetStiffness {
-            position_m: ident_position_m,
-            c_n_per_m: main.params.c,
-            f_z_hz: main.f_z_hz,
-            measured: false,
-        });
+        return Ok(unmeasured);
     }
     let ts = st.runner.info().ts_s;
     let skip = ex.skip_periods;
-    let periods = skip + 2;
-    let period = Prbs::new(TARGET_PRBS_ORDER, ex.clock_samples(ts), amplitude_nm)?.period_samples();
-    st.start(
-        "belt stiffness at the target (open loop)",
-        period * periods as u64,
-    );
     let e = excite(
         st,
+        "belt stiffness at the target (open loop)",
         hold,
         target_m,
         limits,
         holding_nm,
         amplitude_nm,
         TARGET_PRBS_ORDER,
-        periods,
+        skip + 2,
         ex,
     )?;
     let fitted = st.compute(|| -> Result<_> {
@@ -296,12 +293,7 @@ pub fn stiffness_at(
         // leaves the stiffness of the identification position (the static
         // stretch as before this stage), and the log says so.
         Err(e @ (Error::FitFailed { .. } | Error::TooShort { .. } | Error::NoExcitation { .. })) => (
-            TargetStiffness {
-                position_m: ident_position_m,
-                c_n_per_m: main.params.c,
-                f_z_hz: main.f_z_hz,
-                measured: false,
-            },
+            unmeasured,
             format!(
                 "not measured at {:.1} mm ({e}); the identification position's {:.1} kN/m is used",
                 target_m * 1e3,

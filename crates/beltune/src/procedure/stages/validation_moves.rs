@@ -249,7 +249,7 @@ pub fn validation_moves(
     for variant in FeedforwardVariant::ALL {
         // the same controller the tuning page simulates (issue 16)
         let c = validation_controller(feedback, m_e, p.i_t, friction, variant);
-        // Return to the start with the thesis' own limits (it is not measured).
+        // Return to the start within the return limits (it is not measured).
         moves.push(run_move(
             st.runner,
             positioning,
