@@ -35,6 +35,7 @@ pub use sampled::{DiscreteController, DiscreteLoops, DiscreteStability};
 pub use velocity::{PiGains, VelocityPlant, VelocityRule};
 
 use crate::error::{require_non_negative, require_positive};
+use crate::lti::discrete::MAX_DELAY_SAMPLES;
 use crate::lti::margins::StabilityMargins;
 use crate::lti::{bode, log_grid, BodePoint, C64};
 use crate::model::TwoMassParams;
@@ -44,6 +45,11 @@ use crate::{Error, Result};
 pub const DEFAULT_T_R_S: f64 = 2e-3;
 /// Default sampling time `T_s`, s (10 kHz, docs/thesis-map.md).
 pub const DEFAULT_TS_S: f64 = 1e-4;
+/// Longest current-loop dead time a design accepts, s: ten times the
+/// thesis' 1 ms (Table A.4 setup). The identification looks no further
+/// (stage 5), and a velocity loop behind a longer delay cannot reach the
+/// bandwidth a belt axis needs.
+pub const MAX_DEAD_TIME_S: f64 = 10e-3;
 /// Points per decade of the verification grid: the dead-time phase moves less
 /// than 0.03 rad between points up to Nyquist (1 ms, 10 kHz), and resonances with
 /// a relative width above 0.5 % are resolved.
@@ -83,6 +89,25 @@ impl DesignInput {
         require_non_negative("dead_time_s", self.dead_time_s)?;
         require_positive("t_r_s", self.t_r_s)?;
         require_positive("ts_s", self.ts_s)?;
+        if self.dead_time_s > MAX_DEAD_TIME_S {
+            return Err(Error::invalid(
+                "dead_time_s",
+                self.dead_time_s,
+                format!(
+                    "must be at most {MAX_DEAD_TIME_S} s (a drive's current loop and bus delay)"
+                ),
+            ));
+        }
+        if self.dead_time_s / self.ts_s > MAX_DELAY_SAMPLES as f64 {
+            return Err(Error::invalid(
+                "dead_time_s",
+                self.dead_time_s,
+                format!(
+                    "must be at most {MAX_DELAY_SAMPLES} sample periods of {} s",
+                    self.ts_s
+                ),
+            ));
+        }
         if let Some(f) = &self.friction {
             f.validate()?;
         }

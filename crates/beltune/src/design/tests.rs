@@ -425,6 +425,45 @@ fn infeasible_and_invalid_requests_are_errors() {
     assert!(design(&neg, &DesignKnobs::default()).is_err());
 }
 
+/// A model file may say any dead time. One of 1e300 s made the ZOH
+/// discretization build a delay chain of `usize::MAX` states, and the CI's
+/// fuzz test (`tests/fuzz_readers.rs`) hung on it; it is a typed error now,
+/// in the design and in the discretization alike.
+#[test]
+fn a_huge_dead_time_is_a_typed_error_not_a_hang_issue_13() {
+    for dead_time_s in [1e300, f64::MAX, MAX_DEAD_TIME_S * 1.01] {
+        let input = DesignInput {
+            dead_time_s,
+            ..thesis_input()
+        };
+        let e = design(&input, &DesignKnobs::default()).unwrap_err();
+        assert!(
+            matches!(&e, Error::InvalidParameter { name, .. } if name == "dead_time_s"),
+            "{e}"
+        );
+    }
+    // The limit in sample periods: 10 ms at 1 MHz is 10 000 periods.
+    let fast = DesignInput {
+        ts_s: 1e-6,
+        dead_time_s: MAX_DEAD_TIME_S,
+        ..thesis_input()
+    };
+    assert!(design(&fast, &DesignKnobs::default()).is_err());
+    let tf = thesis_input().model.tf_rigid_flexible();
+    let e = StateSpace::zoh(&tf, 1e-4, 1e300).unwrap_err();
+    assert!(matches!(e, Error::InvalidParameter { .. }), "{e}");
+    // The longest accepted dead time still designs (or fails as infeasible),
+    // quickly: the delay chain is at most MAX_DELAY_SAMPLES states.
+    let longest = DesignInput {
+        dead_time_s: MAX_DEAD_TIME_S,
+        ..thesis_input()
+    };
+    match design(&longest, &DesignKnobs::default()) {
+        Ok(d) => assert!(d.k_p.is_finite()),
+        Err(e) => assert!(matches!(e, Error::Infeasible { .. }), "{e}"),
+    }
+}
+
 /// Seeded sweep over plants and knobs: every design either meets its conditions and
 /// is stable, or is a typed error; never a panic or NaN.
 #[test]

@@ -15,6 +15,11 @@ use crate::{Error, Result};
 use beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};
 use nalgebra::{DMatrix, DVector, RowDVector};
 
+/// Longest dead time [`StateSpace::zoh`] discretizes, in sample periods. Each
+/// period is one state, and the loops' eigenvalue checks grow with the cube of
+/// the state count; 256 periods (25.6 ms at 10 kHz) is far beyond any drive.
+pub const MAX_DELAY_SAMPLES: usize = 256;
+
 /// `x[k+1] = A x[k] + B u[k]`, `y[k] = C x[k] + D u[k]`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StateSpace {
@@ -81,11 +86,19 @@ impl StateSpace {
     }
 
     /// ZOH discretization of a strictly proper continuous `tf` preceded by the dead
-    /// time `dead_time_s` (any non-negative value; the fractional part of
+    /// time `dead_time_s` (non-negative, at most [`MAX_DELAY_SAMPLES`] sample
+    /// periods: each period is a state; the fractional part of
     /// `dead_time_s / ts_s` is handled exactly by splitting the hold interval).
     pub fn zoh(tf: &Tf, ts_s: f64, dead_time_s: f64) -> Result<Self> {
         require_positive("ts_s", ts_s)?;
         require_non_negative("dead_time_s", dead_time_s)?;
+        if dead_time_s / ts_s > MAX_DELAY_SAMPLES as f64 {
+            return Err(Error::invalid(
+                "dead_time_s",
+                dead_time_s,
+                format!("must be at most {MAX_DELAY_SAMPLES} sample periods of {ts_s} s"),
+            ));
+        }
         let n = tf.den.degree();
         let lead = tf.den.coeffs[n];
         if n == 0 || lead == 0.0 || tf.num.degree() >= n {

@@ -7,6 +7,7 @@ use super::super::commission::{DataSheet, ExcitationConfig};
 use super::super::motion::move_to;
 use super::super::result::{IdentifiedModel, TargetStiffness};
 use super::Stages;
+use crate::design::MAX_DEAD_TIME_S;
 use crate::ident::dead_time::{estimate_dead_time, DeadTime};
 use crate::ident::etfe::{etfe, EtfeConfig, Frf};
 use crate::ident::fit::{fit_two_mass, FitConfig, TwoMassFit};
@@ -14,9 +15,6 @@ use crate::{Error, Result};
 use beltune_rt::control::CascadeConfig;
 use beltune_rt::prbs::Prbs;
 use beltune_rt::trajectory::Limits;
-
-/// Longest dead time looked for, s.
-const MAX_DEAD_TIME_S: f64 = 10e-3;
 
 /// What stage 5 hands on.
 pub struct Identification {
