@@ -689,6 +689,8 @@ mod tests {
         sim: SimAxis,
         real_time: bool,
         exchanges: u64,
+        /// The exchange count, visible to the computation thread.
+        shared: std::sync::Arc<std::sync::atomic::AtomicU64>,
     }
 
     impl Axis for RealTime {
@@ -700,6 +702,8 @@ mod tests {
             torque_command_nm: f64,
         ) -> std::result::Result<Measurement, AxisError> {
             self.exchanges += 1;
+            self.shared
+                .fetch_add(1, std::sync::atomic::Ordering::SeqCst);
             // a bus cycle takes time: the computation thread runs meanwhile
             std::thread::sleep(std::time::Duration::from_micros(100));
             self.sim.exchange(torque_command_nm)
@@ -712,7 +716,13 @@ mod tests {
         }
     }
 
-    fn with_runner<R>(real_time: bool, f: impl FnOnce(&mut Runner) -> R) -> (R, u64, f64) {
+    /// Run `f` with a runner on egc70 (`real_time`: the axis says it runs in
+    /// real time); `f` also gets the exchange count the axis keeps.
+    fn with_runner<R>(
+        real_time: bool,
+        f: impl FnOnce(&mut Runner, &std::sync::atomic::AtomicU64) -> R,
+    ) -> (R, u64, f64) {
+        let shared = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
         let plant = rigs::builtin("egc70", None).unwrap();
         let info = plant.info();
         let start = 0.3;
@@ -727,6 +737,7 @@ mod tests {
             .unwrap(),
             real_time,
             exchanges: 0,
+            shared: shared.clone(),
         };
         let i_t = 0.078 / (2.0 * std::f64::consts::PI);
         let j = 1.4e-4 + i_t * i_t * 12.16;
@@ -756,7 +767,7 @@ mod tests {
         let (r, drift) = {
             let mut runner =
                 Runner::new(&mut axis, &mut progress, sup, i_t, start, ctrl, limits).unwrap();
-            let r = f(&mut runner);
+            let r = f(&mut runner, &shared);
             (r, (runner.position_m() - start).abs())
         };
         (r, axis.exchanges, drift)
@@ -764,19 +775,28 @@ mod tests {
 
     #[test]
     fn issue_14_a_real_time_axis_is_held_in_closed_loop_while_the_computation_runs() {
-        let ((value, during), exchanges, drift) = with_runner(true, |runner| {
+        // The computation ends once the axis has been held for HELD cycles
+        // (counted by the axis, not timed: a loaded machine stretches every
+        // sleep, and a timed wait once saw fewer cycles than it asked for).
+        const HELD: u64 = 50;
+        let ((value, during), exchanges, drift) = with_runner(true, |runner, count| {
             let before = runner.busy_samples();
+            let start = count.load(std::sync::atomic::Ordering::SeqCst);
             let v = runner
                 .hold_while(|| {
-                    std::thread::sleep(std::time::Duration::from_millis(30));
+                    let t0 = std::time::Instant::now();
+                    while count.load(std::sync::atomic::Ordering::SeqCst) < start + HELD
+                        && t0.elapsed() < std::time::Duration::from_secs(60)
+                    {
+                        std::thread::sleep(std::time::Duration::from_micros(200));
+                    }
                     42
                 })
                 .unwrap();
             (v, runner.busy_samples() - before)
         });
         assert_eq!(value, 42);
-        // 30 ms of computation at about 0.1 ms per exchange: dozens of cycles held
-        assert!(during >= 20, "{during} cycles held");
+        assert!(during >= HELD, "{during} cycles held");
         assert_eq!(exchanges, during);
         // the axis (vertical load none, friction) stays where it was
         assert!(drift < 1e-3, "drift {drift} m");
@@ -784,7 +804,7 @@ mod tests {
 
     #[test]
     fn a_simulated_axis_waits_for_the_computation() {
-        let (during, exchanges, _) = with_runner(false, |runner| {
+        let (during, exchanges, _) = with_runner(false, |runner, _| {
             let before = runner.busy_samples();
             runner
                 .hold_while(|| std::thread::sleep(std::time::Duration::from_millis(5)))
