@@ -27,6 +27,19 @@ const STOP_SETTLE_S: f64 = 0.2;
 const STOP_REST_SPEED_M_S: f64 = 1e-3;
 /// Longest extra hold after a stop's settling time, s.
 const STOP_REST_MAX_S: f64 = 1.0;
+/// Share of the supervisor's following-error limit by which the axis may
+/// leave its stop trajectory before the stop drops its controller for the
+/// damping brake (a stable stop follows within a few mm).
+const STOP_DIVERGENCE_SHARE: f64 = 0.5;
+/// Time constant of the damping brake, s: `J / (D i_t^2)` with the stop
+/// capability's inertia. The brake damps the rigid-body velocity (the
+/// moving average of [`RigidVelocity`], blind to the resonance), a
+/// collocated damper, stable on any two-mass axis; 50 ms is five times the
+/// estimate's lag.
+const STOP_BRAKE_TIME_S: f64 = 0.05;
+/// Speed at which the damping brake reaches the torque limit when the
+/// inertia is not known yet, m/s.
+const STOP_BRAKE_FULL_SPEED_M_S: f64 = 0.1;
 /// Window of each of the two moving averages of the rigid-body velocity
 /// estimate used in open-loop stages, s (see [`RigidVelocity`]).
 const RIGID_VELOCITY_WINDOW_S: f64 = 20e-3;
@@ -562,19 +575,41 @@ impl<'a> Runner<'a> {
         // open-loop stop starts from the rigid-body velocity, which lags a
         // hard acceleration), at most STOP_REST_MAX_S longer.
         let extra = (STOP_REST_MAX_S / ts).ceil() as u64;
+        // A stop controller that does not follow its trajectory (unstable on
+        // this axis) is dropped for a damping brake on the rigid-body velocity.
+        let diverged_m = STOP_DIVERGENCE_SHARE * self.supervisor.limits().following_error_max_m;
+        // N s/m at the cart; without a known inertia (before the axis is
+        // taken) the torque limit is reached at STOP_BRAKE_FULL_SPEED_M_S.
+        let damping = if inertia > 0.0 {
+            inertia / (STOP_BRAKE_TIME_S * self.i_t * self.i_t)
+        } else {
+            limit / (self.i_t * STOP_BRAKE_FULL_SPEED_M_S)
+        };
+        let mut braking = false;
         for k in 0..n + extra {
-            if k >= n && self.velocity_m_s.abs() < STOP_REST_SPEED_M_S {
+            let at_rest = if braking {
+                self.rigid_velocity_m_s.abs() < STOP_REST_SPEED_M_S
+            } else {
+                self.velocity_m_s.abs() < STOP_REST_SPEED_M_S
+            };
+            if k >= n && at_rest {
                 break;
             }
             let s = traj.sample(k as f64 * ts);
-            let sp = Setpoint::at(MotionSample {
-                angle_rad: self.position_to_angle_rad(s.position),
-                velocity_rad_s: s.velocity / self.i_t,
-                acceleration_rad_s2: s.acceleration / self.i_t,
-            });
-            let out = ctrl.step(&sp, self.motor_angle_rad());
-            let tau = if out.torque_nm.is_finite() {
-                out.torque_nm.clamp(-limit, limit)
+            braking |= (self.position_m() - s.position).abs() > diverged_m;
+            let tau = if braking {
+                // N s/m at the cart times m/s, as a motor torque.
+                config.torque_offset_nm - damping * self.i_t * self.rigid_velocity_m_s
+            } else {
+                let sp = Setpoint::at(MotionSample {
+                    angle_rad: self.position_to_angle_rad(s.position),
+                    velocity_rad_s: s.velocity / self.i_t,
+                    acceleration_rad_s2: s.acceleration / self.i_t,
+                });
+                ctrl.step(&sp, self.motor_angle_rad()).torque_nm
+            };
+            let tau = if tau.is_finite() {
+                tau.clamp(-limit, limit)
             } else {
                 0.0
             };
@@ -940,6 +975,70 @@ mod tests {
         assert_eq!(stop_start_velocity(-0.5, -0.6), -0.5);
         assert_eq!(stop_start_velocity(0.5, -0.01), 0.0);
         assert_eq!(stop_start_velocity(f64::NAN, 0.3), 0.0);
+    }
+
+    /// A stop whose controller is unstable on the axis (stop 13: a bootstrap
+    /// loop that the cart's stiction had kept quiet oscillated once the cart
+    /// slid, and the stop kept that loop and ran 3.7 m past the window in the
+    /// simulation) falls back to damping the rigid-body velocity: it ends at
+    /// rest, near where it started.
+    #[test]
+    fn a_stop_with_an_unstable_controller_brakes_by_damping() {
+        let plant = rigs::builtin("egc70", None).unwrap();
+        let start = 0.3;
+        let mut axis = SimAxis::new(
+            &plant,
+            SimConfig {
+                initial_cart_position_m: Some(start),
+                ..SimConfig::default()
+            },
+        )
+        .unwrap();
+        let info = plant.info();
+        let i_t = 0.078 / (2.0 * std::f64::consts::PI);
+        let j = plant.worst_case_two_mass().unwrap().rigid_inertia();
+        let mut unstable = bootstrap_controller(j, i_t, info.ts_s, info.torque_max_nm).unwrap();
+        // 300 times the velocity gain: crossover far beyond the dead time.
+        unstable.gains.k_p_nm_s_per_rad *= 300.0;
+        let mut progress = NoProgress;
+        let mut runner = Runner::new(
+            &mut axis,
+            &mut progress,
+            test_supervisor(info.torque_max_nm, 2.5, 0.05),
+            i_t,
+            start,
+            unstable,
+            TEST_STOP_LIMITS,
+        )
+        .unwrap();
+        runner
+            .set_stop_capability(
+                super::super::safety::StopCapability::from_axis(
+                    info.torque_max_nm,
+                    j,
+                    i_t,
+                    0.0,
+                    0.0,
+                )
+                .unwrap(),
+            )
+            .unwrap();
+        // Push the cart to about 0.1 m/s, then stop.
+        while runner.rigid_velocity_m_s() < 0.1 {
+            runner.step(0.5, None).unwrap();
+        }
+        let from = runner.position_m();
+        let rest = runner.stop().unwrap();
+        assert!(rest.is_finite());
+        assert!(
+            (rest - from).abs() < 0.05,
+            "the stop from {from:.4} m ended at {rest:.4} m"
+        );
+        assert!(
+            runner.rigid_velocity_m_s().abs() < 0.01,
+            "{}",
+            runner.rigid_velocity_m_s()
+        );
     }
 
     /// Keeps the record a safety stop hands over.
