@@ -701,6 +701,18 @@ mod tests {
         position_max: 0.6,
     };
 
+    /// The simulated `plant` with its cart at `start_m`.
+    fn sim_at(plant: &rigs::Plant, start_m: f64) -> SimAxis {
+        SimAxis::new(
+            plant,
+            SimConfig {
+                initial_cart_position_m: Some(start_m),
+                ..SimConfig::default()
+            },
+        )
+        .unwrap()
+    }
+
     /// The supervisor of the runner tests: window 0 .. 0.6 m, torque limit
     /// `torque_max_nm`, speed `velocity_max_m_s` and following error
     /// `following_error_max_m` limits, stop deceleration 5 m/s^2.
@@ -762,14 +774,7 @@ mod tests {
         let info = plant.info();
         let start = 0.3;
         let mut axis = RealTime {
-            sim: SimAxis::new(
-                &plant,
-                SimConfig {
-                    initial_cart_position_m: Some(start),
-                    ..SimConfig::default()
-                },
-            )
-            .unwrap(),
+            sim: sim_at(&plant, start),
             real_time,
             exchanges: 0,
             shared: shared.clone(),
@@ -930,14 +935,7 @@ mod tests {
         let plant = rigs::Plant::Physical(p.clone());
         let info = plant.info();
         let start = 0.3;
-        let mut axis = SimAxis::new(
-            &plant,
-            SimConfig {
-                initial_cart_position_m: Some(start),
-                ..SimConfig::default()
-            },
-        )
-        .unwrap();
+        let mut axis = sim_at(&plant, start);
         let j = plant.worst_case_two_mass().unwrap().rigid_inertia();
         let boot = bootstrap_controller(j, p.i_t(), info.ts_s, info.torque_max_nm).unwrap();
         assert_eq!(boot.torque_offset_nm, 0.0);
@@ -986,17 +984,10 @@ mod tests {
     fn a_stop_with_an_unstable_controller_brakes_by_damping() {
         let plant = rigs::builtin("egc70", None).unwrap();
         let start = 0.3;
-        let mut axis = SimAxis::new(
-            &plant,
-            SimConfig {
-                initial_cart_position_m: Some(start),
-                ..SimConfig::default()
-            },
-        )
-        .unwrap();
+        let mut axis = sim_at(&plant, start);
         let info = plant.info();
-        let i_t = 0.078 / (2.0 * std::f64::consts::PI);
-        let j = plant.worst_case_two_mass().unwrap().rigid_inertia();
+        let model = plant.worst_case_two_mass().unwrap();
+        let (i_t, j) = (model.i_t, model.rigid_inertia());
         let mut unstable = bootstrap_controller(j, i_t, info.ts_s, info.torque_max_nm).unwrap();
         // 300 times the velocity gain: crossover far beyond the dead time.
         unstable.gains.k_p_nm_s_per_rad *= 300.0;
@@ -1061,14 +1052,7 @@ mod tests {
     fn a_safety_stop_hands_over_the_last_second_of_samples() {
         let plant = rigs::builtin("sim-b", None).unwrap();
         let start = 0.05;
-        let mut axis = SimAxis::new(
-            &plant,
-            SimConfig {
-                initial_cart_position_m: Some(start),
-                ..SimConfig::default()
-            },
-        )
-        .unwrap();
+        let mut axis = sim_at(&plant, start);
         let info = plant.info();
         let i_t = match &plant {
             rigs::Plant::Linear(l) => l.two_mass.i_t,
@@ -1182,14 +1166,7 @@ mod tests {
         let start = 0.3;
         let good = (1.5 / info.ts_s) as u64;
         let mut axis = FailsAfter {
-            sim: SimAxis::new(
-                &plant,
-                SimConfig {
-                    initial_cart_position_m: Some(start),
-                    ..SimConfig::default()
-                },
-            )
-            .unwrap(),
+            sim: sim_at(&plant, start),
             good,
             quick_stops: 0,
         };
