@@ -735,9 +735,8 @@ mod tests {
     struct RealTime {
         sim: SimAxis,
         real_time: bool,
-        exchanges: u64,
-        /// The exchange count, visible to the computation thread.
-        shared: std::sync::Arc<std::sync::atomic::AtomicU64>,
+        /// The exchange count, shared with the computation thread.
+        exchanges: std::sync::Arc<std::sync::atomic::AtomicU64>,
     }
 
     impl Axis for RealTime {
@@ -748,8 +747,7 @@ mod tests {
             &mut self,
             torque_command_nm: f64,
         ) -> std::result::Result<Measurement, AxisError> {
-            self.exchanges += 1;
-            self.shared
+            self.exchanges
                 .fetch_add(1, std::sync::atomic::Ordering::SeqCst);
             // a bus cycle takes time: the computation thread runs meanwhile
             std::thread::sleep(std::time::Duration::from_micros(100));
@@ -776,8 +774,7 @@ mod tests {
         let mut axis = RealTime {
             sim: sim_at(&plant, start),
             real_time,
-            exchanges: 0,
-            shared: shared.clone(),
+            exchanges: shared.clone(),
         };
         let i_t = 0.078 / (2.0 * std::f64::consts::PI);
         let j = 1.4e-4 + i_t * i_t * 12.16;
@@ -810,7 +807,7 @@ mod tests {
             let r = f(&mut runner, &shared);
             (r, (runner.position_m() - start).abs())
         };
-        (r, axis.exchanges, drift)
+        (r, shared.load(std::sync::atomic::Ordering::SeqCst), drift)
     }
 
     #[test]
