@@ -35,7 +35,7 @@ pub use sampled::{DiscreteController, DiscreteLoops, DiscreteStability};
 pub use velocity::{PiGains, VelocityPlant, VelocityRule};
 
 use crate::error::{require_non_negative, require_positive};
-use crate::lti::discrete::MAX_DELAY_SAMPLES;
+use crate::lti::discrete::check_delay_samples;
 use crate::lti::margins::StabilityMargins;
 use crate::lti::{bode, log_grid, BodePoint, C64};
 use crate::model::TwoMassParams;
@@ -98,16 +98,7 @@ impl DesignInput {
                 ),
             ));
         }
-        if self.dead_time_s / self.ts_s > MAX_DELAY_SAMPLES as f64 {
-            return Err(Error::invalid(
-                "dead_time_s",
-                self.dead_time_s,
-                format!(
-                    "must be at most {MAX_DELAY_SAMPLES} sample periods of {} s",
-                    self.ts_s
-                ),
-            ));
-        }
+        check_delay_samples(self.ts_s, self.dead_time_s)?;
         if let Some(f) = &self.friction {
             f.validate()?;
         }

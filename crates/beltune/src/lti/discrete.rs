@@ -20,6 +20,19 @@ use nalgebra::{DMatrix, DVector, RowDVector};
 /// the state count; 256 periods (25.6 ms at 10 kHz) is far beyond any drive.
 pub const MAX_DELAY_SAMPLES: usize = 256;
 
+/// Typed error unless the dead time `dead_time_s` is at most
+/// [`MAX_DELAY_SAMPLES`] sample periods of `ts_s`.
+pub fn check_delay_samples(ts_s: f64, dead_time_s: f64) -> Result<()> {
+    if dead_time_s / ts_s > MAX_DELAY_SAMPLES as f64 {
+        return Err(Error::invalid(
+            "dead_time_s",
+            dead_time_s,
+            format!("must be at most {MAX_DELAY_SAMPLES} sample periods of {ts_s} s"),
+        ));
+    }
+    Ok(())
+}
+
 /// `x[k+1] = A x[k] + B u[k]`, `y[k] = C x[k] + D u[k]`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StateSpace {
@@ -92,13 +105,7 @@ impl StateSpace {
     pub fn zoh(tf: &Tf, ts_s: f64, dead_time_s: f64) -> Result<Self> {
         require_positive("ts_s", ts_s)?;
         require_non_negative("dead_time_s", dead_time_s)?;
-        if dead_time_s / ts_s > MAX_DELAY_SAMPLES as f64 {
-            return Err(Error::invalid(
-                "dead_time_s",
-                dead_time_s,
-                format!("must be at most {MAX_DELAY_SAMPLES} sample periods of {ts_s} s"),
-            ));
-        }
+        check_delay_samples(ts_s, dead_time_s)?;
         let n = tf.den.degree();
         let lead = tf.den.coeffs[n];
         if n == 0 || lead == 0.0 || tf.num.degree() >= n {
