@@ -71,6 +71,11 @@ pub enum FitModel {
     /// fitted as a fifth damping parameter (the linear sets of Tables
     /// A.11-A.13 have `d = 20 N s/m`).
     WithBeltDamping,
+    /// The nonlinear two-mass model (2.30) with the Coulomb friction of the
+    /// motor and of the cart, identified from the time record
+    /// ([`crate::ident::nonlinear`], issue 12); its linear part is (2.38)
+    /// with belt damping.
+    Nonlinear,
 }
 
 impl FitModel {
@@ -79,7 +84,7 @@ impl FitModel {
         match self {
             FitModel::RigidFlexible => p.tf_rigid_flexible(),
             FitModel::Exact => p.tf_torque_to_motor_angle_undamped_belt(),
-            FitModel::WithBeltDamping => p.tf_torque_to_motor_angle(),
+            FitModel::WithBeltDamping | FitModel::Nonlinear => p.tf_torque_to_motor_angle(),
         }
     }
 }
@@ -167,6 +172,13 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
     require_positive("i_t", cfg.i_t)?;
     if let Some(t) = cfg.theta_e {
         require_positive("theta_e", t)?;
+    }
+    if cfg.model == FitModel::Nonlinear {
+        return Err(Error::invalid(
+            "fit model",
+            f64::NAN,
+            "the nonlinear model (2.30) is fitted to the time record (ident::nonlinear), not to the FRF",
+        ));
     }
     let free = cfg.free_inertia || cfg.theta_e.is_none();
     let fit_d = cfg.model == FitModel::WithBeltDamping;

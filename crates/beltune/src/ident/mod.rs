@@ -7,6 +7,7 @@
 //! - [`features`]: resonance peak, antiresonance dip, rigid-body asymptote (start values)
 //! - [`fit`]: Levenberg-Marquardt fit of (2.42), (3.32)-(3.34), with uncertainties
 //! - [`friction`]: constant-velocity runs (3.35)-(3.36) and regression on any motion
+//! - [`nonlinear`]: the nonlinear two-mass model (2.30) with its Coulomb friction, from the excitation (issue 12)
 //! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24)
 //! - [`dead_time`]: current-loop dead time (3.25)-(3.30)
 //! - [`record`]: CSV records with validation
@@ -17,6 +18,7 @@ pub mod etfe;
 pub mod features;
 pub mod fit;
 pub mod friction;
+pub mod nonlinear;
 pub mod record;
 pub mod recorded;
 pub mod strategy;
@@ -36,6 +38,7 @@ pub use friction::{
     fit_constant_velocity, fit_viscous_only, identify_from_motion, run_means, ConstantVelocityRun,
     FrictionFit, MotionFriction, MotionFrictionConfig, THESIS_VELOCITY_SEQUENCE_M_S,
 };
+pub use nonlinear::{fit_nonlinear, NonlinearConfig, NonlinearFit};
 pub use record::{read_csv_columns, CsvColumns, Sampling};
 pub use recorded::{detect_period, identify_recorded, RecordedExcitation, RecordedIdentification};
 pub use strategy::{direct_closed_loop, indirect_closed_loop, open_loop};
