@@ -254,8 +254,15 @@ pub struct CommissioningConfig {
     pub t_r_s: f64,
     /// Speeds of the friction runs (each in both directions), m/s.
     pub friction_speeds_m_s: Vec<f64>,
-    /// Length of each friction run, m.
-    pub friction_run_m: f64,
+    /// Time each friction run spends at its constant speed, s: the run is
+    /// as long as that plateau and its acceleration and deceleration need
+    /// (at most the travel window allows). Issue 12: with runs of a fixed
+    /// 0.1 m, the 0.4 m/s plateau of a heavy cart on a soft belt lasted
+    /// 0.2 s, two periods of its ringing and less than the velocity loop's
+    /// settling, and the fitted viscous friction came out at a third of the
+    /// truth (the feedforward then lacked 0.1 N m at the validation move's
+    /// cruise speed).
+    pub friction_plateau_s: f64,
     /// The validation move.
     pub validation: MoveSpec,
     /// Largest following error allowed in closed-loop stages, m.
@@ -277,7 +284,7 @@ impl Default for CommissioningConfig {
             excitation: ExcitationConfig::default(),
             t_r_s: 2e-3,
             friction_speeds_m_s: vec![0.1, 0.25, 0.4],
-            friction_run_m: 0.1,
+            friction_plateau_s: 0.45,
             validation: MoveSpec::default(),
             following_error_max_m: 0.05,
             design_rule: DesignRule::Robust,

@@ -155,18 +155,29 @@ fn friction_runs(
     f_ring_hz: f64,
 ) -> Result<Vec<FrictionRun>> {
     let center = 0.5 * (ds.travel_min_m + ds.travel_max_m);
-    let half = 0.5 * cfg.friction_run_m;
     let a_run = RUN_ACCELERATION_M_S2;
     let pos_limits = positioning_limits(ds);
-    move_to(runner, ctrl, center - half, &pos_limits, 0.05)?;
     let mut points = Vec::new();
     let opts = TrackOptions {
         preview_samples: preview,
         check_following_error: true,
         ..Default::default()
     };
-    for &v in &cfg.friction_speeds_m_s {
-        for target in [center + half, center - half] {
+    // Back to back (the momentum balance between consecutive runs needs no
+    // gap): each speed runs forward over its own length from where the
+    // previous run ended, and back to where the next speed starts.
+    let speeds = &cfg.friction_speeds_m_s;
+    let half = |i: usize| 0.5 * run_length_m(speeds[i], cfg.friction_plateau_s, ds);
+    if !speeds.is_empty() {
+        move_to(runner, ctrl, center - half(0), &pos_limits, 0.05)?;
+    }
+    for (i, &v) in speeds.iter().enumerate() {
+        let next = if i + 1 < speeds.len() {
+            half(i + 1)
+        } else {
+            half(i)
+        };
+        for target in [center + half(i), center - half(i).max(next)] {
             let limits = Limits {
                 v_max: v,
                 v_min: -v,
@@ -202,6 +213,18 @@ fn friction_runs(
         }
     }
     Ok(points)
+}
+
+/// Distance kept from either end of the travel window by the friction runs, m.
+const RUN_MARGIN_M: f64 = 0.02;
+
+/// Length of a friction run at speed `v` (m/s): `plateau_s` at that speed
+/// plus the acceleration and deceleration at [`RUN_ACCELERATION_M_S2`], at
+/// most the travel window less [`RUN_MARGIN_M`] at either end, m.
+pub fn run_length_m(v: f64, plateau_s: f64, ds: &DataSheet) -> f64 {
+    let wanted = v * plateau_s.max(0.0) + v * v / RUN_ACCELERATION_M_S2;
+    let room = ds.travel_max_m - ds.travel_min_m - 2.0 * RUN_MARGIN_M;
+    wanted.min(room).max(0.0)
 }
 
 /// Mean velocity and torque over the part of a run where the desired velocity
