@@ -574,7 +574,7 @@ impl LibraryTuner {
 
     fn frf_overlay(&self) -> Option<FrfOverlay> {
         let lines = self.model.frf.as_ref()?;
-        let tf = FitModel::default().tf(&self.model.params);
+        let tf = FitModel::WithBeltDamping.tf(&self.model.params);
         let p = plots::frf_display(lines, &tf, self.model.dead_time_s, vec![]).ok()?;
         Some(FrfOverlay {
             freq_hz: p.measured.freq_hz,
@@ -887,7 +887,7 @@ impl LibraryTuner {
         let p = &self.model.params;
         let (f_z, f_r) = (p.f_z_hz(), p.f_r_hz());
         let loops = report_build::loop_plots(d, f_z, f_r)?;
-        let tf = FitModel::default().tf(p);
+        let tf = FitModel::WithBeltDamping.tf(p);
         let frf = match &self.model.frf {
             Some(lines) => Some(plots::frf_display(
                 lines,

@@ -90,6 +90,26 @@ pub struct IdentifiedModel {
     pub lines_used: usize,
     /// Cart position at which the FRF was measured, m (NaN / `null`: unknown, e.g. recorded data).
     pub position_m: f64,
+    /// How the parameters were identified (`frf_fit` when absent).
+    pub method: IdentificationMethod,
+    /// Coulomb friction of the motor side the friction-aware fit found, N m
+    /// (`null`: not identified).
+    pub motor_coulomb_nm: Option<f64>,
+    /// Coulomb friction of the cart the friction-aware fit found, N
+    /// (`null`: not identified).
+    pub cart_coulomb_n: Option<f64>,
+}
+
+/// Which identification gave the parameters of an [`IdentifiedModel`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IdentificationMethod {
+    /// The thesis' fit of the linear model (2.42) to the FRF's magnitude (3.33).
+    #[default]
+    FrfFit,
+    /// The nonlinear model (2.30) with the Coulomb friction of the motor and
+    /// of the cart, fitted to the time record ([`crate::ident::nonlinear`]).
+    FrictionAware,
 }
 
 /// What a file may hold: every field optional or with an old spelling.
@@ -127,6 +147,12 @@ struct RawModel {
     lines_used: Option<usize>,
     #[serde(default)]
     position_m: Option<f64>,
+    #[serde(default)]
+    method: IdentificationMethod,
+    #[serde(default)]
+    motor_coulomb_nm: Option<f64>,
+    #[serde(default)]
+    cart_coulomb_n: Option<f64>,
 }
 
 impl TryFrom<RawModel> for IdentifiedModel {
@@ -166,6 +192,9 @@ impl TryFrom<RawModel> for IdentifiedModel {
             mean_coherence: r.mean_coherence.unwrap_or(nan),
             lines_used: r.lines_used.unwrap_or(0),
             position_m: r.position_m.unwrap_or(nan),
+            method: r.method,
+            motor_coulomb_nm: r.motor_coulomb_nm.filter(|x| x.is_finite()),
+            cart_coulomb_n: r.cart_coulomb_n.filter(|x| x.is_finite()),
         })
     }
 }
@@ -204,6 +233,9 @@ impl IdentifiedModel {
             mean_coherence,
             lines_used: fit.n_lines,
             position_m,
+            method: IdentificationMethod::FrfFit,
+            motor_coulomb_nm: None,
+            cart_coulomb_n: None,
         }
     }
 
@@ -340,6 +372,9 @@ const MODEL_KEYS: &[&str] = &[
     "lines_used",
     "n_lines",
     "position_m",
+    "method",
+    "motor_coulomb_nm",
+    "cart_coulomb_n",
 ];
 /// Keys of a `friction` table (and the flat form's friction), with old spellings.
 const FRICTION_KEYS: &[&str] = &[

@@ -194,7 +194,7 @@ pub fn parameter_changes(a: &Value, b: &Value) -> Table {
 fn model_tf(json: &Value) -> Option<(crate::lti::Tf, f64)> {
     let id: super::result::IdentifiedModel =
         serde_json::from_value(json.get("identified")?.clone()).ok()?;
-    Some((FitModel::default().tf(&id.params()), id.dead_time_s))
+    Some((FitModel::WithBeltDamping.tf(&id.params()), id.dead_time_s))
 }
 
 fn labelled(mut c: BodeCurve, label: String, dots: bool, dashed: bool) -> BodeCurve {

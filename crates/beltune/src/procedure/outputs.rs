@@ -29,6 +29,14 @@ pub struct CommissioningJson {
     pub plant: String,
     /// The identified model (with sampling time, torque limit and units).
     pub identified: IdentifiedModel,
+    /// The thesis' fit of the FRF's magnitude (3.5), beside the model in
+    /// `identified` when that is the friction-aware fit (`null` for
+    /// recorded data, where `identified` is the FRF fit).
+    pub frf_fit: Option<crate::model::TwoMassParams>,
+    /// The friction-aware fit of the nonlinear model (2.30) (issue 12):
+    /// parameters, Coulomb friction of motor and cart, residuals; `null`
+    /// where it failed or for recorded data.
+    pub friction_aware: Option<crate::ident::NonlinearFit>,
     /// Friction (`null` when it could not be measured).
     pub friction: Option<FrictionResult>,
     /// Controller: gains, prefilter, achieved margins.
@@ -43,7 +51,8 @@ pub struct CommissioningJson {
     pub computation_time_s: f64,
     /// PRBS amplitude used, N m (`null` for recorded data).
     pub excitation_amplitude_nm: Option<f64>,
-    /// Where the FRF was measured, m (`null` for recorded data).
+    /// Where the model was measured: the mean motor-side position over the
+    /// compared periods of the excitation, m (`null` for recorded data).
     pub identification_position_m: Option<f64>,
     /// The belt stiffness where the validation move ends, which the static
     /// belt stretch of `controller.toml` uses (`null` for recorded data).
@@ -168,6 +177,8 @@ pub fn commissioning_json(
         provenance,
         plant: plant.to_string(),
         identified,
+        frf_fit: Some(run.frf_fit.params),
+        friction_aware: run.nonlinear.clone(),
         friction: Some(run.friction.clone()),
         controller: run.design.summary(),
         drive_form: DriveForm::of(&run.design),
@@ -286,6 +297,8 @@ pub fn recorded_outputs(
         provenance,
         plant: source.to_string(),
         identified,
+        frf_fit: None,
+        friction_aware: None,
         friction: run.friction.clone(),
         controller: run.design.summary(),
         drive_form: DriveForm::of(&run.design),
