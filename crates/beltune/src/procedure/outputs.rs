@@ -29,14 +29,6 @@ pub struct CommissioningJson {
     pub plant: String,
     /// The identified model (with sampling time, torque limit and units).
     pub identified: IdentifiedModel,
-    /// The thesis' fit of the FRF's magnitude (3.5), beside the model in
-    /// `identified` when that is the friction-aware fit (`null` for
-    /// recorded data, where `identified` is the FRF fit).
-    pub frf_fit: Option<crate::model::TwoMassParams>,
-    /// The friction-aware fit of the nonlinear model (2.30) (issue 12):
-    /// parameters, Coulomb friction of motor and cart, residuals; `null`
-    /// where it failed or for recorded data.
-    pub friction_aware: Option<crate::ident::NonlinearFit>,
     /// Friction (`null` when it could not be measured).
     pub friction: Option<FrictionResult>,
     /// Controller: gains, prefilter, achieved margins.
@@ -57,6 +49,16 @@ pub struct CommissioningJson {
     /// The belt stiffness where the validation move ends, which the static
     /// belt stretch of `controller.toml` uses (`null` for recorded data).
     pub target_stiffness: Option<TargetStiffness>,
+    /// The thesis' fit of the FRF's magnitude (3.5), beside the model in
+    /// `identified` when that is the friction-aware fit (absent for
+    /// recorded data, where `identified` is the FRF fit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frf_fit: Option<crate::model::TwoMassParams>,
+    /// The friction-aware fit of the nonlinear model (2.30) (issue 12):
+    /// parameters, Coulomb friction of motor and cart, residuals; absent
+    /// where it failed or for recorded data.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_aware: Option<crate::ident::NonlinearFit>,
     /// For a simulated plant: the true values at the identification position.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub truth: Option<Truth>,
