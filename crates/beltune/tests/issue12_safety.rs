@@ -194,3 +194,36 @@ fn the_plant_file_carries_the_noise_issue_12() {
     assert!(plant.validate().is_err());
     assert!(SimAxis::new(&plant, SimConfig::default()).is_err());
 }
+
+/// Plant #155 (20.6 kg on a 54 deg slope, held with 2.1 of 3.1 N m) ended
+/// "during friction runs: safety stop: following error 50.00 mm": the runs
+/// accelerated at 10 m/s^2, which needs 2.7 N m more than the axis has left
+/// after holding its load. The runs now accelerate with what the torque
+/// budget allows (1.4 m/s^2 here).
+#[test]
+fn the_friction_runs_accelerate_within_the_torque_left_issue_12() {
+    let o = plant(155);
+    assert!(
+        o.kind != OutcomeKind::Failed,
+        "the commissioning must end with a controller: {}",
+        o.message
+    );
+    assert!(!o.travel_violation, "{}", o.travel_excess_m);
+}
+
+/// Plant #248 (18.0 kg, belt x0.57) ended "during validation moves: safety
+/// stop: following error 50.00 mm": its honest (slow) design, a 1.3 Hz
+/// position loop, trails the Table A.8 move by about 50 mm without
+/// feedforward, the comparison variant the thesis' chapter 5 runs first.
+/// The following-error limit now guards only the delivered controller's
+/// move (nonlinear feedforward); the comparison variants run to the end.
+#[test]
+fn a_slow_loop_s_comparison_moves_do_not_stop_the_commissioning_issue_12() {
+    let o = plant(248);
+    assert!(
+        o.kind != OutcomeKind::Failed,
+        "the commissioning must end with a controller: {}",
+        o.message
+    );
+    assert!(!o.travel_violation, "{}", o.travel_excess_m);
+}

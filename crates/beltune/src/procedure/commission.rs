@@ -512,6 +512,7 @@ pub fn commission(
         n_t,
         ident.fit.f_z_hz,
         holding,
+        held.friction_nm,
     )?;
     st.runner.set_stop_capability(StopCapability::from_axis(
         torque_max,

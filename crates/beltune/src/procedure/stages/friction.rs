@@ -23,8 +23,35 @@ use beltune_rt::trajectory::{Limits, State, Trajectory};
 /// (thesis 3.6), s: several time constants of the velocity loop and of the
 /// cart's oscillation after the acceleration phase.
 const RUNNING_IN_S: f64 = 0.05;
-/// Acceleration of the friction runs, m/s^2.
+/// Largest acceleration of the friction runs, m/s^2.
 const RUN_ACCELERATION_M_S2: f64 = 10.0;
+/// Share of the torque left after gravity and Coulomb friction (within
+/// [`super::validation_moves::MOVE_TORQUE_FRACTION`] of the limit) that
+/// the friction runs' acceleration may take; the rest is the feedback's.
+const RUN_TORQUE_SHARE: f64 = 0.8;
+
+/// The friction runs' acceleration, m/s^2: [`RUN_ACCELERATION_M_S2`], or
+/// less where the torque the axis has left after holding its load
+/// (`holding_nm`) and its Coulomb friction (`coulomb_nm`) within
+/// [`super::validation_moves::MOVE_TORQUE_FRACTION`] of `torque_max_nm`
+/// cannot accelerate the rigid `inertia_kg_m2` that hard (issue 12: plant
+/// #155, 20.6 kg on a 54 deg slope, held with 2.1 of 3.1 N m; 10 m/s^2 needed
+/// 2.7 N m more, and the runs ended in a following-error stop; now 1.4
+/// m/s^2). `None`
+/// where nothing is left.
+pub fn run_acceleration_m_s2(
+    torque_max_nm: f64,
+    holding_nm: f64,
+    coulomb_nm: f64,
+    inertia_kg_m2: f64,
+    i_t_m: f64,
+) -> Option<f64> {
+    let budget = super::validation_moves::MOVE_TORQUE_FRACTION * torque_max_nm
+        - holding_nm.abs()
+        - coulomb_nm.max(0.0);
+    let a = RUN_TORQUE_SHARE * budget * i_t_m / inertia_kg_m2;
+    (a.is_finite() && a > 0.0).then(|| a.min(RUN_ACCELERATION_M_S2))
+}
 
 /// What stage 7 hands on.
 pub struct FrictionStage {
@@ -43,6 +70,7 @@ pub struct FrictionStage {
 /// Stage 7: runs at the configured speeds with `ctrl` (the feedback cascade
 /// with inertia feedforward), `preview` samples of feedforward preview;
 /// `f_ring_hz` is the cart's ringing frequency (averaged out).
+#[allow(clippy::too_many_arguments)]
 pub fn friction_stage(
     st: &mut Stages,
     ctrl: &CascadeConfig<f64>,
@@ -51,9 +79,21 @@ pub fn friction_stage(
     preview: usize,
     f_ring_hz: f64,
     holding_nm: f64,
+    coulomb_nm: f64,
 ) -> Result<FrictionStage> {
     st.start("friction runs", 0);
-    let runs = friction_runs(st.runner, ctrl, ds, cfg, preview, f_ring_hz)?;
+    let torque_max = st.runner.supervisor().limits().torque_max_nm;
+    let inertia = ctrl.feedforward.params.inertia_kg_m2;
+    let a_run = run_acceleration_m_s2(torque_max, holding_nm, coulomb_nm, inertia, ds.i_t_m)
+        .ok_or_else(|| crate::Error::Infeasible {
+            reason: format!(
+                "holding the load ({:.3} N m) and its friction ({:.3} N m) leave nothing of {:.0} % of the torque limit {torque_max:.3} N m for the friction runs",
+                holding_nm.abs(),
+                coulomb_nm,
+                100.0 * super::validation_moves::MOVE_TORQUE_FRACTION
+            ),
+        })?;
+    let runs = friction_runs(st.runner, ctrl, ds, cfg, preview, f_ring_hz, a_run)?;
     let points: Vec<ConstantVelocityRun> = runs.iter().map(|r| r.point).collect();
     let (fit, linear_fit) = st.compute(|| -> Result<_> {
         let mut fit = fit_constant_velocity(&points)?;
@@ -153,9 +193,9 @@ fn friction_runs(
     cfg: &CommissioningConfig,
     preview: usize,
     f_ring_hz: f64,
+    a_run: f64,
 ) -> Result<Vec<FrictionRun>> {
     let center = 0.5 * (ds.travel_min_m + ds.travel_max_m);
-    let a_run = RUN_ACCELERATION_M_S2;
     let pos_limits = positioning_limits(ds);
     let mut points = Vec::new();
     let opts = TrackOptions {
@@ -167,7 +207,7 @@ fn friction_runs(
     // gap): each speed runs forward over its own length from where the
     // previous run ended, and back to where the next speed starts.
     let speeds = &cfg.friction_speeds_m_s;
-    let half = |i: usize| 0.5 * run_length_m(speeds[i], cfg.friction_plateau_s, ds);
+    let half = |i: usize| 0.5 * run_length_m(speeds[i], cfg.friction_plateau_s, a_run, ds);
     if !speeds.is_empty() {
         move_to(runner, ctrl, center - half(0), &pos_limits, 0.05)?;
     }
@@ -219,10 +259,10 @@ fn friction_runs(
 const RUN_MARGIN_M: f64 = 0.02;
 
 /// Length of a friction run at speed `v` (m/s): `plateau_s` at that speed
-/// plus the acceleration and deceleration at [`RUN_ACCELERATION_M_S2`], at
-/// most the travel window less [`RUN_MARGIN_M`] at either end, m.
-pub fn run_length_m(v: f64, plateau_s: f64, ds: &DataSheet) -> f64 {
-    let wanted = v * plateau_s.max(0.0) + v * v / RUN_ACCELERATION_M_S2;
+/// plus the acceleration and deceleration at `a_run` (m/s^2), at most the
+/// travel window less [`RUN_MARGIN_M`] at either end, m.
+pub fn run_length_m(v: f64, plateau_s: f64, a_run: f64, ds: &DataSheet) -> f64 {
+    let wanted = v * plateau_s.max(0.0) + v * v / a_run;
     let room = ds.travel_max_m - ds.travel_min_m - 2.0 * RUN_MARGIN_M;
     wanted.min(room).max(0.0)
 }
@@ -344,6 +384,24 @@ mod tests {
             });
         }
         rec
+    }
+
+    /// The friction runs' acceleration from the torque budget, against the
+    /// closed form `0.8 (0.9 tau_max - |tau_hold| - tau_c) i_t / J`, capped at
+    /// 10 m/s^2; nothing left is `None`. Plant #155 of issue 12: 3.1 N m,
+    /// 2.1 N m holding, 0.19 N m Coulomb, J 3.4e-3 kg m^2: 1.76 m/s^2.
+    #[test]
+    fn the_runs_accelerate_with_the_torque_left_issue_12() {
+        let (i_t, j) = (0.012414, 3.4e-3);
+        let a = run_acceleration_m_s2(3.1, -2.1156, 0.1909, j, i_t).unwrap();
+        let expected = 0.8 * (0.9 * 3.1 - 2.1156 - 0.1909) * i_t / j;
+        assert!(
+            (a - expected).abs() < 1e-12 && (a - 1.41).abs() < 0.01,
+            "{a}"
+        );
+        assert_eq!(run_acceleration_m_s2(3.1, 0.0, 0.1, 1e-3, i_t), Some(10.0));
+        assert_eq!(run_acceleration_m_s2(3.1, 2.8, 0.1, j, i_t), None);
+        assert_eq!(run_acceleration_m_s2(3.1, 0.0, 0.1, f64::NAN, i_t), None);
     }
 
     /// Issue 12: the acceleration torque of a settling velocity loop is not

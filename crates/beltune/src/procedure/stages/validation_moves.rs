@@ -3,6 +3,7 @@
 //! to the start runs under the feedback cascade.
 
 use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
+use super::super::motion::TrackOptions;
 use super::super::result::{FrictionResult, Validation};
 use super::super::validation::{
     run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
@@ -249,13 +250,24 @@ pub fn validation_moves(
     for variant in FeedforwardVariant::ALL {
         // the same controller the tuning page simulates (issue 16)
         let c = validation_controller(feedback, m_e, p.i_t, friction, variant);
+        // The following-error limit guards the delivered controller (the
+        // nonlinear feedforward). The comparison variants lag by design: on
+        // a slow loop the P position loop alone trails a 1.35 m/s move by
+        // v / K_PP, 200 mm on plant #248 of issue 12 (K_PP 6.3 1/s), which
+        // stopped the whole commissioning. The travel look-ahead, the torque
+        // and the velocity limits still guard them.
+        let variant_opts = TrackOptions {
+            check_following_error: opts.check_following_error
+                && variant == FeedforwardVariant::Nonlinear,
+            ..opts
+        };
         // Return to the start within the return limits (it is not measured).
         moves.push(run_move(
             st.runner,
             positioning,
             &return_limits,
             &c,
-            opts,
+            variant_opts,
             &spec,
         )?);
     }
