@@ -49,7 +49,15 @@
 //! (the cart then rested 100-450 um from its target at the end of the
 //! validation record). The threshold is a dead zone: inside it the
 //! integrator finishes the positioning without the Coulomb push, so the hold
-//! cannot chatter about the target.
+//! cannot chatter about the target. A push against the previous one (the
+//! axis overshot its target) doubles the threshold, back to the configured
+//! one when the trajectory moves again: a light cart with high friction,
+//! pushed with the whole `tau_c`, can overshoot beyond the threshold in the
+//! other direction, and a constant threshold let it hunt between the two for
+//! seconds (issue 12: 1.2 kg, 0.23 N m, +-600 um at the motor); a growing
+//! one ends any such cycle after a few pushes and leaves the rest to the
+//! integrator. Pushes the same way (a heavy load on a slope creeping back)
+//! keep the threshold.
 //!
 //! [`CascadeController::reset_to`] assumes the axis at rest (`omega_d = 0`); the
 //! desired-velocity low-pass starts from zero.
@@ -317,6 +325,13 @@ pub struct CascadeController<T = f64> {
     inv_k_i: T,
     /// Direction of the Coulomb hold `h` of refinement (c): +1, -1 or 0.
     coulomb_hold: T,
+    /// Breakaway threshold for the next engagement at rest, rad: the
+    /// configured one, doubled by each push against the previous one until
+    /// the trajectory moves.
+    breakaway_rad: T,
+    /// Direction of the last breakaway push at rest (0: none since the
+    /// trajectory moved).
+    last_push: T,
 }
 
 impl<T: Real> CascadeController<T> {
@@ -345,6 +360,8 @@ impl<T: Real> CascadeController<T> {
             integrator_rad: T::ZERO,
             inv_k_i: if k_i > T::ZERO { T::ONE / k_i } else { T::ZERO },
             coulomb_hold: T::ZERO,
+            breakaway_rad: T::ZERO,
+            last_push: T::ZERO,
         };
         c.reset_to(T::ZERO);
         Ok(c)
@@ -386,6 +403,8 @@ impl<T: Real> CascadeController<T> {
         self.prefilter.reset();
         self.integrator_rad = T::ZERO;
         self.coulomb_hold = T::ZERO;
+        self.breakaway_rad = self.ff.coulomb_breakaway_rad;
+        self.last_push = T::ZERO;
     }
 
     /// As [`Self::reset_to`], with the integrator preloaded so that at zero
@@ -465,19 +484,23 @@ impl<T: Real> CascadeController<T> {
         // Refinement (c), the Coulomb hold (module docs).
         let v_ff = ff_sample.velocity_rad_s;
         let band = self.ff.coulomb_deadband_rad_s;
-        if v_ff > band {
-            self.coulomb_hold = T::ONE;
-        } else if v_ff < -band {
-            self.coulomb_hold = -T::ONE;
+        if v_ff > band || v_ff < -band {
+            self.coulomb_hold = if v_ff > band { T::ONE } else { -T::ONE };
+            self.breakaway_rad = self.ff.coulomb_breakaway_rad;
+            self.last_push = T::ZERO;
         } else {
             // Breakaway: at rest, an error beyond the threshold engages the
-            // hold toward the target (only with the Coulomb term on).
-            let th = self.ff.coulomb_breakaway_rad;
+            // hold toward the target (only with the Coulomb term on); a push
+            // against the previous one doubles the threshold (module docs).
+            let th = self.breakaway_rad;
             if self.coulomb_hold == T::ZERO && th > T::ZERO && self.ff.coulomb_nm > T::ZERO {
-                if e_phi > th {
-                    self.coulomb_hold = T::ONE;
-                } else if e_phi < -th {
-                    self.coulomb_hold = -T::ONE;
+                // against the last push the threshold is doubled
+                let against = e_phi * self.last_push < T::ZERO;
+                let need = if against { th + th } else { th };
+                if e_phi > need || e_phi < -need {
+                    self.breakaway_rad = need;
+                    self.coulomb_hold = if e_phi > T::ZERO { T::ONE } else { -T::ONE };
+                    self.last_push = self.coulomb_hold;
                 }
             }
             if e_phi * self.coulomb_hold > T::ZERO {
@@ -678,8 +701,10 @@ mod tests {
         assert_eq!(c.step(&stop, 1.0 + 0.5 * th).feedforward_nm, -tau_c);
         assert_eq!(c.step(&stop, 1.0).feedforward_nm, 0.0);
         assert_eq!(c.coulomb_hold(), 0.0);
-        // Stuck short beyond it: pushed on (+).
-        assert_eq!(c.step(&stop, 1.0 - 2.0 * th).feedforward_nm, tau_c);
+        // Stuck short beyond the threshold, doubled by the push against the
+        // previous one: pushed on (+).
+        assert_eq!(c.step(&stop, 1.0 - 1.5 * th).feedforward_nm, 0.0);
+        assert_eq!(c.step(&stop, 1.0 - 3.0 * th).feedforward_nm, tau_c);
         assert_eq!(c.coulomb_hold(), 1.0);
         // Without the Coulomb term there is no breakaway.
         let mut lin = config();
@@ -694,6 +719,52 @@ mod tests {
             cfg.feedforward.params.coulomb_breakaway_rad = bad;
             assert!(CascadeController::new(cfg).is_err());
         }
+    }
+
+    /// Issue 12, a light cart with high friction hunted for seconds after
+    /// its move: each breakaway push overshot beyond the threshold the other
+    /// way. A push against the previous one doubles the threshold, so a hunt
+    /// of constant amplitude ends; pushes the same way keep it; a moving
+    /// trajectory restores it.
+    #[test]
+    fn a_breakaway_hunt_ends_the_threshold_doubling_issue_12() {
+        let tau_c = 0.1;
+        let th = 2e-3;
+        let mut cfg = config();
+        cfg.feedforward = Feedforward::nonlinear(0.0, 0.0, tau_c);
+        cfg.feedforward.params.coulomb_breakaway_rad = th;
+        let mut c = CascadeController::new(cfg).unwrap();
+        let stop = Setpoint::hold(1.0);
+        // A hunt between +-5 th: pushed at th, then against it at 2 th and
+        // 4 th, then left to the integrator (8 th).
+        // Each push carries the axis through the target to 5 th on the other
+        // side; without a push it stays.
+        let mut pushes = 0;
+        let mut at = 1.0 + 5.0 * th;
+        for _ in 0..10 {
+            if c.step(&stop, at).feedforward_nm != 0.0 {
+                pushes += 1;
+                // the push ends where the error changes sign
+                c.step(&stop, 1.0);
+                at = 2.0 - at;
+            }
+        }
+        assert_eq!(pushes, 3);
+        // Pushes the same way keep the threshold.
+        let mut c = CascadeController::new(cfg).unwrap();
+        for _ in 0..5 {
+            assert_eq!(c.step(&stop, 1.0 - 1.5 * th).feedforward_nm, tau_c);
+            c.step(&stop, 1.0);
+        }
+        // The trajectory moves: the configured threshold again.
+        let moving = Setpoint::at(crate::control::MotionSample {
+            angle_rad: 1.0,
+            velocity_rad_s: 1.0,
+            acceleration_rad_s2: 0.0,
+        });
+        c.step(&moving, 1.0);
+        c.step(&stop, 1.0);
+        assert_eq!(c.step(&stop, 1.0 + 1.5 * th).feedforward_nm, -tau_c);
     }
 
     #[test]
