@@ -351,9 +351,28 @@ typedef struct {
    */
   double m_c_kg;
   /**
-   * Belt stiffness `c`, N/m.
+   * Belt stiffness `c` at `stiffness_position_m`, N/m.
    */
   double c_n_per_m;
+  /**
+   * Cart position where `c_n_per_m` holds, m (the positions of the cart
+   * samples).
+   */
+  double stiffness_position_m;
+  /**
+   * Slope of the belt's compliance `1/c` along the stroke there, 1/N
+   * (0: one stiffness for the whole stroke).
+   */
+  double compliance_slope_per_n;
+  /**
+   * Half the compliance's second derivative, 1/(N m).
+   */
+  double compliance_curvature_per_n_m;
+  /**
+   * Force the belt carries at rest (holding torque over `i_t`), N: the
+   * motor leads by its stretch `F / c` where the cart is.
+   */
+  double static_force_n;
 } BtSetpointConfig;
 
 #ifdef __cplusplus

@@ -22,9 +22,9 @@
 #![deny(missing_docs)]
 
 use beltune_rt::control::{
-    AntiWindup, BeltStretch, CartSample, CascadeConfig, CascadeController, CascadeGains,
-    ControlOutput, Feedforward, FeedforwardParams, FeedforwardTerms, MotionSample, Setpoint,
-    SetpointConversion,
+    AntiWindup, BeltProfile, BeltStretch, CartSample, CascadeConfig, CascadeController,
+    CascadeGains, ControlOutput, Feedforward, FeedforwardParams, FeedforwardTerms, MotionSample,
+    Setpoint, SetpointConversion,
 };
 use beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};
 use beltune_rt::trajectory::{Limits, State, Trajectory};
@@ -302,8 +302,19 @@ pub struct BtSetpointConfig {
     pub belt_stretch: bool,
     /// Moving mass `m_c`, kg.
     pub m_c_kg: f64,
-    /// Belt stiffness `c`, N/m.
+    /// Belt stiffness `c` at `stiffness_position_m`, N/m.
     pub c_n_per_m: f64,
+    /// Cart position where `c_n_per_m` holds, m (the positions of the cart
+    /// samples).
+    pub stiffness_position_m: f64,
+    /// Slope of the belt's compliance `1/c` along the stroke there, 1/N
+    /// (0: one stiffness for the whole stroke).
+    pub compliance_slope_per_n: f64,
+    /// Half the compliance's second derivative, 1/(N m).
+    pub compliance_curvature_per_n_m: f64,
+    /// Force the belt carries at rest (holding torque over `i_t`), N: the
+    /// motor leads by its stretch `F / c` where the cart is.
+    pub static_force_n: f64,
 }
 
 /// Opaque storage of a controller (initialize with [`bt_cascade_init`]); e.g. a
@@ -606,10 +617,17 @@ pub unsafe extern "C" fn bt_setpoint_init(
     };
     c.magic = 0;
     let belt = if cfg.belt_stretch {
-        BeltStretch::On {
-            m_c_kg: cfg.m_c_kg,
-            c_n_per_m: cfg.c_n_per_m,
+        if !(cfg.c_n_per_m.is_finite() && cfg.c_n_per_m > 0.0) {
+            return BT_ERR_INVALID;
         }
+        BeltStretch::Profile(BeltProfile {
+            m_c_kg: cfg.m_c_kg,
+            reference_m: cfg.stiffness_position_m,
+            compliance_m_per_n: 1.0 / cfg.c_n_per_m,
+            compliance_slope_per_n: cfg.compliance_slope_per_n,
+            compliance_curvature_per_n_m: cfg.compliance_curvature_per_n_m,
+            static_force_n: cfg.static_force_n,
+        })
     } else {
         BeltStretch::Off
     };

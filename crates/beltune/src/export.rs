@@ -94,6 +94,19 @@ pub fn values(file: &ControllerFile) -> Vec<(String, Value)> {
         ("m_c_kg".into(), Real(s.m_c_kg)),
         ("c_n_per_m".into(), Real(s.c_n_per_m)),
         ("static_stretch_m".into(), Real(s.static_stretch_m)),
+        ("stiffness_position_m".into(), Real(s.stiffness_position_m)),
+        (
+            "compliance_slope_per_n".into(),
+            Real(s.compliance_slope_per_n),
+        ),
+        (
+            "compliance_curvature_per_n_m".into(),
+            Real(s.compliance_curvature_per_n_m),
+        ),
+        (
+            "static_force_n".into(),
+            Real(s.static_force_n.unwrap_or(s.static_stretch_m * s.c_n_per_m)),
+        ),
         ("t_r_s".into(), Real(file.velocity_filter.t_r_s)),
         // drive-menu form (information)
         (
@@ -217,12 +230,14 @@ pub fn export(file: &ControllerFile, lang: Lang) -> String {
 }
 
 /// The Rust module: named `const`s, `CASCADE` (`CascadeConfig<f64>`) and
-/// `BELT_STRETCH` (`BeltStretch<f64>`) for `SetpointConversion::new(I_T_M_PER_RAD, BELT_STRETCH)`.
+/// `BELT_STRETCH` (`BeltStretch<f64>`: the belt's compliance along the
+/// stroke and the static force, [`beltune_rt::control::BeltProfile`]) for
+/// `SetpointConversion::new(I_T_M_PER_RAD, BELT_STRETCH)`.
 pub fn rust_module(file: &ControllerFile) -> String {
     let name = |n: &str| RUST.name(file, n);
     let mut s = header_lines(file, "//");
     s.push_str(
-        "\nuse beltune_rt::control::{\n    AntiWindup, BeltStretch, CascadeConfig, CascadeGains, Feedforward, FeedforwardParams,\n    FeedforwardTerms,\n};\nuse beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};\n\n",
+        "\nuse beltune_rt::control::{\n    AntiWindup, BeltProfile, BeltStretch, CascadeConfig, CascadeGains, Feedforward,\n    FeedforwardParams, FeedforwardTerms,\n};\nuse beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};\n\n",
     );
     s.push_str(&RUST.declarations(file));
     let sos = |i: usize| {
@@ -250,9 +265,13 @@ pub fn rust_module(file: &ControllerFile) -> String {
     );
     let belt = if file.setpoint.belt_stretch {
         format!(
-            "BeltStretch::On {{\n    m_c_kg: {},\n    c_n_per_m: {},\n}}",
+            "BeltStretch::Profile(BeltProfile {{\n    m_c_kg: {},\n    reference_m: {},\n    compliance_m_per_n: 1.0 / {},\n    compliance_slope_per_n: {},\n    compliance_curvature_per_n_m: {},\n    static_force_n: {},\n}})",
             name("m_c_kg"),
-            name("c_n_per_m")
+            name("stiffness_position_m"),
+            name("c_n_per_m"),
+            name("compliance_slope_per_n"),
+            name("compliance_curvature_per_n_m"),
+            name("static_force_n"),
         )
     } else {
         "BeltStretch::Off".to_string()
@@ -278,7 +297,7 @@ pub fn c_header(file: &ControllerFile) -> String {
     };
     let _ = write!(
         s,
-        "\n/* The commissioned controller. */\nstatic const BtCascadeConfig BELTUNE_CASCADE = {{\n    .ts_s = BELTUNE_TS_S,\n    .k_pp_per_s = BELTUNE_K_PP_PER_S,\n    .k_p_nm_s_per_rad = {kp},\n    .k_i_nm_per_rad = {ki},\n    .k_v = BELTUNE_K_V,\n    .velocity_filter = {{BELTUNE_VELOCITY_FILTER_B0, BELTUNE_VELOCITY_FILTER_B1, BELTUNE_VELOCITY_FILTER_A1}},\n    .prefilter = {{\n        {s1},\n        {s2},\n    }},\n    .torque_max_nm = {tmax},\n    .anti_windup = {aw},\n    .ff_inertia = BELTUNE_FF_INERTIA,\n    .ff_viscous = BELTUNE_FF_VISCOUS,\n    .ff_coulomb = BELTUNE_FF_COULOMB,\n    .inertia_kg_m2 = {ffi},\n    .viscous_nm_s_per_rad = {ffv},\n    .coulomb_nm = {ffc},\n    .coulomb_deadband_rad_s = BELTUNE_FF_COULOMB_DEADBAND_RAD_S,\n    .coulomb_breakaway_rad = BELTUNE_FF_COULOMB_BREAKAWAY_RAD,\n    .torque_offset_nm = {toff},\n    .filter_desired_velocity = BELTUNE_FILTER_DESIRED_VELOCITY,\n    .feedforward_preview = BELTUNE_FEEDFORWARD_PREVIEW,\n}};\n\n/* The cart -> motor setpoint conversion. */\nstatic const BtSetpointConfig BELTUNE_SETPOINT = {{\n    .i_t_m_per_rad = BELTUNE_I_T_M_PER_RAD,\n    .belt_stretch = BELTUNE_BELT_STRETCH_ON,\n    .m_c_kg = {mc},\n    .c_n_per_m = {c},\n}};\n\n#endif /* BELTUNE_CONTROLLER_H */\n",
+        "\n/* The commissioned controller. */\nstatic const BtCascadeConfig BELTUNE_CASCADE = {{\n    .ts_s = BELTUNE_TS_S,\n    .k_pp_per_s = BELTUNE_K_PP_PER_S,\n    .k_p_nm_s_per_rad = {kp},\n    .k_i_nm_per_rad = {ki},\n    .k_v = BELTUNE_K_V,\n    .velocity_filter = {{BELTUNE_VELOCITY_FILTER_B0, BELTUNE_VELOCITY_FILTER_B1, BELTUNE_VELOCITY_FILTER_A1}},\n    .prefilter = {{\n        {s1},\n        {s2},\n    }},\n    .torque_max_nm = {tmax},\n    .anti_windup = {aw},\n    .ff_inertia = BELTUNE_FF_INERTIA,\n    .ff_viscous = BELTUNE_FF_VISCOUS,\n    .ff_coulomb = BELTUNE_FF_COULOMB,\n    .inertia_kg_m2 = {ffi},\n    .viscous_nm_s_per_rad = {ffv},\n    .coulomb_nm = {ffc},\n    .coulomb_deadband_rad_s = BELTUNE_FF_COULOMB_DEADBAND_RAD_S,\n    .coulomb_breakaway_rad = BELTUNE_FF_COULOMB_BREAKAWAY_RAD,\n    .torque_offset_nm = {toff},\n    .filter_desired_velocity = BELTUNE_FILTER_DESIRED_VELOCITY,\n    .feedforward_preview = BELTUNE_FEEDFORWARD_PREVIEW,\n}};\n\n/* The cart -> motor setpoint conversion. */\nstatic const BtSetpointConfig BELTUNE_SETPOINT = {{\n    .i_t_m_per_rad = BELTUNE_I_T_M_PER_RAD,\n    .belt_stretch = BELTUNE_BELT_STRETCH_ON,\n    .m_c_kg = {mc},\n    .c_n_per_m = {c},\n    .stiffness_position_m = {sp},\n    .compliance_slope_per_n = {cs},\n    .compliance_curvature_per_n_m = {cc},\n    .static_force_n = {sf},\n}};\n\n#endif /* BELTUNE_CONTROLLER_H */\n",
         kp = name("k_p_nm_s_per_rad"),
         ki = name("k_i_nm_per_rad"),
         s1 = sec(1),
@@ -290,6 +309,10 @@ pub fn c_header(file: &ControllerFile) -> String {
         toff = name("torque_offset_nm"),
         mc = name("m_c_kg"),
         c = name("c_n_per_m"),
+        sp = name("stiffness_position_m"),
+        cs = name("compliance_slope_per_n"),
+        cc = name("compliance_curvature_per_n_m"),
+        sf = name("static_force_n"),
     );
     s
 }

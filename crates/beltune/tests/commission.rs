@@ -23,8 +23,11 @@ const STATIC_ERROR_M: f64 = 100e-6;
 /// before the long move (measured 20.1 s); the three unmeasured returns to
 /// the validation start run within the positioning limits (0.5 m/s instead
 /// of the move's 1.1 m/s: a light cart with high friction overshot into a
-/// travel stop) and add 1.0 s (measured 21.1 s), hence 21.5 s.
-const EXPERIMENT_TIME_GUARD_S: f64 = 21.5;
+/// travel stop) and add 1.0 s (measured 21.1 s). The belt stiffness near
+/// the validation start (stage 5c: one more PRBS of three periods, for the
+/// compliance along the stroke the setpoint conversion uses) adds 3.2 s
+/// (measured 24.3 s), hence 25 s.
+const EXPERIMENT_TIME_GUARD_S: f64 = 25.0;
 
 fn run(payload_kg: Option<f64>, tilt_deg: Option<f64>) -> (Plant, Commissioning) {
     let mut plant = rigs::builtin("egc70", payload_kg).unwrap();

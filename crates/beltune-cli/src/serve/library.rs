@@ -539,6 +539,7 @@ impl LibraryTuner {
             &plant,
             d,
             &friction,
+            self.model.target_stiffness.as_ref(),
             variant,
             &MoveSpec::default(),
             MOVE_SEED,

@@ -3,8 +3,8 @@
 // Torques in N m, gains K_P in N m s/rad, K_I in N m/rad; angles in rad, times in s.
 
 use beltune_rt::control::{
-    AntiWindup, BeltStretch, CascadeConfig, CascadeGains, Feedforward, FeedforwardParams,
-    FeedforwardTerms,
+    AntiWindup, BeltProfile, BeltStretch, CascadeConfig, CascadeGains, Feedforward,
+    FeedforwardParams, FeedforwardTerms,
 };
 use beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};
 
@@ -46,6 +46,10 @@ pub const BELT_STRETCH_ON: bool = true;
 pub const M_C_KG: f64 = 12.377609552193872;
 pub const C_N_PER_M: f64 = 217452.59357856752;
 pub const STATIC_STRETCH_M: f64 = 3.603678470215036e-8;
+pub const STIFFNESS_POSITION_M: f64 = 0.0;
+pub const COMPLIANCE_SLOPE_PER_N: f64 = 0.0;
+pub const COMPLIANCE_CURVATURE_PER_N_M: f64 = 0.0;
+pub const STATIC_FORCE_N: f64 = 0.007836292297715042;
 pub const T_R_S: f64 = 0.002;
 pub const DRIVE_VELOCITY_GAIN_NM_S_PER_RAD: f64 = 0.11393367499176903;
 pub const DRIVE_POSITION_GAIN_PER_S: f64 = 8.527531367646716;
@@ -106,7 +110,11 @@ pub const CASCADE: CascadeConfig<f64> = CascadeConfig {
 };
 
 /// Belt-stretch compensation of the setpoint conversion.
-pub const BELT_STRETCH: BeltStretch<f64> = BeltStretch::On {
+pub const BELT_STRETCH: BeltStretch<f64> = BeltStretch::Profile(BeltProfile {
     m_c_kg: M_C_KG,
-    c_n_per_m: C_N_PER_M,
-};
+    reference_m: STIFFNESS_POSITION_M,
+    compliance_m_per_n: 1.0 / C_N_PER_M,
+    compliance_slope_per_n: COMPLIANCE_SLOPE_PER_N,
+    compliance_curvature_per_n_m: COMPLIANCE_CURVATURE_PER_N_M,
+    static_force_n: STATIC_FORCE_N,
+});

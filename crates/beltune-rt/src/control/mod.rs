@@ -56,7 +56,9 @@ pub use feedforward::{
     Feedforward, FeedforwardParams, FeedforwardTerms, DEFAULT_COULOMB_DEADBAND_RAD_S,
 };
 pub use pid::{pid_to_ppi, position_gain_root, ppi_to_pid, PidGains, PositionGainRoot};
-pub use setpoint::{BeltStretch, CartSample, MotionSample, Setpoint, SetpointConversion};
+pub use setpoint::{
+    BeltProfile, BeltStretch, CartSample, MotionSample, Setpoint, SetpointConversion,
+};
 
 #[cfg(test)]
 mod closed_loop_tests;

@@ -10,6 +10,18 @@
 //! `omega_d = (xi_d' + m_c xi_d''' / c) / i_t`. The acceleration of the
 //! compensation, `m_c xi_d'''' / (c i_t)`, is dropped: a jerk-limited trajectory
 //! has a piecewise-constant jerk, whose derivative is a train of impulses.
+//!
+//! The belt's stiffness depends on where the cart is (2.26): with the
+//! compliance `K(xi) = 1 / c(xi)` and a constant force `F_s` the belt carries
+//! at rest (gravity along a tilted axis), the cart
+//! `m_c xi'' = (i_t phi_m - xi) / K(xi) - F_s` follows `xi_d` exactly for
+//! `phi_d = (xi_d + K(xi_d) (m_c xi_d'' + F_s)) / i_t` and
+//! `omega_d = (xi_d' + K m_c xi_d''' + K' xi_d' (m_c xi_d'' + F_s)) / i_t`
+//! ([`BeltProfile`]). For (2.26) the compliance is exactly quadratic in
+//! `xi`: `K = (l_1 + l_e)(l_2 + l_3 + 2 l_e) / (c_b (l_1 + l_2 + l_3 + 3 l_e))`
+//! with `l_1 + l_2` constant, so three coefficients hold it over the stroke
+//! (issue 12: on a soft belt the stiffness along a 0.5 m move changed by a
+//! factor two, and the constant one left the cart up to 0.6 mm off).
 
 use crate::error::{positive, Error};
 use crate::Real;
@@ -76,13 +88,47 @@ pub enum BeltStretch<T = f64> {
     /// Rigid belt: `phi_d = xi_d / i_t` (the thesis).
     #[default]
     Off,
-    /// Compensate the static belt stretch of the two-mass model.
+    /// Compensate the belt stretch of the two-mass model with one stiffness.
     On {
         /// Moving (cart) mass `m_c` in kg.
         m_c_kg: T,
         /// Belt stiffness `c` in N/m.
         c_n_per_m: T,
     },
+    /// Compensate the belt stretch with the stiffness where the cart is and
+    /// the static stretch under a constant force (see the module docs).
+    Profile(BeltProfile<T>),
+}
+
+/// The belt's replacement compliance along the stroke, `K(xi) = 1 / c(xi)`,
+/// as a quadratic about `reference_m` (exact for (2.26)), the moving mass
+/// and the constant force the belt carries. Positions are those of the
+/// converted [`CartSample`]s.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct BeltProfile<T = f64> {
+    /// Moving (cart) mass `m_c` in kg.
+    pub m_c_kg: T,
+    /// Cart position the compliance is expanded about, m.
+    pub reference_m: T,
+    /// Compliance `K` at `reference_m`, m/N (`1 / c`).
+    pub compliance_m_per_n: T,
+    /// Slope `dK/dxi` at `reference_m`, 1/N.
+    pub compliance_slope_per_n: T,
+    /// Half the second derivative, `K''/2`, 1/(N m).
+    pub compliance_curvature_per_n_m: T,
+    /// Force the belt carries at rest, N: minus the constant force on the
+    /// cart (gravity along a tilted axis: the holding torque over `i_t`).
+    pub static_force_n: T,
+}
+
+impl<T: Real> BeltProfile<T> {
+    /// The compliance at cart position `xi_m`, m/N.
+    #[inline]
+    pub fn compliance_at(&self, xi_m: T) -> T {
+        let x = xi_m - self.reference_m;
+        self.compliance_m_per_n
+            + x * (self.compliance_slope_per_n + x * self.compliance_curvature_per_n_m)
+    }
 }
 
 /// Cart trajectory sample -> motor setpoint.
@@ -91,32 +137,62 @@ pub struct SetpointConversion<T = f64> {
     /// `i_t = r / i_g` in m/rad.
     i_t_m_per_rad: T,
     inv_i_t: T,
-    /// `m_c / c` in s^2 (0 when belt-stretch compensation is off).
-    stretch_s2: T,
+    /// The belt model (compliance zero when belt-stretch compensation is off).
+    belt: BeltProfile<T>,
+}
+
+fn finite(name: &'static str, x: f64) -> Result<f64, Error> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            reason: "must be finite",
+        })
+    }
 }
 
 impl<T: Real> SetpointConversion<T> {
     /// Conversion for transmission `i_t_m_per_rad` (> 0) and the chosen belt
-    /// model. Errors for non-positive or non-finite parameters.
+    /// model. Errors for non-positive or non-finite parameters (a negative
+    /// mass, a compliance that is not positive at the reference).
     pub fn new(i_t_m_per_rad: T, belt: BeltStretch<T>) -> Result<Self, Error> {
         let i_t = positive("i_t_m_per_rad", i_t_m_per_rad.to_f64())?;
-        let stretch = match belt {
-            BeltStretch::Off => 0.0,
-            BeltStretch::On { m_c_kg, c_n_per_m } => {
-                let m = m_c_kg.to_f64();
-                if !(m.is_finite() && m >= 0.0) {
-                    return Err(Error::InvalidParameter {
-                        name: "m_c_kg",
-                        reason: "must be finite and >= 0",
-                    });
-                }
-                m / positive("c_n_per_m", c_n_per_m.to_f64())?
+        let mass = |m: T| {
+            let m = m.to_f64();
+            if m.is_finite() && m >= 0.0 {
+                Ok(m)
+            } else {
+                Err(Error::InvalidParameter {
+                    name: "m_c_kg",
+                    reason: "must be finite and >= 0",
+                })
+            }
+        };
+        let profile = match belt {
+            BeltStretch::Off => BeltProfile::default(),
+            BeltStretch::On { m_c_kg, c_n_per_m } => BeltProfile {
+                m_c_kg: T::from_f64(mass(m_c_kg)?),
+                compliance_m_per_n: T::from_f64(1.0 / positive("c_n_per_m", c_n_per_m.to_f64())?),
+                ..BeltProfile::default()
+            },
+            BeltStretch::Profile(p) => {
+                mass(p.m_c_kg)?;
+                positive("compliance_m_per_n", p.compliance_m_per_n.to_f64())?;
+                finite("reference_m", p.reference_m.to_f64())?;
+                finite("compliance_slope_per_n", p.compliance_slope_per_n.to_f64())?;
+                finite(
+                    "compliance_curvature_per_n_m",
+                    p.compliance_curvature_per_n_m.to_f64(),
+                )?;
+                finite("static_force_n", p.static_force_n.to_f64())?;
+                p
             }
         };
         Ok(SetpointConversion {
             i_t_m_per_rad: T::from_f64(i_t),
             inv_i_t: T::from_f64(1.0 / i_t),
-            stretch_s2: T::from_f64(stretch),
+            belt: profile,
         })
     }
 
@@ -125,16 +201,33 @@ impl<T: Real> SetpointConversion<T> {
         self.i_t_m_per_rad
     }
 
-    /// The motor setpoint for a cart sample: `phi_d = (xi_d + m_c xi_d''/c)/i_t`,
-    /// `omega_d = (xi_d' + m_c xi_d'''/c)/i_t`, `alpha_d = xi_d''/i_t`
-    /// (compensation terms zero when off). Cost: 5 multiplications, 2 additions.
+    /// The motor setpoint for a cart sample:
+    /// `phi_d = (xi_d + K (m_c xi_d'' + F_s))/i_t`,
+    /// `omega_d = (xi_d' + K m_c xi_d''' + K' xi_d' (m_c xi_d'' + F_s))/i_t`,
+    /// `alpha_d = xi_d''/i_t`, with the compliance `K(xi_d)` of the belt model
+    /// (zero when off; constant `1/c` and `F_s = 0` for
+    /// [`BeltStretch::On`]). Cost: 13 multiplications, 9 additions.
     #[inline]
     pub fn motor_sample(&self, cart: &CartSample<T>) -> MotionSample<T> {
+        let b = &self.belt;
+        let x = cart.position_m - b.reference_m;
+        let slope = b.compliance_slope_per_n + (x + x) * b.compliance_curvature_per_n_m;
+        let k = b.compliance_m_per_n
+            + x * (b.compliance_slope_per_n + x * b.compliance_curvature_per_n_m);
+        let load = b.m_c_kg * cart.acceleration_m_s2 + b.static_force_n;
         MotionSample {
-            angle_rad: (cart.position_m + self.stretch_s2 * cart.acceleration_m_s2) * self.inv_i_t,
-            velocity_rad_s: (cart.velocity_m_s + self.stretch_s2 * cart.jerk_m_s3) * self.inv_i_t,
+            angle_rad: (cart.position_m + k * load) * self.inv_i_t,
+            velocity_rad_s: (cart.velocity_m_s
+                + k * b.m_c_kg * cart.jerk_m_s3
+                + slope * cart.velocity_m_s * load)
+                * self.inv_i_t,
             acceleration_rad_s2: cart.acceleration_m_s2 * self.inv_i_t,
         }
+    }
+
+    /// The belt model the conversion uses (all zero when off).
+    pub fn belt(&self) -> BeltProfile<T> {
+        self.belt
     }
 
     /// Cart position seen from the motor with a rigid belt, `i_t phi_m`, in m.
@@ -221,6 +314,86 @@ mod tests {
         assert!(compensated < RK4_TOL_M, "compensated error {compensated}");
     }
 
+    /// Issue 12, the belt profile: a cart on a belt whose compliance changes
+    /// with the cart's position (quadratic, 3.8 to 9.8 um/N over the move,
+    /// like a soft egc70 belt between 0 and 0.5 m) and that carries a static
+    /// force (gravity on a 30 deg slope), driven by the converted motor
+    /// angle, follows `xi_d` exactly (RK4 at 1 us); the constant stiffness of
+    /// the move's end leaves it more than 0.3 mm off. The converted velocity
+    /// is the derivative of the converted angle (central difference).
+    #[test]
+    fn a_belt_profile_makes_the_cart_follow_where_the_stiffness_changes_issue_12() {
+        let profile = BeltProfile {
+            m_c_kg: M_C,
+            reference_m: 0.5,
+            compliance_m_per_n: 9.86e-6,
+            compliance_slope_per_n: 1.0e-5,
+            compliance_curvature_per_n_m: -5.0e-6,
+            static_force_n: M_C * 9.81 * 0.5,
+        };
+        // xi_d from 0.01 to 0.49 m and back: A (1 - cos w t)
+        let (x0, amp, w) = (0.01, 0.24, 2.0 * core::f64::consts::PI * 1.5);
+        let cart = |t: f64| CartSample {
+            position_m: x0 + amp * (1.0 - libm::cos(w * t)),
+            velocity_m_s: amp * w * libm::sin(w * t),
+            acceleration_m_s2: amp * w * w * libm::cos(w * t),
+            jerk_m_s3: -amp * w * w * w * libm::sin(w * t),
+        };
+        let run = |belt: BeltStretch<f64>| -> f64 {
+            let conv = SetpointConversion::new(I_T, belt).unwrap();
+            let p = |t: f64| I_T * conv.motor_sample(&cart(t)).angle_rad;
+            // the true belt: the profile's compliance, its static force
+            let f = |t: f64, x: f64| {
+                ((p(t) - x) / profile.compliance_at(x) - profile.static_force_n) / M_C
+            };
+            let c0 = cart(0.0);
+            let (mut x, mut v) = (c0.position_m, c0.velocity_m_s);
+            let h = 1e-6;
+            let mut worst: f64 = 0.0;
+            let mut t = 0.0;
+            for _ in 0..600_000 {
+                let k1x = v;
+                let k1v = f(t, x);
+                let k2x = v + 0.5 * h * k1v;
+                let k2v = f(t + 0.5 * h, x + 0.5 * h * k1x);
+                let k3x = v + 0.5 * h * k2v;
+                let k3v = f(t + 0.5 * h, x + 0.5 * h * k2x);
+                let k4x = v + h * k3v;
+                let k4v = f(t + h, x + h * k3x);
+                x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+                v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+                t += h;
+                worst = worst.max((x - cart(t).position_m).abs());
+            }
+            worst
+        };
+        // The cart starts where the profile's conversion puts it at rest; a
+        // constant stiffness starts it with a wrong stretch too: both are
+        // errors of the constant model.
+        const RK4_TOL_M: f64 = 1e-9;
+        let exact = run(BeltStretch::Profile(profile));
+        assert!(exact < RK4_TOL_M, "profile error {exact}");
+        let end = BeltStretch::On {
+            m_c_kg: M_C,
+            c_n_per_m: 1.0 / profile.compliance_at(0.49),
+        };
+        let constant = run(end);
+        assert!(constant > 3e-4, "constant-stiffness error {constant}");
+
+        let conv = SetpointConversion::new(I_T, BeltStretch::Profile(profile)).unwrap();
+        let d = 1e-6;
+        for t in [0.05, 0.2, 0.31] {
+            let fd = (conv.motor_sample(&cart(t + d)).angle_rad
+                - conv.motor_sample(&cart(t - d)).angle_rad)
+                / (2.0 * d);
+            let w_d = conv.motor_sample(&cart(t)).velocity_rad_s;
+            assert!(
+                (fd - w_d).abs() < 1e-6 * w_d.abs().max(1.0),
+                "{t}: {fd} vs {w_d}"
+            );
+        }
+    }
+
     #[test]
     fn invalid_conversion_parameters_are_errors() {
         assert!(SetpointConversion::new(0.0, BeltStretch::Off).is_err());
@@ -240,5 +413,31 @@ mod tests {
             }
         )
         .is_err());
+        let ok = BeltProfile {
+            m_c_kg: M_C,
+            reference_m: 0.5,
+            compliance_m_per_n: 1.0 / C,
+            compliance_slope_per_n: 1e-5,
+            compliance_curvature_per_n_m: -5e-6,
+            static_force_n: 10.0,
+        };
+        assert!(SetpointConversion::new(I_T, BeltStretch::Profile(ok)).is_ok());
+        for bad in [
+            BeltProfile {
+                compliance_m_per_n: 0.0,
+                ..ok
+            },
+            BeltProfile {
+                compliance_slope_per_n: f64::INFINITY,
+                ..ok
+            },
+            BeltProfile {
+                static_force_n: f64::NAN,
+                ..ok
+            },
+            BeltProfile { m_c_kg: -1.0, ..ok },
+        ] {
+            assert!(SetpointConversion::new(I_T, BeltStretch::Profile(bad)).is_err());
+        }
     }
 }

@@ -458,18 +458,30 @@ pub fn commission(
         ex,
         datasheet,
     )?;
-    // ---- 5b. belt stiffness where the validation move ends (issue 12) ----
-    let target_stiffness = stages::identification::stiffness_at(
+    // ---- 5b, 5c. belt stiffness where the validation move ends and near
+    // where it starts: the compliance along the stroke (issue 12) ----
+    let total_coulomb = ident
+        .nonlinear
+        .as_ref()
+        .filter(|_| ident.nonlinear_note.is_none())
+        .map_or(held.friction_nm, |n| n.tau_c_motor_nm + n.cart_coulomb_nm());
+    let target_stiffness = stages::identification::stiffness_profile(
         &mut st,
         &boot_hold,
         stages::validation_moves::validation_target_m(&cfg.validation, datasheet),
-        &ident.fit,
-        id_pos,
-        &pos_limits,
-        holding,
-        amplitude,
-        ex,
-        datasheet,
+        stages::identification::start_side_position_m(datasheet, ident.excursion_m),
+        &stages::identification::StiffnessInputs {
+            main: &ident.fit,
+            ident_position_m: ident.measured_position_m,
+            excitation_center_m: id_pos,
+            limits: &pos_limits,
+            holding_nm: holding,
+            amplitude_nm: amplitude,
+            dead_time_s: ident.dead_time.seconds,
+            coulomb_nm: total_coulomb,
+            ex,
+            datasheet,
+        },
     )?;
     let p = ident.fit.params;
     // The stops now brake the identified inertia (issue 12).
@@ -609,7 +621,7 @@ pub fn commission(
         &fr.result,
         n_t,
         holding,
-        target_stiffness.c_n_per_m,
+        &target_stiffness,
         datasheet,
         cfg,
     )?;

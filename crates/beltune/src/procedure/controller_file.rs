@@ -157,9 +157,50 @@ pub struct SetpointSection {
     /// ended (commissioning stage 5b, `target_stiffness` in
     /// `commissioning.json`), else the model's.
     pub c_n_per_m: f64,
-    /// Static belt stretch under the holding torque `tau_hold / (i_t c)`
-    /// with [`Self::c_n_per_m`], m: the motor setpoint leads the cart by this much.
+    /// Static belt stretch under the holding torque at
+    /// [`Self::stiffness_position_m`], `tau_hold / (i_t c)`, m: what the
+    /// conversion's static force gives there (information: the conversion
+    /// applies it, a consumer does not add it again).
     pub static_stretch_m: f64,
+    /// Cart position where [`Self::c_n_per_m`] holds, m (in the coordinates
+    /// of the trajectory samples; the validation target). 0 in older files,
+    /// whose stiffness is one for the whole stroke.
+    #[serde(default)]
+    pub stiffness_position_m: f64,
+    /// Slope of the belt's compliance `1 / c` along the stroke at
+    /// [`Self::stiffness_position_m`], 1/N (stages 5b/5c; 0: one stiffness).
+    #[serde(default)]
+    pub compliance_slope_per_n: f64,
+    /// Half the compliance's second derivative, 1/(N m) (0: at most linear).
+    #[serde(default)]
+    pub compliance_curvature_per_n_m: f64,
+    /// Force the belt carries at rest, `tau_hold / i_t`, N: the conversion
+    /// leads the motor by its stretch `F / c(xi)` wherever the cart is
+    /// (absent in older files: `static_stretch_m c_n_per_m`).
+    #[serde(default)]
+    pub static_force_n: Option<f64>,
+}
+
+impl SetpointSection {
+    /// The belt model of the conversion: the compliance along the stroke
+    /// about [`Self::stiffness_position_m`] with the static force
+    /// (`Off` when `belt_stretch` is off; a non-positive `c_n_per_m` is
+    /// left for [`SetpointConversion::new`] to refuse).
+    pub fn belt_stretch(&self) -> BeltStretch<f64> {
+        if !self.belt_stretch {
+            return BeltStretch::Off;
+        }
+        BeltStretch::Profile(beltune_rt::control::BeltProfile {
+            m_c_kg: self.m_c_kg,
+            reference_m: self.stiffness_position_m,
+            compliance_m_per_n: 1.0 / self.c_n_per_m,
+            compliance_slope_per_n: self.compliance_slope_per_n,
+            compliance_curvature_per_n_m: self.compliance_curvature_per_n_m,
+            static_force_n: self
+                .static_force_n
+                .unwrap_or(self.static_stretch_m * self.c_n_per_m),
+        })
+    }
 }
 
 impl ControllerFile {
@@ -189,8 +230,13 @@ impl ControllerFile {
         let sos = |s: &SosCoeffs<f64>| [s.b0, s.b1, s.b2, s.a1, s.a2];
         let v = cfg.velocity_filter;
         let model = des.input.model;
-        // the stiffness where the validated move decelerated and rests
-        let c_setpoint = target_stiffness.map_or(model.c, |t| t.c_n_per_m);
+        // the stiffness where the validated move decelerated and rests, and
+        // how it changes along the stroke
+        let belt = target_stiffness
+            .copied()
+            .unwrap_or_else(|| TargetStiffness::constant(0.0, model.c, model.f_z_hz(), false));
+        let c_setpoint = belt.c_n_per_m;
+        let static_force_n = friction.holding_torque_nm / model.i_t;
         let file = ControllerFile {
             schema_version: SCHEMA_VERSION,
             units,
@@ -220,7 +266,9 @@ impl ControllerFile {
                 inertia: true,
                 viscous: true,
                 coulomb: true,
-                inertia_kg_m2: model.rigid_inertia(),
+                // what the validation moved with (the friction-aware fit's
+                // rigid inertia, else the friction runs' momentum balance)
+                inertia_kg_m2: des.feedforward.inertia_kg_m2,
                 viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
                 coulomb_nm: friction.coulomb_nm,
                 coulomb_deadband_rad_s: beltune_rt::control::DEFAULT_COULOMB_DEADBAND_RAD_S,
@@ -236,7 +284,11 @@ impl ControllerFile {
                 belt_stretch: true,
                 m_c_kg: model.m_c,
                 c_n_per_m: c_setpoint,
-                static_stretch_m: friction.holding_torque_nm / (model.i_t * c_setpoint),
+                static_stretch_m: static_force_n / c_setpoint,
+                stiffness_position_m: belt.position_m,
+                compliance_slope_per_n: belt.compliance_slope_per_n,
+                compliance_curvature_per_n_m: belt.compliance_curvature_per_n_m,
+                static_force_n: Some(static_force_n),
             },
             drive_form: DriveForm::of(des),
         };
@@ -299,15 +351,7 @@ impl ControllerFile {
     /// The setpoint conversion for cart trajectories (validated).
     pub fn setpoint_conversion(&self) -> Result<SetpointConversion<f64>> {
         let s = &self.setpoint;
-        let belt = if s.belt_stretch {
-            BeltStretch::On {
-                m_c_kg: s.m_c_kg,
-                c_n_per_m: s.c_n_per_m,
-            }
-        } else {
-            BeltStretch::Off
-        };
-        Ok(SetpointConversion::new(s.i_t_m_per_rad, belt)?)
+        Ok(SetpointConversion::new(s.i_t_m_per_rad, s.belt_stretch())?)
     }
 
     /// The TOML text (keys relabelled in current units).
@@ -488,12 +532,17 @@ mod tests {
             assert!(a.iter().any(|t| t.abs() == 3.1), "the test saturates");
             assert_eq!(back.feedforward.preview_samples, 10);
             let sc = back.setpoint_conversion().unwrap();
+            // the model's stiffness everywhere, the holding torque's force
             let want_sc = SetpointConversion::new(
                 0.0124141,
-                BeltStretch::On {
+                BeltStretch::Profile(beltune_rt::control::BeltProfile {
                     m_c_kg: 13.44,
-                    c_n_per_m: 203.74e3,
-                },
+                    reference_m: 0.0,
+                    compliance_m_per_n: 1.0 / 203.74e3,
+                    compliance_slope_per_n: 0.0,
+                    compliance_curvature_per_n_m: 0.0,
+                    static_force_n: f.holding_torque_nm / 0.0124141,
+                }),
             )
             .unwrap();
             assert_eq!(sc, want_sc);
@@ -523,18 +572,89 @@ mod tests {
         let tol = 1e-9;
         let model = file(None).setpoint;
         assert!((model.static_stretch_m - 0.31 / (0.0124141 * 203.74e3)).abs() < tol);
-        let target = TargetStiffness {
-            position_m: 0.5,
-            c_n_per_m: 250e3,
-            f_z_hz: 22.0,
-            measured: true,
-        };
+        let target = TargetStiffness::constant(0.5, 250e3, 22.0, true);
         let at_target = file(Some(&target)).setpoint;
         assert!((at_target.static_stretch_m - 0.31 / (0.0124141 * 250e3)).abs() < tol);
         // the dynamic stretch compensation m_c a / c uses it too, as the
         // validation move did
         assert_eq!(model.c_n_per_m, 203.74e3);
         assert_eq!(at_target.c_n_per_m, 250e3);
+    }
+
+    /// Issue 12: the file carries the belt's compliance along the stroke
+    /// and the static force, and its setpoint conversion is the one the
+    /// validation moved with: at the target it leads by the static stretch
+    /// there, at another position by the stretch of that position's
+    /// stiffness, `F K(xi)`; an older file (no profile keys) reads as one
+    /// stiffness with the static force `static_stretch_m c`.
+    #[test]
+    fn the_setpoint_carries_the_belt_profile_issue_12() {
+        let des = designed(PrefilterKind::Butterworth);
+        let f = friction();
+        let profile = TargetStiffness {
+            compliance_slope_per_n: 1.0e-5,
+            compliance_curvature_per_n_m: -5.0e-6,
+            ..TargetStiffness::constant(0.5, 250e3, 22.0, true)
+        };
+        let file = ControllerFile::from_design(
+            &des,
+            &f,
+            Some(&profile),
+            3.1,
+            ModelUnits::Torque,
+            Provenance::now(vec![], None),
+        )
+        .unwrap();
+        let back = ControllerFile::parse(&file.to_toml().unwrap(), "c.toml").unwrap();
+        assert_eq!(back.setpoint, file.setpoint);
+        let conv = back.setpoint_conversion().unwrap();
+        let force = 0.31 / 0.0124141;
+        let at_rest = |x: f64| {
+            conv.motor_sample(&beltune_rt::control::CartSample {
+                position_m: x,
+                ..Default::default()
+            })
+            .angle_rad
+                * 0.0124141
+                - x
+        };
+        let tol = 1e-12;
+        assert!(
+            (at_rest(0.5) - force / 250e3).abs() < tol,
+            "{}",
+            at_rest(0.5)
+        );
+        assert!((at_rest(0.1) - force * profile.compliance_at(0.1)).abs() < tol);
+        assert!(at_rest(0.1) < at_rest(0.5), "stiffer near the motor");
+        // an older file: no profile keys
+        let text = file.to_toml().unwrap();
+        let old: String = text
+            .lines()
+            .filter(|l| {
+                ![
+                    "stiffness_position_m",
+                    "compliance_slope",
+                    "compliance_curvature",
+                    "static_force_n",
+                ]
+                .iter()
+                .any(|k| l.starts_with(k))
+            })
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let old = ControllerFile::parse(&old, "old.toml").unwrap();
+        let s = &old.setpoint;
+        assert_eq!((s.compliance_slope_per_n, s.static_force_n), (0.0, None));
+        let conv = old.setpoint_conversion().unwrap();
+        let lead = conv
+            .motor_sample(&beltune_rt::control::CartSample {
+                position_m: 0.1,
+                ..Default::default()
+            })
+            .angle_rad
+            * 0.0124141
+            - 0.1;
+        assert!((lead - s.static_stretch_m).abs() < tol, "{lead}");
     }
 
     #[test]

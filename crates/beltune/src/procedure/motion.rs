@@ -14,15 +14,19 @@ use beltune_rt::trajectory::{Limits, State, Trajectory};
 pub struct TrackOptions {
     /// Feedforward preview in samples (the current-loop dead time `n_T`), 0 for none.
     pub preview_samples: usize,
-    /// Belt-stretch compensation (docs/thesis-map.md): `Off` for a rigid belt.
+    /// Belt-stretch compensation (docs/thesis-map.md): `Off` for a rigid
+    /// belt; a [`beltune_rt::control::BeltProfile`] also carries the static
+    /// stretch under a constant force (gravity on a tilted axis: the cart
+    /// hangs `K(xi) F` behind the motor), with positions measured from the
+    /// runner's origin (the cart position at motor angle 0).
     pub belt_stretch: BeltStretch<f64>,
-    /// Check the following error against the supervisor's limit.
+    /// Track in closed loop with the following error checked against the
+    /// supervisor's limit (`false`: supervised as an open-loop motion).
     pub check_following_error: bool,
-    /// Static belt stretch under a constant load, m: the cart hangs `F / c`
-    /// behind the motor when a constant force `F` (gravity on a tilted axis)
-    /// acts on it; the motor setpoint leads by this much. `F / c` with
-    /// `F = tau_hold / i_t` from the holding torque and the identified `c`.
-    pub static_stretch_m: f64,
+    /// With [`Self::check_following_error`]: record the following error but
+    /// do not limit it ([`Runner::step_unlimited`]): a move whose lag is
+    /// expected.
+    pub following_error_unlimited: bool,
 }
 
 /// A recorded closed-loop run.
@@ -70,8 +74,7 @@ pub fn track(
     let mut ctrl = CascadeController::new(*config)?;
     ctrl.reset_to(runner.motor_angle_rad());
     let conv = SetpointConversion::new(runner.i_t(), opts.belt_stretch)?;
-    // A lead of the motor by the static stretch is an origin shifted back by it.
-    let origin = runner.origin_m() - opts.static_stretch_m;
+    let origin = runner.origin_m();
     let duration = traj.duration_s();
     let n = ((duration + settle_s.max(0.0)) / ts).ceil() as usize;
     let mut rec = TrackRecord {
@@ -89,7 +92,10 @@ pub fn track(
         let following = opts
             .check_following_error
             .then(|| desired.position - runner.position_m());
-        let sample = runner.step(out.torque_nm, following)?;
+        let sample = match following {
+            Some(e) if opts.following_error_unlimited => runner.step_unlimited(out.torque_nm, e)?,
+            _ => runner.step(out.torque_nm, following)?,
+        };
         // The exchange returns what the drive measured at the end of the
         // cycle ([`crate::plant::Axis::exchange`]), i.e. at (k+1) T: the record
         // pairs it with the desired position of that instant. Pairing it with

@@ -339,6 +339,24 @@ impl<'a> Runner<'a> {
     /// error. A failed exchange ends in the drive's quick stop and
     /// [`Error::Axis`].
     pub fn step(&mut self, torque_nm: f64, following_error_m: Option<f64>) -> Result<Sample> {
+        self.step_tracking(torque_nm, following_error_m, true)
+    }
+
+    /// [`Runner::step`] in closed loop whose following error `following_error_m`
+    /// is recorded but not limited: a move whose lag is expected (the
+    /// validation's comparison variants without feedforward, issue 12). The
+    /// look-ahead is the closed loop's; travel, velocity and torque are
+    /// supervised as always.
+    pub fn step_unlimited(&mut self, torque_nm: f64, following_error_m: f64) -> Result<Sample> {
+        self.step_tracking(torque_nm, Some(following_error_m), false)
+    }
+
+    fn step_tracking(
+        &mut self,
+        torque_nm: f64,
+        following_error_m: Option<f64>,
+        limit_following_error: bool,
+    ) -> Result<Sample> {
         let limit = self
             .info
             .torque_max_nm
@@ -365,13 +383,13 @@ impl<'a> Runner<'a> {
             };
             (v, lag)
         };
-        if let Err(v) = self.supervisor.check_lagged(
-            self.position_m(),
-            velocity,
-            lag,
-            torque,
-            following_error_m,
-        ) {
+        // a tracking loop whose error is not limited is judged as one with no
+        // error (the closed loop's look-ahead)
+        let judged = following_error_m.map(|e| if limit_following_error { e } else { 0.0 });
+        if let Err(v) =
+            self.supervisor
+                .check_lagged(self.position_m(), velocity, lag, torque, judged)
+        {
             return Err(self.stop_after(v, torque, following_error_m));
         }
         self.raw_step(torque, following_error_m)

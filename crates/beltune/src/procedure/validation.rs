@@ -269,28 +269,31 @@ pub fn validation_controller(
 
 /// The tracking options of a validation move for the design model `p`:
 /// feedforward preview by `preview_samples` (the current-loop dead time),
-/// belt-stretch compensation `m_c a / c` and the static stretch under the
-/// holding torque `holding_nm`, both with the belt stiffness
-/// `static_c_n_per_m` where the move ends. Issue 12: the stiffness
-/// identified at the worst-case position is up to 30 % lower than at the
-/// target, and the cart rested that share of the static stretch, up to
-/// hundreds of um, short of it; the dynamic stretch of the deceleration
-/// into the target is that stiffness's too (on plants 0-99 of seed 12 the
-/// median max cart error went from 0.302 to 0.286 mm with it).
+/// belt-stretch compensation `K(xi) (m_c a + F)` with the belt's compliance
+/// along the stroke `belt` (stages 5b/5c) and the force `F = tau_hold / i_t`
+/// the belt carries under the holding torque `holding_nm`, positions from
+/// `origin_m` (the runner's). Issue 12: the stiffness identified at the
+/// worst-case position is up to 30 % lower than at the target, and the cart
+/// rested that share of the static stretch, up to hundreds of um, short of
+/// it; the stiffness along a 0.5 m move changes by a factor two on a soft
+/// belt, and one stiffness left the cart up to 0.6 mm off during the
+/// acceleration and stepped the static stretch of a tilted axis at the start.
 pub fn validation_track_options(
     p: &crate::model::TwoMassParams,
     preview_samples: usize,
     holding_nm: f64,
-    static_c_n_per_m: f64,
+    belt: &super::result::TargetStiffness,
+    origin_m: f64,
 ) -> TrackOptions {
     TrackOptions {
         preview_samples,
-        belt_stretch: beltune_rt::control::BeltStretch::On {
-            m_c_kg: p.m_c,
-            c_n_per_m: static_c_n_per_m,
-        },
+        belt_stretch: beltune_rt::control::BeltStretch::Profile(belt.belt_profile(
+            p.m_c,
+            holding_nm / p.i_t,
+            origin_m,
+        )),
         check_following_error: true,
-        static_stretch_m: holding_nm / (p.i_t * static_c_n_per_m),
+        following_error_unlimited: false,
     }
 }
 
@@ -302,12 +305,16 @@ pub const SIM_STOP_DECELERATION_M_S2: f64 = 20.0;
 /// The validation move of design `des` on a fresh simulation of `plant`
 /// (noise `seed`), at rest at `spec.start_m`, with the controller and options
 /// of stage 8 ([`validation_controller`], [`validation_track_options`]; the
-/// simulated plants are horizontal: no holding torque). A following error
-/// beyond `following_error_max_m` stops the move (typed error).
+/// simulated plants are horizontal: no holding torque), the belt's
+/// compliance along the stroke `belt` (stages 5b/5c; `None`: the model's
+/// stiffness everywhere). A following error beyond `following_error_max_m`
+/// stops the move (typed error).
+#[allow(clippy::too_many_arguments)]
 pub fn simulate_validation_move(
     plant: &crate::model::rigs::Plant,
     des: &crate::design::ControllerDesign,
     friction: &super::result::FrictionResult,
+    belt: Option<&super::result::TargetStiffness>,
     variant: FeedforwardVariant,
     spec: &MoveSpec,
     seed: u64,
@@ -374,7 +381,10 @@ pub fn simulate_validation_move(
         variant,
     );
     let preview = (des.input.dead_time_s / des.input.ts_s).round() as usize;
-    let opts = validation_track_options(&model, preview, 0.0, model.c);
+    let belt = belt.copied().unwrap_or_else(|| {
+        super::result::TargetStiffness::constant(spec.target_m, model.c, model.f_z_hz(), false)
+    });
+    let opts = validation_track_options(&model, preview, 0.0, &belt, spec.start_m);
     run_move(
         &mut runner,
         &feedback,

@@ -72,6 +72,9 @@ pub struct NonlinearConfig {
     /// Coulomb friction measured before (motor side, all bodies), N m: the
     /// start values of the cart's share. 0 if unknown.
     pub coulomb_hint_nm: f64,
+    /// Hold the start's `m_c` instead of fitting it: the belt stiffness at
+    /// another cart position, where the mass is the one identified already.
+    pub fixed_mass: bool,
 }
 
 /// The identified nonlinear two-mass model (2.30).
@@ -187,11 +190,15 @@ pub fn fit_nonlinear(
     })?;
     let n = eval.residual.len();
     let uncertainty = solved.jacobian_mat().and_then(|j| {
-        let s2 = eval.residual.norm_squared() / (n.saturating_sub(N_Q)).max(1) as f64;
+        let n_free = solved.free.len();
+        let s2 = eval.residual.norm_squared() / (n.saturating_sub(n_free)).max(1) as f64;
         let jtj = j.transpose() * &j;
         let scale = jtj.diagonal().max();
         let cov = jtj.pseudo_inverse(1e-12 * scale).ok()? * s2;
-        let sig = |k: usize| cov[(k, k)].max(0.0).sqrt() * solved.dlnp_dq(k);
+        let sig = |k: usize| match solved.free.iter().position(|&f| f == k) {
+            Some(i) => cov[(i, i)].max(0.0).sqrt() * solved.dlnp_dq(k),
+            None => 0.0,
+        };
         Some(ParamUncertainty {
             theta_e: 0.0,
             m_c: cart.m_c * sig(0),
@@ -275,6 +282,9 @@ struct Problem {
     /// Start values and log half-widths of `m_c, c, d, d_c, F_c`.
     p0: [f64; N_Q],
     half_width: [f64; N_Q],
+    /// Which of `m_c, c, d, d_c, F_c` are fitted (`q` holds these, in order);
+    /// the others keep their start values.
+    free: Vec<usize>,
     q: DVector<f64>,
     residual: Option<DVector<f64>>,
     evaluations: std::cell::Cell<usize>,
@@ -400,7 +410,8 @@ impl Problem {
             regressors,
             theta_e: cfg.theta_e,
             p0: [1.0; N_Q],
-            half_width: [0.0; N_Q],
+            half_width: [1.0; N_Q],
+            free: (usize::from(cfg.fixed_mass)..N_Q).collect(),
             q: DVector::zeros(N_Q),
             residual: None,
             evaluations: std::cell::Cell::new(0),
@@ -432,24 +443,35 @@ impl Problem {
             DAMPING_RANGE.ln(),
             DAMPING_RANGE.ln(),
         ];
-        self.q = DVector::zeros(N_Q);
+        self.q = DVector::zeros(self.free.len());
         self.evaluations.set(0);
         self.residual = self.evaluate(&self.q).map(|e| e.residual);
     }
 
+    /// The coordinate of parameter `k` in `q`, if it is fitted.
+    fn q_of(&self, q: &DVector<f64>, k: usize) -> Option<f64> {
+        self.free.iter().position(|&f| f == k).map(|i| q[i])
+    }
+
     fn value(&self, q: &DVector<f64>, k: usize) -> f64 {
         let h = self.half_width[k];
-        self.p0[k] * (h * (q[k] / h).tanh()).exp()
+        match self.q_of(q, k) {
+            Some(x) => self.p0[k] * (h * (x / h).tanh()).exp(),
+            None => self.p0[k],
+        }
     }
 
     fn dlnp_dq(&self, k: usize) -> f64 {
-        let t = (self.q[k] / self.half_width[k]).tanh();
+        let t = (self.q_of(&self.q, k).unwrap_or(0.0) / self.half_width[k]).tanh();
         1.0 - t * t
     }
 
-    /// The first mass/stiffness parameter within 1 % (in ln p) of its range.
+    /// The first fitted mass/stiffness parameter within 1 % (in ln p) of its range.
     fn at_bound(&self) -> Option<usize> {
-        (0..2).find(|&k| (self.q[k] / self.half_width[k]).tanh().abs() > 0.99)
+        (0..2).find(|&k| {
+            self.q_of(&self.q, k)
+                .is_some_and(|x| (x / self.half_width[k]).tanh().abs() > 0.99)
+        })
     }
 
     fn cart(&self, q: &DVector<f64>) -> CartParams {
@@ -545,8 +567,8 @@ impl Problem {
             Some(r) => r.clone(),
             None => self.evaluate(&self.q)?.residual,
         };
-        let mut j = DMatrix::zeros(base.len(), N_Q);
-        for k in 0..N_Q {
+        let mut j = DMatrix::zeros(base.len(), self.free.len());
+        for k in 0..self.free.len() {
             let mut qp = self.q.clone();
             qp[k] += JACOBIAN_STEP;
             let col = (self.evaluate(&qp)?.residual - &base) / JACOBIAN_STEP;

@@ -14,6 +14,7 @@ use crate::ident::dead_time::{estimate_dead_time, DeadTime};
 use crate::ident::etfe::{etfe, EtfeConfig, Frf};
 use crate::ident::fit::{fit_two_mass, FitConfig, FitModel, TwoMassFit};
 use crate::ident::nonlinear::{fit_nonlinear, NonlinearConfig, NonlinearFit};
+use crate::model::TwoMassParams;
 use crate::{Error, Result};
 use beltune_rt::control::CascadeConfig;
 use beltune_rt::prbs::Prbs;
@@ -37,6 +38,8 @@ pub struct Identification {
     /// model holds (the open-loop excitation moves the axis around the
     /// position it started at).
     pub measured_position_m: f64,
+    /// Largest distance of the axis from the excitation's centre during it, m.
+    pub excursion_m: f64,
     /// The current-loop dead time.
     pub dead_time: DeadTime,
     /// The model summary.
@@ -189,6 +192,7 @@ fn fit_friction_aware(
             band_hz: (lo, hi.min(NONLINEAR_BAND_RESONANCES * fit.f_r_hz)),
             cart_force_n: -holding_nm / datasheet.i_t_m,
             coulomb_hint_nm: coulomb_hint_nm.max(0.0),
+            fixed_mass: false,
         },
     )
 }
@@ -343,6 +347,11 @@ pub fn identification(
         nonlinear,
         nonlinear_note,
         measured_position_m,
+        excursion_m: e
+            .pos
+            .iter()
+            .map(|p| (p - center_m).abs())
+            .fold(0.0, f64::max),
         dead_time,
         identified,
         excitation_time_s: (0..n).map(|k| e.t_start_s + k as f64 * ts).collect(),
@@ -360,96 +369,218 @@ pub const SAME_POSITION_M: f64 = 0.005;
 /// PRBS order of the stiffness measurement at the validation target.
 pub const TARGET_PRBS_ORDER: u32 = 9;
 
-/// Stage 5b (issue 12): the belt stiffness at `target_m`, where the
-/// validation move ends. A second open-loop PRBS of amplitude `amplitude_nm`
-/// around `holding_nm` there (one transient period and the two periods the
-/// coherence needs, order [`TARGET_PRBS_ORDER`]), fitted like the main
-/// identification; the stiffness is that fit's `c` (2.1 % rms against
-/// (2.26) on the study's plants; `m_c w_z^2` with the main fit's `m_c` was
-/// 3.4 %). Skipped, with the main fit's `c`, when the target is within
-/// [`SAME_POSITION_M`] of the identification position `ident_position_m`;
-/// a target FRF that does not fit falls back to it too, and the log says so.
-#[allow(clippy::too_many_arguments)]
-pub fn stiffness_at(
+/// What the identification leaves for measuring the belt stiffness
+/// elsewhere (stages 5b, 5c): the model, where it was measured, and the
+/// excitation's settings.
+pub struct StiffnessInputs<'a> {
+    /// The model the design uses (its `m_c` and `Theta_e` hold everywhere).
+    pub main: &'a TwoMassFit,
+    /// Where the model was measured (the mean position of its excitation), m.
+    pub ident_position_m: f64,
+    /// Where its excitation was centred, m: a position within
+    /// [`SAME_POSITION_M`] of it is not measured again.
+    pub excitation_center_m: f64,
+    /// Positioning limits of the moves in between.
+    pub limits: &'a Limits,
+    /// Holding torque, N m.
+    pub holding_nm: f64,
+    /// PRBS amplitude, N m.
+    pub amplitude_nm: f64,
+    /// Current-loop dead time, s.
+    pub dead_time_s: f64,
+    /// Coulomb friction at the motor (the friction-aware fit's start), N m.
+    pub coulomb_nm: f64,
+    /// Excitation settings.
+    pub ex: &'a ExcitationConfig,
+    /// The data sheet.
+    pub datasheet: &'a DataSheet,
+}
+
+/// The belt stiffness at `position_m` from an open-loop PRBS there (one
+/// transient period and the two periods the coherence needs, order
+/// [`TARGET_PRBS_ORDER`]): the FRF fit for the start values, then the
+/// friction-aware fit with the main model's mass and motor inertia held
+/// (the mass does not change along the stroke; on a sticking cart the FRF
+/// fit's `c` carries the friction's error). `Ok(Err(reason))` where no fit
+/// holds (the caller keeps what it has).
+fn measure_stiffness(
     st: &mut Stages,
+    stage: &str,
     hold: &CascadeConfig<f64>,
-    target_m: f64,
-    main: &TwoMassFit,
-    ident_position_m: f64,
-    limits: &Limits,
-    holding_nm: f64,
-    amplitude_nm: f64,
-    ex: &ExcitationConfig,
-    datasheet: &DataSheet,
-) -> Result<TargetStiffness> {
-    // The identification position's stiffness, where the target's is not measured.
-    let unmeasured = TargetStiffness {
-        position_m: ident_position_m,
-        c_n_per_m: main.params.c,
-        f_z_hz: main.f_z_hz,
-        measured: false,
-    };
-    if (target_m - ident_position_m).abs() < SAME_POSITION_M {
-        st.start("belt stiffness at the target", 0);
-        st.finish(
-            "belt stiffness",
-            format!(
-                "the target {:.1} mm is the identification position: c {:.1} kN/m",
-                target_m * 1e3,
-                main.params.c / 1e3
-            ),
-        );
-        return Ok(unmeasured);
-    }
+    position_m: f64,
+    inp: &StiffnessInputs,
+) -> Result<std::result::Result<TargetStiffness, String>> {
     let ts = st.runner.info().ts_s;
+    let ex = inp.ex;
     let skip = ex.skip_periods;
     let e = excite(
         st,
-        "belt stiffness at the target (open loop)",
+        stage,
         hold,
-        target_m,
-        limits,
-        holding_nm,
-        amplitude_nm,
+        position_m,
+        inp.limits,
+        inp.holding_nm,
+        inp.amplitude_nm,
         TARGET_PRBS_ORDER,
         skip + 2,
         ex,
     )?;
+    let main = inp.main.params;
     let fitted = st.compute(|| -> Result<_> {
         let ecfg = etfe_config(ts, e.period, skip, ex);
         let frf = etfe(&e.cmd, &e.ang, &ecfg)?;
-        fit_frf(&frf, &ecfg, ex, datasheet)
-    });
-    let (out, line) = match fitted {
-        Ok(fit) => (
-            TargetStiffness {
-                position_m: target_m,
-                c_n_per_m: fit.params.c,
-                f_z_hz: fit.f_z_hz,
-                measured: true,
+        let frf_fit = fit_frf(&frf, &ecfg, ex, inp.datasheet)?;
+        let (lo, hi) = ecfg.band_hz.unwrap_or((0.0, 0.5 / ts));
+        let start = TwoMassParams {
+            m_c: main.m_c,
+            theta_e: main.theta_e,
+            ..frf_fit.params
+        };
+        let nl = fit_nonlinear(
+            &e.cmd,
+            &e.ang,
+            &start,
+            &NonlinearConfig {
+                theta_e: Some(main.theta_e),
+                i_t: inp.datasheet.i_t_m,
+                ts_s: ts,
+                period_samples: e.period,
+                skip_periods: skip,
+                dead_time_s: inp.dead_time_s,
+                band_hz: (lo, hi.min(NONLINEAR_BAND_RESONANCES * frf_fit.f_r_hz)),
+                cart_force_n: -inp.holding_nm / inp.datasheet.i_t_m,
+                coulomb_hint_nm: inp.coulomb_nm.max(0.0),
+                fixed_mass: true,
             },
-            format!(
-                "at {:.1} mm: f_z {:.2} Hz, c {:.1} kN/m (at the identification position {:.1} mm: {:.1} kN/m)",
-                target_m * 1e3,
-                fit.f_z_hz,
-                fit.params.c / 1e3,
-                ident_position_m * 1e3,
-                main.params.c / 1e3,
-            ),
-        ),
-        // The main identification stands: a target FRF that does not fit
-        // leaves the stiffness of the identification position (the static
-        // stretch as before this stage), and the log says so.
-        Err(e @ (Error::FitFailed { .. } | Error::TooShort { .. } | Error::NoExcitation { .. })) => (
-            unmeasured,
-            format!(
-                "not measured at {:.1} mm ({e}); the identification position's {:.1} kN/m is used",
-                target_m * 1e3,
-                main.params.c / 1e3
-            ),
-        ),
-        Err(e) => return Err(e),
+        );
+        Ok(match nl {
+            Ok(nl) if nl.improves_on_linear() => (nl.params.c, nl.f_z_hz),
+            _ => (frf_fit.params.c, frf_fit.f_z_hz),
+        })
+    });
+    match fitted {
+        Ok((c, f_z)) => Ok(Ok(TargetStiffness::constant(position_m, c, f_z, true))),
+        Err(
+            e @ (Error::FitFailed { .. } | Error::TooShort { .. } | Error::NoExcitation { .. }),
+        ) => Ok(Err(e.to_string())),
+        Err(e) => Err(e),
+    }
+}
+
+/// Where the belt stiffness near the validation start is measured (stage
+/// 5c), m: a quarter of the window (at least 0.1 m) inside its lower edge,
+/// and at least twice the identification's largest excursion from its
+/// centre `excursion_m` (plus 20 mm) inside it. The open-loop PRBS moves
+/// the axis by tens of mm, on a tilted axis downhill, a light cart most; at
+/// the 12 % the identification position keeps from the upper edge, 24 of the
+/// study's first 270 plants ran into a travel stop there, and two light carts
+/// on short strokes at 25 %. The compliance (2.26) is quadratic in the
+/// position, so the point need not be at the start itself.
+pub fn start_side_position_m(ds: &DataSheet, excursion_m: f64) -> f64 {
+    let width = ds.travel_max_m - ds.travel_min_m;
+    let room = if excursion_m.is_finite() {
+        2.0 * excursion_m + 0.02
+    } else {
+        0.0
     };
-    st.finish("belt stiffness", line);
-    Ok(out)
+    ds.travel_min_m + (0.25 * width).max(0.1).max(room)
+}
+
+/// Stages 5b and 5c (issue 12): the belt stiffness where the validation move
+/// ends (`target_m`) and near where it starts (`start_side_m`), each by an
+/// open-loop PRBS there ([`measure_stiffness`]); with the identification
+/// position's, the compliance through the three (exactly quadratic for
+/// (2.26), [`TargetStiffness::through`]). A position within
+/// [`SAME_POSITION_M`] of one measured already is not measured again; a
+/// measurement that does not fit is left out and the log says so; three
+/// points that do not make a belt (a convex compliance: measurement error)
+/// leave the two that span the move, then the target's stiffness alone.
+pub fn stiffness_profile(
+    st: &mut Stages,
+    hold: &CascadeConfig<f64>,
+    target_m: f64,
+    start_side_m: f64,
+    inp: &StiffnessInputs,
+) -> Result<TargetStiffness> {
+    let main = inp.main;
+    let id = inp.ident_position_m;
+    let center = inp.excitation_center_m;
+    let at_id = TargetStiffness::constant(id, main.params.c, main.f_z_hz, false);
+    // one measurement per position not measured yet, each with its log line
+    let measure = |st: &mut Stages, what: &str, x: f64| -> Result<Option<TargetStiffness>> {
+        let stage = format!("belt stiffness {what} (open loop)");
+        let label = format!("belt stiffness {what}");
+        if (x - center).abs() < SAME_POSITION_M {
+            st.start(&label, 0);
+            st.finish(
+                &label,
+                format!(
+                    "{:.1} mm is the identification position: c {:.1} kN/m",
+                    x * 1e3,
+                    main.params.c / 1e3
+                ),
+            );
+            return Ok(None);
+        }
+        let (line, out) = match measure_stiffness(st, &stage, hold, x, inp)? {
+            Ok(t) => (
+                format!(
+                    "at {:.1} mm: f_z {:.2} Hz, c {:.1} kN/m",
+                    x * 1e3,
+                    t.f_z_hz,
+                    t.c_n_per_m / 1e3
+                ),
+                Some(t),
+            ),
+            Err(why) => (format!("not measured at {:.1} mm ({why})", x * 1e3), None),
+        };
+        st.finish(&label, line);
+        Ok(out)
+    };
+    let target = measure(st, "at the target", target_m)?;
+    let start_side = if start_side_m > target_m - SAME_POSITION_M {
+        None
+    } else {
+        measure(st, "near the start", start_side_m)?
+    };
+    // The compliance through the identification position's stiffness and
+    // what was measured, about the target where it was measured (else
+    // about the identification position).
+    let reference = target.unwrap_or(at_id);
+    let mut others: Vec<(f64, f64)> = Vec::new();
+    if target.is_some() {
+        others.push((id, main.params.c));
+    }
+    others.extend(start_side.map(|t| (t.position_m, t.c_n_per_m)));
+    let window = (inp.datasheet.travel_min_m, inp.datasheet.travel_max_m);
+    let spanning: Vec<(f64, f64)> = start_side
+        .map(|t| (t.position_m, t.c_n_per_m))
+        .into_iter()
+        .collect();
+    let (profile, shape) = match reference.through(&others, window, SAME_POSITION_M) {
+        Some(p) if others.len() == 2 => (p, "quadratic through three positions"),
+        Some(p) if others.len() == 1 => (p, "linear through two positions"),
+        Some(p) => (p, "one stiffness for the stroke"),
+        None => match reference.through(&spanning, window, SAME_POSITION_M) {
+            Some(p) if !spanning.is_empty() => (
+                p,
+                "linear through two positions (the three do not make a belt's compliance)",
+            ),
+            _ => (reference, "one stiffness for the stroke"),
+        },
+    };
+    st.start("belt stiffness along the stroke", 0);
+    st.finish(
+        "belt stiffness",
+        format!(
+            "{shape}: c {:.1} kN/m at {:.1} mm, {:.1} kN/m at {:.1} mm (window ends), identification {:.1} kN/m at {:.1} mm",
+            profile.stiffness_at(window.0) / 1e3,
+            window.0 * 1e3,
+            profile.stiffness_at(window.1) / 1e3,
+            window.1 * 1e3,
+            main.params.c / 1e3,
+            id * 1e3
+        ),
+    );
+    Ok(profile)
 }
