@@ -478,7 +478,8 @@ fn limits_not_met_is_5_with_the_results_written() {
     let out = dir.join("out");
     let o = commission(
         &out,
-        &["--quiet", "--json", "--max-tracking-error", "0.00005"],
+        // 10 um: below what egc70 reaches (0.042 mm since issue 12)
+        &["--quiet", "--json", "--max-tracking-error", "0.00001"],
     );
     assert_eq!(code(&o), 5, "{}", text(&o.stderr));
     let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -488,7 +489,7 @@ fn limits_not_met_is_5_with_the_results_written() {
     let c = &s["verdict"]["checks"][0];
     assert_eq!(c["name"], "max_tracking_error");
     assert_eq!(c["passed"], false);
-    assert!(c["value_m"].as_f64().unwrap() >= 5e-5);
+    assert!(c["value_m"].as_f64().unwrap() >= 1e-5);
     assert_eq!(
         c["value_m"],
         s["validation"]["max_tracking_error_nonlinear_m"]

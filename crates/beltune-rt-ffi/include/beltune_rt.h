@@ -52,7 +52,7 @@
 /**
  * 8-byte words of opaque storage in [`BtSetpointConversion`].
  */
-#define BT_SETPOINT_WORDS 8
+#define BT_SETPOINT_WORDS 16
 
 /**
  * Opaque storage of a controller (initialize with [`bt_cascade_init`]); e.g. a
@@ -373,6 +373,19 @@ typedef struct {
    * motor leads by its stretch `F / c` where the cart is.
    */
   double static_force_n;
+  /**
+   * The cart's viscous friction `d_c`, N s/m (0: its stretch is not led).
+   */
+  double cart_viscous_n_s_per_m;
+  /**
+   * The cart's Coulomb friction `F_c`, N (0: its stretch is not led).
+   */
+  double cart_coulomb_n;
+  /**
+   * Cart speed over which the Coulomb lead ramps in and out, m/s (> 0
+   * where `cart_coulomb_n` is not 0).
+   */
+  double coulomb_velocity_m_s;
 } BtSetpointConfig;
 
 #ifdef __cplusplus

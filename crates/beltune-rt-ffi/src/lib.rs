@@ -49,7 +49,7 @@ pub const BT_CASCADE_WORDS: usize = 64;
 /// 8-byte words of opaque storage in [`BtTrajectory`].
 pub const BT_TRAJECTORY_WORDS: usize = 96;
 /// 8-byte words of opaque storage in [`BtSetpointConversion`].
-pub const BT_SETPOINT_WORDS: usize = 8;
+pub const BT_SETPOINT_WORDS: usize = 16;
 const BT_CASCADE_BYTES: usize = 8 * BT_CASCADE_WORDS;
 const BT_TRAJECTORY_BYTES: usize = 8 * BT_TRAJECTORY_WORDS;
 const BT_SETPOINT_BYTES: usize = 8 * BT_SETPOINT_WORDS;
@@ -315,6 +315,13 @@ pub struct BtSetpointConfig {
     /// Force the belt carries at rest (holding torque over `i_t`), N: the
     /// motor leads by its stretch `F / c` where the cart is.
     pub static_force_n: f64,
+    /// The cart's viscous friction `d_c`, N s/m (0: its stretch is not led).
+    pub cart_viscous_n_s_per_m: f64,
+    /// The cart's Coulomb friction `F_c`, N (0: its stretch is not led).
+    pub cart_coulomb_n: f64,
+    /// Cart speed over which the Coulomb lead ramps in and out, m/s (> 0
+    /// where `cart_coulomb_n` is not 0).
+    pub coulomb_velocity_m_s: f64,
 }
 
 /// Opaque storage of a controller (initialize with [`bt_cascade_init`]); e.g. a
@@ -627,6 +634,9 @@ pub unsafe extern "C" fn bt_setpoint_init(
             compliance_slope_per_n: cfg.compliance_slope_per_n,
             compliance_curvature_per_n_m: cfg.compliance_curvature_per_n_m,
             static_force_n: cfg.static_force_n,
+            cart_viscous_n_s_per_m: cfg.cart_viscous_n_s_per_m,
+            cart_coulomb_n: cfg.cart_coulomb_n,
+            coulomb_velocity_m_s: cfg.coulomb_velocity_m_s,
         })
     } else {
         BeltStretch::Off

@@ -107,6 +107,12 @@ pub fn values(file: &ControllerFile) -> Vec<(String, Value)> {
             "static_force_n".into(),
             Real(s.static_force_n.unwrap_or(s.static_stretch_m * s.c_n_per_m)),
         ),
+        (
+            "cart_viscous_n_s_per_m".into(),
+            Real(s.cart_viscous_n_s_per_m),
+        ),
+        ("cart_coulomb_n".into(), Real(s.cart_coulomb_n)),
+        ("coulomb_velocity_m_s".into(), Real(s.coulomb_velocity_m_s)),
         ("t_r_s".into(), Real(file.velocity_filter.t_r_s)),
         // drive-menu form (information)
         (
@@ -265,13 +271,16 @@ pub fn rust_module(file: &ControllerFile) -> String {
     );
     let belt = if file.setpoint.belt_stretch {
         format!(
-            "BeltStretch::Profile(BeltProfile {{\n    m_c_kg: {},\n    reference_m: {},\n    compliance_m_per_n: 1.0 / {},\n    compliance_slope_per_n: {},\n    compliance_curvature_per_n_m: {},\n    static_force_n: {},\n}})",
+            "BeltStretch::Profile(BeltProfile {{\n    m_c_kg: {},\n    reference_m: {},\n    compliance_m_per_n: 1.0 / {},\n    compliance_slope_per_n: {},\n    compliance_curvature_per_n_m: {},\n    static_force_n: {},\n    cart_viscous_n_s_per_m: {},\n    cart_coulomb_n: {},\n    coulomb_velocity_m_s: {},\n}})",
             name("m_c_kg"),
             name("stiffness_position_m"),
             name("c_n_per_m"),
             name("compliance_slope_per_n"),
             name("compliance_curvature_per_n_m"),
             name("static_force_n"),
+            name("cart_viscous_n_s_per_m"),
+            name("cart_coulomb_n"),
+            name("coulomb_velocity_m_s"),
         )
     } else {
         "BeltStretch::Off".to_string()
@@ -297,7 +306,7 @@ pub fn c_header(file: &ControllerFile) -> String {
     };
     let _ = write!(
         s,
-        "\n/* The commissioned controller. */\nstatic const BtCascadeConfig BELTUNE_CASCADE = {{\n    .ts_s = BELTUNE_TS_S,\n    .k_pp_per_s = BELTUNE_K_PP_PER_S,\n    .k_p_nm_s_per_rad = {kp},\n    .k_i_nm_per_rad = {ki},\n    .k_v = BELTUNE_K_V,\n    .velocity_filter = {{BELTUNE_VELOCITY_FILTER_B0, BELTUNE_VELOCITY_FILTER_B1, BELTUNE_VELOCITY_FILTER_A1}},\n    .prefilter = {{\n        {s1},\n        {s2},\n    }},\n    .torque_max_nm = {tmax},\n    .anti_windup = {aw},\n    .ff_inertia = BELTUNE_FF_INERTIA,\n    .ff_viscous = BELTUNE_FF_VISCOUS,\n    .ff_coulomb = BELTUNE_FF_COULOMB,\n    .inertia_kg_m2 = {ffi},\n    .viscous_nm_s_per_rad = {ffv},\n    .coulomb_nm = {ffc},\n    .coulomb_deadband_rad_s = BELTUNE_FF_COULOMB_DEADBAND_RAD_S,\n    .coulomb_breakaway_rad = BELTUNE_FF_COULOMB_BREAKAWAY_RAD,\n    .torque_offset_nm = {toff},\n    .filter_desired_velocity = BELTUNE_FILTER_DESIRED_VELOCITY,\n    .feedforward_preview = BELTUNE_FEEDFORWARD_PREVIEW,\n}};\n\n/* The cart -> motor setpoint conversion. */\nstatic const BtSetpointConfig BELTUNE_SETPOINT = {{\n    .i_t_m_per_rad = BELTUNE_I_T_M_PER_RAD,\n    .belt_stretch = BELTUNE_BELT_STRETCH_ON,\n    .m_c_kg = {mc},\n    .c_n_per_m = {c},\n    .stiffness_position_m = {sp},\n    .compliance_slope_per_n = {cs},\n    .compliance_curvature_per_n_m = {cc},\n    .static_force_n = {sf},\n}};\n\n#endif /* BELTUNE_CONTROLLER_H */\n",
+        "\n/* The commissioned controller. */\nstatic const BtCascadeConfig BELTUNE_CASCADE = {{\n    .ts_s = BELTUNE_TS_S,\n    .k_pp_per_s = BELTUNE_K_PP_PER_S,\n    .k_p_nm_s_per_rad = {kp},\n    .k_i_nm_per_rad = {ki},\n    .k_v = BELTUNE_K_V,\n    .velocity_filter = {{BELTUNE_VELOCITY_FILTER_B0, BELTUNE_VELOCITY_FILTER_B1, BELTUNE_VELOCITY_FILTER_A1}},\n    .prefilter = {{\n        {s1},\n        {s2},\n    }},\n    .torque_max_nm = {tmax},\n    .anti_windup = {aw},\n    .ff_inertia = BELTUNE_FF_INERTIA,\n    .ff_viscous = BELTUNE_FF_VISCOUS,\n    .ff_coulomb = BELTUNE_FF_COULOMB,\n    .inertia_kg_m2 = {ffi},\n    .viscous_nm_s_per_rad = {ffv},\n    .coulomb_nm = {ffc},\n    .coulomb_deadband_rad_s = BELTUNE_FF_COULOMB_DEADBAND_RAD_S,\n    .coulomb_breakaway_rad = BELTUNE_FF_COULOMB_BREAKAWAY_RAD,\n    .torque_offset_nm = {toff},\n    .filter_desired_velocity = BELTUNE_FILTER_DESIRED_VELOCITY,\n    .feedforward_preview = BELTUNE_FEEDFORWARD_PREVIEW,\n}};\n\n/* The cart -> motor setpoint conversion. */\nstatic const BtSetpointConfig BELTUNE_SETPOINT = {{\n    .i_t_m_per_rad = BELTUNE_I_T_M_PER_RAD,\n    .belt_stretch = BELTUNE_BELT_STRETCH_ON,\n    .m_c_kg = {mc},\n    .c_n_per_m = {c},\n    .stiffness_position_m = {sp},\n    .compliance_slope_per_n = {cs},\n    .compliance_curvature_per_n_m = {cc},\n    .static_force_n = {sf},\n    .cart_viscous_n_s_per_m = {cv},\n    .cart_coulomb_n = {cf},\n    .coulomb_velocity_m_s = {vc},\n}};\n\n#endif /* BELTUNE_CONTROLLER_H */\n",
         kp = name("k_p_nm_s_per_rad"),
         ki = name("k_i_nm_per_rad"),
         s1 = sec(1),
@@ -313,6 +322,9 @@ pub fn c_header(file: &ControllerFile) -> String {
         cs = name("compliance_slope_per_n"),
         cc = name("compliance_curvature_per_n_m"),
         sf = name("static_force_n"),
+        cv = name("cart_viscous_n_s_per_m"),
+        cf = name("cart_coulomb_n"),
+        vc = name("coulomb_velocity_m_s"),
     );
     s
 }

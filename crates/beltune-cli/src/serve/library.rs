@@ -69,6 +69,12 @@ pub struct FrictionTotals {
     /// Holding torque (tilted axis), N m; absent: 0.
     #[serde(default)]
     pub holding_torque_nm: Option<f64>,
+    /// The cart's Coulomb friction, N (setpoint's stretch lead); absent: 0.
+    #[serde(default)]
+    pub cart_coulomb_n: f64,
+    /// The cart's viscous friction, N s/m; absent: 0.
+    #[serde(default)]
+    pub cart_viscous_n_s_per_m: f64,
 }
 
 /// The validation summary of `commissioning.json` (nonlinear move only).
@@ -156,6 +162,8 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         coulomb_nm: f.coulomb_nm,
         linear_viscous_nm_s_per_rad: Some(f.linear_viscous_nm_s_per_rad),
         holding_torque_nm: Some(f.holding_torque_nm),
+        cart_coulomb_n: f.cart_coulomb_n,
+        cart_viscous_n_s_per_m: f.cart_viscous_n_s_per_m,
     });
     if let Some(f) = friction {
         beltune::error::require_non_negative(
@@ -315,6 +323,8 @@ impl LibraryTuner {
             coulomb_nm: 0.0,
             linear_viscous_nm_s_per_rad: None,
             holding_torque_nm: None,
+            cart_coulomb_n: 0.0,
+            cart_viscous_n_s_per_m: 0.0,
         });
         let friction = FrictionResult {
             viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
@@ -324,6 +334,8 @@ impl LibraryTuner {
                 .unwrap_or(f.viscous_nm_s_per_rad),
             relative_residual: 0.0,
             holding_torque_nm: f.holding_torque_nm.unwrap_or(0.0),
+            cart_coulomb_n: f.cart_coulomb_n,
+            cart_viscous_n_s_per_m: f.cart_viscous_n_s_per_m,
         };
         Ok(LibraryTuner {
             sigmas: (model.m_c_sigma, model.c_sigma),
@@ -378,6 +390,8 @@ impl LibraryTuner {
                 coulomb_nm: run.friction.coulomb_nm,
                 linear_viscous_nm_s_per_rad: Some(run.friction.linear_viscous_nm_s_per_rad),
                 holding_torque_nm: Some(run.friction.holding_torque_nm),
+                cart_coulomb_n: run.friction.cart_coulomb_n,
+                cart_viscous_n_s_per_m: run.friction.cart_viscous_n_s_per_m,
             }),
             frf: Some(lines),
             commissioned: Some(run.validation.nonlinear.clone()),

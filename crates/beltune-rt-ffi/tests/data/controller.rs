@@ -50,6 +50,9 @@ pub const STIFFNESS_POSITION_M: f64 = 0.0;
 pub const COMPLIANCE_SLOPE_PER_N: f64 = 0.0;
 pub const COMPLIANCE_CURVATURE_PER_N_M: f64 = 0.0;
 pub const STATIC_FORCE_N: f64 = 0.007836292297715042;
+pub const CART_VISCOUS_N_S_PER_M: f64 = 9.2;
+pub const CART_COULOMB_N: f64 = 6.4;
+pub const COULOMB_VELOCITY_M_S: f64 = 0.05;
 pub const T_R_S: f64 = 0.002;
 pub const DRIVE_VELOCITY_GAIN_NM_S_PER_RAD: f64 = 0.11393367499176903;
 pub const DRIVE_POSITION_GAIN_PER_S: f64 = 8.527531367646716;
@@ -117,4 +120,7 @@ pub const BELT_STRETCH: BeltStretch<f64> = BeltStretch::Profile(BeltProfile {
     compliance_slope_per_n: COMPLIANCE_SLOPE_PER_N,
     compliance_curvature_per_n_m: COMPLIANCE_CURVATURE_PER_N_M,
     static_force_n: STATIC_FORCE_N,
+    cart_viscous_n_s_per_m: CART_VISCOUS_N_S_PER_M,
+    cart_coulomb_n: CART_COULOMB_N,
+    coulomb_velocity_m_s: COULOMB_VELOCITY_M_S,
 });

@@ -22,8 +22,17 @@
 //! with `l_1 + l_2` constant, so three coefficients hold it over the stroke
 //! (issue 12: on a soft belt the stiffness along a 0.5 m move changed by a
 //! factor two, and the constant one left the cart up to 0.6 mm off).
+//!
+//! The belt also carries the cart's own friction while it moves,
+//! `d_c xi' + F_c sign(xi')` (2.30): the profile's `cart_viscous_n_s_per_m`
+//! and `cart_coulomb_n` add it to the force the stretch is led by. The
+//! Coulomb sign is ramped as `(v / v_c) |v / v_c|` below `v_c`: a linear
+//! ramp retreated faster at the end of a move than the trajectory advanced,
+//! so the motor setpoint reversed, the cascade's Coulomb feedforward flipped
+//! and a stuck cart ended 0.25 mm off; the quadratic's rate vanishes with
+//! the speed.
 
-use crate::error::{positive, Error};
+use crate::error::{finite, positive, Error};
 use crate::Real;
 
 /// One desired motion sample in motor coordinates.
@@ -119,6 +128,17 @@ pub struct BeltProfile<T = f64> {
     /// Force the belt carries at rest, N: minus the constant force on the
     /// cart (gravity along a tilted axis: the holding torque over `i_t`).
     pub static_force_n: T,
+    /// The cart's viscous friction `d_c`, N s/m: the belt carries
+    /// `d_c xi'` more while the cart moves (0: not compensated).
+    pub cart_viscous_n_s_per_m: T,
+    /// The cart's Coulomb friction `F_c`, N: the belt carries
+    /// `F_c sign(xi')` more while the cart moves (0: not compensated).
+    pub cart_coulomb_n: T,
+    /// Cart speed at which the Coulomb share reaches `F_c`, m/s: below it
+    /// `sign(xi')` is the ramp `xi' / v_c`, so the lead grows while the
+    /// move starts and falls back to the static stretch as it ends (must be
+    /// positive where `cart_coulomb_n` is not 0).
+    pub coulomb_velocity_m_s: T,
 }
 
 impl<T: Real> BeltProfile<T> {
@@ -128,6 +148,33 @@ impl<T: Real> BeltProfile<T> {
         let x = xi_m - self.reference_m;
         self.compliance_m_per_n
             + x * (self.compliance_slope_per_n + x * self.compliance_curvature_per_n_m)
+    }
+
+    /// The force the belt carries for a cart sample beyond the static one
+    /// and its time derivative, N and N/s: `m_c xi'' + d_c xi' + F_c s(xi')`
+    /// with the ramped sign `s` (see [`Self::coulomb_velocity_m_s`]).
+    #[inline]
+    fn dynamic_force(&self, cart: &CartSample<T>) -> (T, T) {
+        let (v, a) = (cart.velocity_m_s, cart.acceleration_m_s2);
+        let mut force = self.m_c_kg * a + self.cart_viscous_n_s_per_m * v;
+        let mut rate = self.m_c_kg * cart.jerk_m_s3 + self.cart_viscous_n_s_per_m * a;
+        if self.cart_coulomb_n != T::ZERO {
+            let vc = self.coulomb_velocity_m_s;
+            if v >= vc {
+                force += self.cart_coulomb_n;
+            } else if v <= -vc {
+                force -= self.cart_coulomb_n;
+            } else {
+                // s = (v / v_c) |v / v_c|: its rate vanishes with the speed,
+                // so the lead's retreat at the end of a move never outruns
+                // the trajectory (a linear ramp reversed the motor setpoint)
+                let g = self.cart_coulomb_n / (vc * vc);
+                let av = if v < T::ZERO { T::ZERO - v } else { v };
+                force += g * v * av;
+                rate += (g + g) * av * a;
+            }
+        }
+        (force, rate)
     }
 }
 
@@ -139,17 +186,6 @@ pub struct SetpointConversion<T = f64> {
     inv_i_t: T,
     /// The belt model (compliance zero when belt-stretch compensation is off).
     belt: BeltProfile<T>,
-}
-
-fn finite(name: &'static str, x: f64) -> Result<f64, Error> {
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(Error::InvalidParameter {
-            name,
-            reason: "must be finite",
-        })
-    }
 }
 
 impl<T: Real> SetpointConversion<T> {
@@ -186,6 +222,11 @@ impl<T: Real> SetpointConversion<T> {
                     p.compliance_curvature_per_n_m.to_f64(),
                 )?;
                 finite("static_force_n", p.static_force_n.to_f64())?;
+                finite("cart_viscous_n_s_per_m", p.cart_viscous_n_s_per_m.to_f64())?;
+                finite("cart_coulomb_n", p.cart_coulomb_n.to_f64())?;
+                if p.cart_coulomb_n.to_f64() != 0.0 {
+                    positive("coulomb_velocity_m_s", p.coulomb_velocity_m_s.to_f64())?;
+                }
                 p
             }
         };
@@ -202,11 +243,14 @@ impl<T: Real> SetpointConversion<T> {
     }
 
     /// The motor setpoint for a cart sample:
-    /// `phi_d = (xi_d + K (m_c xi_d'' + F_s))/i_t`,
-    /// `omega_d = (xi_d' + K m_c xi_d''' + K' xi_d' (m_c xi_d'' + F_s))/i_t`,
+    /// `phi_d = (xi_d + K (F + F_s))/i_t`,
+    /// `omega_d = (xi_d' + K F' + K' xi_d' (F + F_s))/i_t`,
     /// `alpha_d = xi_d''/i_t`, with the compliance `K(xi_d)` of the belt model
     /// (zero when off; constant `1/c` and `F_s = 0` for
-    /// [`BeltStretch::On`]). Cost: 13 multiplications, 9 additions.
+    /// [`BeltStretch::On`]) and the force the moving cart needs
+    /// `F = m_c xi_d'' + d_c xi_d' + F_c s(xi_d')` ([`BeltProfile`]). Cost: at
+    /// most 19 multiplications, 14 additions and one division (the division
+    /// only inside the Coulomb ramp).
     #[inline]
     pub fn motor_sample(&self, cart: &CartSample<T>) -> MotionSample<T> {
         let b = &self.belt;
@@ -214,12 +258,11 @@ impl<T: Real> SetpointConversion<T> {
         let slope = b.compliance_slope_per_n + (x + x) * b.compliance_curvature_per_n_m;
         let k = b.compliance_m_per_n
             + x * (b.compliance_slope_per_n + x * b.compliance_curvature_per_n_m);
-        let load = b.m_c_kg * cart.acceleration_m_s2 + b.static_force_n;
+        let (force, rate) = b.dynamic_force(cart);
+        let load = force + b.static_force_n;
         MotionSample {
             angle_rad: (cart.position_m + k * load) * self.inv_i_t,
-            velocity_rad_s: (cart.velocity_m_s
-                + k * b.m_c_kg * cart.jerk_m_s3
-                + slope * cart.velocity_m_s * load)
+            velocity_rad_s: (cart.velocity_m_s + k * rate + slope * cart.velocity_m_s * load)
                 * self.inv_i_t,
             acceleration_rad_s2: cart.acceleration_m_s2 * self.inv_i_t,
         }
@@ -239,6 +282,36 @@ impl<T: Real> SetpointConversion<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The largest `|xi - xi_d|` of the cart `xi'' = accel(t, xi, xi')`
+    /// integrated by RK4 at 1 us for `steps` steps from `xi_d(0)`, `xi_d'(0)`:
+    /// the independent check of the flatness relations below.
+    fn worst_cart_error_rk4(
+        accel: &dyn Fn(f64, f64, f64) -> f64,
+        cart: &dyn Fn(f64) -> CartSample<f64>,
+        steps: usize,
+    ) -> f64 {
+        let c0 = cart(0.0);
+        let (mut x, mut v) = (c0.position_m, c0.velocity_m_s);
+        let h = 1e-6;
+        let mut worst: f64 = 0.0;
+        let mut t = 0.0;
+        for _ in 0..steps {
+            let k1x = v;
+            let k1v = accel(t, x, v);
+            let k2x = v + 0.5 * h * k1v;
+            let k2v = accel(t + 0.5 * h, x + 0.5 * h * k1x, k2x);
+            let k3x = v + 0.5 * h * k2v;
+            let k3v = accel(t + 0.5 * h, x + 0.5 * h * k2x, k3x);
+            let k4x = v + h * k3v;
+            let k4v = accel(t + h, x + h * k3x, k4x);
+            x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            t += h;
+            worst = worst.max((x - cart(t).position_m).abs());
+        }
+        worst
+    }
 
     /// Table A.4: m_c = 13.44 kg, c = 203.74 kN/m, i_t = 12.414 mm/rad.
     const M_C: f64 = 13.44;
@@ -279,27 +352,8 @@ mod tests {
             let conv = SetpointConversion::new(I_T, belt).unwrap();
             let phi = |t: f64| conv.motor_sample(&cart(t)).angle_rad;
             // initial state consistent with the trajectory at t = 0
-            let c0 = cart(0.0);
-            let (mut x, mut v) = (c0.position_m, c0.velocity_m_s);
-            let f = |t: f64, x: f64| C / M_C * (I_T * phi(t) - x);
-            let h = 1e-6;
-            let mut worst: f64 = 0.0;
-            let mut t = 0.0;
-            for _ in 0..300_000 {
-                let k1x = v;
-                let k1v = f(t, x);
-                let k2x = v + 0.5 * h * k1v;
-                let k2v = f(t + 0.5 * h, x + 0.5 * h * k1x);
-                let k3x = v + 0.5 * h * k2v;
-                let k3v = f(t + 0.5 * h, x + 0.5 * h * k2x);
-                let k4x = v + h * k3v;
-                let k4v = f(t + h, x + h * k3x);
-                x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
-                v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
-                t += h;
-                worst = worst.max((x - cart(t).position_m).abs());
-            }
-            worst
+            let f = |t: f64, x: f64, _v: f64| C / M_C * (I_T * phi(t) - x);
+            worst_cart_error_rk4(&f, &cart, 300_000)
         };
         let compensated = run(BeltStretch::On {
             m_c_kg: M_C,
@@ -330,6 +384,7 @@ mod tests {
             compliance_slope_per_n: 1.0e-5,
             compliance_curvature_per_n_m: -5.0e-6,
             static_force_n: M_C * 9.81 * 0.5,
+            ..BeltProfile::default()
         };
         // xi_d from 0.01 to 0.49 m and back: A (1 - cos w t)
         let (x0, amp, w) = (0.01, 0.24, 2.0 * core::f64::consts::PI * 1.5);
@@ -346,26 +401,7 @@ mod tests {
             let f = |t: f64, x: f64| {
                 ((p(t) - x) / profile.compliance_at(x) - profile.static_force_n) / M_C
             };
-            let c0 = cart(0.0);
-            let (mut x, mut v) = (c0.position_m, c0.velocity_m_s);
-            let h = 1e-6;
-            let mut worst: f64 = 0.0;
-            let mut t = 0.0;
-            for _ in 0..600_000 {
-                let k1x = v;
-                let k1v = f(t, x);
-                let k2x = v + 0.5 * h * k1v;
-                let k2v = f(t + 0.5 * h, x + 0.5 * h * k1x);
-                let k3x = v + 0.5 * h * k2v;
-                let k3v = f(t + 0.5 * h, x + 0.5 * h * k2x);
-                let k4x = v + h * k3v;
-                let k4v = f(t + h, x + h * k3x);
-                x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
-                v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
-                t += h;
-                worst = worst.max((x - cart(t).position_m).abs());
-            }
-            worst
+            worst_cart_error_rk4(&|t, x, _v| f(t, x), &cart, 600_000)
         };
         // The cart starts where the profile's conversion puts it at rest; a
         // constant stiffness starts it with a wrong stretch too: both are
@@ -389,6 +425,80 @@ mod tests {
             let w_d = conv.motor_sample(&cart(t)).velocity_rad_s;
             assert!(
                 (fd - w_d).abs() < 1e-6 * w_d.abs().max(1.0),
+                "{t}: {fd} vs {w_d}"
+            );
+        }
+    }
+
+    /// Issue 12: the belt also carries the cart's friction while it moves
+    /// (soft belts with a sticky cart: up to 0.3 mm of stretch). A cart
+    /// with viscous friction and the ramped Coulomb sign of the profile,
+    /// on the belt of the test above, follows `xi_d` exactly from rest
+    /// (RK4 at 1 us); the profile without the friction leaves it lagging by
+    /// about `(d_c v + F_c) / c`. The converted velocity is the derivative of
+    /// the converted angle, inside the ramp too.
+    #[test]
+    fn the_cart_friction_lead_makes_the_rubbing_cart_follow_issue_12() {
+        let profile = BeltProfile {
+            m_c_kg: M_C,
+            reference_m: 0.5,
+            compliance_m_per_n: 9.86e-6,
+            compliance_slope_per_n: 1.0e-5,
+            compliance_curvature_per_n_m: -5.0e-6,
+            static_force_n: M_C * 9.81 * 0.5,
+            cart_viscous_n_s_per_m: 30.0,
+            cart_coulomb_n: 15.0,
+            coulomb_velocity_m_s: 0.05,
+        };
+        let (x0, amp, w) = (0.01, 0.24, 2.0 * core::f64::consts::PI * 1.5);
+        let cart = |t: f64| CartSample {
+            position_m: x0 + amp * (1.0 - libm::cos(w * t)),
+            velocity_m_s: amp * w * libm::sin(w * t),
+            acceleration_m_s2: amp * w * w * libm::cos(w * t),
+            jerk_m_s3: -amp * w * w * w * libm::sin(w * t),
+        };
+        // the ramped Coulomb sign of the profile
+        let sign = |v: f64| {
+            let r = v / profile.coulomb_velocity_m_s;
+            if r.abs() >= 1.0 {
+                r.signum()
+            } else {
+                r * r.abs()
+            }
+        };
+        let run = |belt: BeltProfile<f64>| -> f64 {
+            let conv = SetpointConversion::new(I_T, BeltStretch::Profile(belt)).unwrap();
+            let p = |t: f64| I_T * conv.motor_sample(&cart(t)).angle_rad;
+            let f = |t: f64, x: f64, v: f64| {
+                ((p(t) - x) / profile.compliance_at(x)
+                    - profile.static_force_n
+                    - profile.cart_viscous_n_s_per_m * v
+                    - profile.cart_coulomb_n * sign(v))
+                    / M_C
+            };
+            worst_cart_error_rk4(&f, &cart, 300_000)
+        };
+        const RK4_TOL_M: f64 = 1e-9;
+        let exact = run(profile);
+        assert!(exact < RK4_TOL_M, "with the friction lead: {exact}");
+        let without = run(BeltProfile {
+            cart_viscous_n_s_per_m: 0.0,
+            cart_coulomb_n: 0.0,
+            ..profile
+        });
+        // (30 N s/m * 2.26 m/s + 15 N) * 3.8 um/N at least: 0.3 mm
+        assert!(without > 3e-4, "without: {without}");
+
+        let conv = SetpointConversion::new(I_T, BeltStretch::Profile(profile)).unwrap();
+        let d = 1e-7;
+        // t = 0.002 s: v = 0.0107 m/s, inside the Coulomb ramp
+        for t in [0.002, 0.01, 0.2, 0.31] {
+            let fd = (conv.motor_sample(&cart(t + d)).angle_rad
+                - conv.motor_sample(&cart(t - d)).angle_rad)
+                / (2.0 * d);
+            let w_d = conv.motor_sample(&cart(t)).velocity_rad_s;
+            assert!(
+                (fd - w_d).abs() < 1e-5 * w_d.abs().max(1.0),
                 "{t}: {fd} vs {w_d}"
             );
         }
@@ -420,6 +530,9 @@ mod tests {
             compliance_slope_per_n: 1e-5,
             compliance_curvature_per_n_m: -5e-6,
             static_force_n: 10.0,
+            cart_viscous_n_s_per_m: 8.0,
+            cart_coulomb_n: 13.0,
+            coulomb_velocity_m_s: 0.05,
         };
         assert!(SetpointConversion::new(I_T, BeltStretch::Profile(ok)).is_ok());
         for bad in [
@@ -436,6 +549,18 @@ mod tests {
                 ..ok
             },
             BeltProfile { m_c_kg: -1.0, ..ok },
+            BeltProfile {
+                cart_coulomb_n: f64::NAN,
+                ..ok
+            },
+            BeltProfile {
+                cart_viscous_n_s_per_m: f64::INFINITY,
+                ..ok
+            },
+            BeltProfile {
+                coulomb_velocity_m_s: 0.0,
+                ..ok
+            },
         ] {
             assert!(SetpointConversion::new(I_T, BeltStretch::Profile(bad)).is_err());
         }

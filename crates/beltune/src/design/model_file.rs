@@ -269,6 +269,14 @@ pub struct FrictionResult {
     /// Holding torque (gravity on a tilted axis, or the record's constant
     /// offset), N m (0 when not given).
     pub holding_torque_nm: f64,
+    /// The cart's share of the Coulomb friction, `F_c` in N (current units:
+    /// A m/rad), from the friction-aware model (`beltune::ident::nonlinear`);
+    /// 0 when unknown. Part of [`Self::coulomb_nm`], not in addition to it:
+    /// the setpoint conversion leads the motor by the belt stretch it causes.
+    pub cart_coulomb_n: f64,
+    /// The cart's viscous friction `d_c`, N s/m, from the friction-aware
+    /// model; 0 when unknown (as [`Self::cart_coulomb_n`]).
+    pub cart_viscous_n_s_per_m: f64,
 }
 
 /// What a file's `friction` may hold (old spellings, optional parts).
@@ -284,6 +292,10 @@ struct RawFriction {
     relative_residual: f64,
     #[serde(default)]
     holding_torque_nm: f64,
+    #[serde(default)]
+    cart_coulomb_n: f64,
+    #[serde(default)]
+    cart_viscous_n_s_per_m: f64,
 }
 
 impl From<RawFriction> for FrictionResult {
@@ -296,6 +308,8 @@ impl From<RawFriction> for FrictionResult {
                 .unwrap_or(r.viscous_nm_s_per_rad),
             relative_residual: r.relative_residual,
             holding_torque_nm: r.holding_torque_nm,
+            cart_coulomb_n: r.cart_coulomb_n,
+            cart_viscous_n_s_per_m: r.cart_viscous_n_s_per_m,
         }
     }
 }
@@ -386,6 +400,8 @@ const FRICTION_KEYS: &[&str] = &[
     "linear_viscous",
     "relative_residual",
     "holding_torque_nm",
+    "cart_coulomb_n",
+    "cart_viscous_n_s_per_m",
 ];
 /// Top-level keys of the document form.
 const DOCUMENT_KEYS: &[&str] = &["schema_version", "provenance", "identified", "friction"];
@@ -495,6 +511,8 @@ impl ModelFile {
                         linear_viscous_nm_s_per_rad: v,
                         relative_residual: 0.0,
                         holding_torque_nm: 0.0,
+                        cart_coulomb_n: 0.0,
+                        cart_viscous_n_s_per_m: 0.0,
                     }
                 });
             ModelFile {

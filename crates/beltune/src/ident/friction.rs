@@ -91,6 +91,60 @@ pub fn fit_viscous_only(runs: &[ConstantVelocityRun]) -> Result<FrictionFit> {
     solve_runs(runs, false)
 }
 
+/// (3.36) with a constant torque offset: `tau = tau_0 + d_v~ w + tau_c~ sign(w)`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct OffsetFrictionFit {
+    /// The friction terms.
+    pub friction: FrictionFit,
+    /// The offset `tau_0`, N m: torque the runs need in either direction
+    /// beyond friction (what gravity takes that the assumed holding torque
+    /// did not).
+    pub offset_nm: f64,
+}
+
+/// Least squares for `d_v~`, `tau_c~` and a torque offset over runs in both
+/// directions: with runs at the same speeds either way the offset is the
+/// mean torque of the two directions, which friction cancels from. Errors
+/// (rank deficient) when the runs do not go both ways at two speeds or more.
+pub fn fit_with_offset(runs: &[ConstantVelocityRun]) -> Result<OffsetFrictionFit> {
+    if runs.len() < 4 {
+        return Err(Error::TooShort {
+            what: "friction fit with a torque offset (constant-velocity runs)".into(),
+            needed: 4,
+            got: runs.len(),
+        });
+    }
+    check_runs(runs)?;
+    let a = DMatrix::from_fn(runs.len(), 3, |i, j| match j {
+        0 => runs[i].velocity_rad_s,
+        1 => runs[i].velocity_rad_s.signum(),
+        _ => 1.0,
+    });
+    let b = DVector::from_iterator(runs.len(), runs.iter().map(|r| r.mean_torque_nm));
+    let x = lstsq(&a, &b)?;
+    let r = &b - &a * &x;
+    Ok(OffsetFrictionFit {
+        friction: FrictionFit {
+            viscous_nm_s_per_rad: x[0],
+            coulomb_nm: x[1],
+            rms_residual_nm: (r.norm_squared() / runs.len() as f64).sqrt(),
+        },
+        offset_nm: x[2],
+    })
+}
+
+fn check_runs(runs: &[ConstantVelocityRun]) -> Result<()> {
+    for (i, r) in runs.iter().enumerate() {
+        if !(r.velocity_rad_s.is_finite() && r.mean_torque_nm.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "constant-velocity run".into(),
+                index: i,
+            });
+        }
+    }
+    Ok(())
+}
+
 fn solve_runs(runs: &[ConstantVelocityRun], coulomb: bool) -> Result<FrictionFit> {
     let cols = if coulomb { 2 } else { 1 };
     if runs.len() < cols + 1 {
@@ -100,14 +154,7 @@ fn solve_runs(runs: &[ConstantVelocityRun], coulomb: bool) -> Result<FrictionFit
             got: runs.len(),
         });
     }
-    for (i, r) in runs.iter().enumerate() {
-        if !(r.velocity_rad_s.is_finite() && r.mean_torque_nm.is_finite()) {
-            return Err(Error::NonFinite {
-                what: "constant-velocity run".into(),
-                index: i,
-            });
-        }
-    }
+    check_runs(runs)?;
     let a = DMatrix::from_fn(runs.len(), cols, |i, j| match j {
         0 => runs[i].velocity_rad_s,
         _ => runs[i].velocity_rad_s.signum(),
@@ -445,6 +492,49 @@ mod tests {
         assert_eq!(lin.coulomb_nm, 0.0);
         assert!(lin.viscous_nm_s_per_rad > fit.viscous_nm_s_per_rad);
         assert!(lin.rms_residual_nm > fit.rms_residual_nm);
+    }
+
+    /// Issue 12: the holding torque of stage 3 was up to 0.1 N m off on
+    /// sticky tilted axes; the friction runs determine the offset it left.
+    /// Exact runs (3.36) plus an offset of 0.04 N m, three speeds each way:
+    /// the fit returns the offset and the Table A.10 friction to rounding;
+    /// runs in one direction only cannot separate the offset from Coulomb.
+    #[test]
+    fn the_friction_runs_give_the_torque_offset_issue_12() {
+        let offset = 0.04;
+        let runs: Vec<ConstantVelocityRun> = [20.0, -20.0, 40.0, -40.0, 60.0, -60.0]
+            .iter()
+            .map(|&w: &f64| ConstantVelocityRun {
+                velocity_rad_s: w,
+                mean_torque_nm: offset + D_V * w + TAU_C * w.signum(),
+            })
+            .collect();
+        let fit = fit_with_offset(&runs).unwrap();
+        assert!((fit.offset_nm - offset).abs() < 1e-12, "{fit:?}");
+        assert!((fit.friction.coulomb_nm - TAU_C).abs() < 1e-12, "{fit:?}");
+        assert!(
+            (fit.friction.viscous_nm_s_per_rad - D_V).abs() < 1e-14,
+            "{fit:?}"
+        );
+        assert!(fit.friction.rms_residual_nm < 1e-12);
+        // without the offset the Coulomb term absorbs it asymmetrically
+        let plain = fit_constant_velocity(&runs).unwrap();
+        assert!(plain.rms_residual_nm > 0.03, "{plain:?}");
+        let one_way: Vec<_> = runs
+            .iter()
+            .copied()
+            .filter(|r| r.velocity_rad_s > 0.0)
+            .collect();
+        assert!(matches!(
+            fit_with_offset(&one_way),
+            Err(Error::FitFailed { .. } | Error::TooShort { .. })
+        ));
+        let mut bad = runs.clone();
+        bad[2].mean_torque_nm = f64::NAN;
+        assert!(matches!(
+            fit_with_offset(&bad),
+            Err(Error::NonFinite { .. })
+        ));
     }
 
     fn motion(rate_hz: f64, jitter: bool) -> (Vec<f64>, Vec<f64>, Vec<f64>) {

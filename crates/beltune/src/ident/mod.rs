@@ -35,8 +35,9 @@ pub use etfe::{etfe, log_spaced_subset, EtfeConfig, Frf, LineStatus};
 pub use features::{frf_features, FrfFeatures};
 pub use fit::{fit_two_mass, FitConfig, FitModel, ModelUnits, ParamUncertainty, TwoMassFit};
 pub use friction::{
-    fit_constant_velocity, fit_viscous_only, identify_from_motion, run_means, ConstantVelocityRun,
-    FrictionFit, MotionFriction, MotionFrictionConfig, THESIS_VELOCITY_SEQUENCE_M_S,
+    fit_constant_velocity, fit_viscous_only, fit_with_offset, identify_from_motion, run_means,
+    ConstantVelocityRun, FrictionFit, MotionFriction, MotionFrictionConfig, OffsetFrictionFit,
+    THESIS_VELOCITY_SEQUENCE_M_S,
 };
 pub use nonlinear::{fit_nonlinear, NonlinearConfig, NonlinearFit};
 pub use record::{read_csv_columns, CsvColumns, Sampling};

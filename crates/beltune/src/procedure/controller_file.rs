@@ -179,6 +179,21 @@ pub struct SetpointSection {
     /// (absent in older files: `static_stretch_m c_n_per_m`).
     #[serde(default)]
     pub static_force_n: Option<f64>,
+    /// The cart's viscous friction `d_c`, N s/m: the motor leads by the
+    /// stretch `d_c xi' / c(xi)` too (0: not compensated, older files).
+    #[serde(default)]
+    pub cart_viscous_n_s_per_m: f64,
+    /// The cart's Coulomb friction `F_c`, N: the motor leads by
+    /// `F_c sign(xi') / c(xi)` while the cart moves (0: not compensated).
+    #[serde(default)]
+    pub cart_coulomb_n: f64,
+    /// Cart speed over which the Coulomb lead ramps in and out, m/s.
+    #[serde(default = "default_coulomb_velocity")]
+    pub coulomb_velocity_m_s: f64,
+}
+
+fn default_coulomb_velocity() -> f64 {
+    super::result::CART_COULOMB_VELOCITY_M_S
 }
 
 impl SetpointSection {
@@ -199,6 +214,9 @@ impl SetpointSection {
             static_force_n: self
                 .static_force_n
                 .unwrap_or(self.static_stretch_m * self.c_n_per_m),
+            cart_viscous_n_s_per_m: self.cart_viscous_n_s_per_m,
+            cart_coulomb_n: self.cart_coulomb_n,
+            coulomb_velocity_m_s: self.coulomb_velocity_m_s,
         })
     }
 }
@@ -272,7 +290,11 @@ impl ControllerFile {
                 viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
                 coulomb_nm: friction.coulomb_nm,
                 coulomb_deadband_rad_s: beltune_rt::control::DEFAULT_COULOMB_DEADBAND_RAD_S,
-                coulomb_breakaway_rad: super::validation::coulomb_breakaway_rad(model.i_t),
+                coulomb_breakaway_rad: super::validation::coulomb_breakaway_rad(
+                    model.i_t,
+                    friction,
+                    belt.c_n_per_m,
+                ),
                 linear_viscous_nm_s_per_rad: friction.linear_viscous_nm_s_per_rad,
                 preview: true,
                 preview_samples: (des.input.dead_time_s / des.input.ts_s).round() as usize,
@@ -289,6 +311,9 @@ impl ControllerFile {
                 compliance_slope_per_n: belt.compliance_slope_per_n,
                 compliance_curvature_per_n_m: belt.compliance_curvature_per_n_m,
                 static_force_n: Some(static_force_n),
+                cart_viscous_n_s_per_m: friction.cart_viscous_n_s_per_m,
+                cart_coulomb_n: friction.cart_coulomb_n,
+                coulomb_velocity_m_s: super::result::CART_COULOMB_VELOCITY_M_S,
             },
             drive_form: DriveForm::of(des),
         };
@@ -451,6 +476,8 @@ mod tests {
             linear_viscous_nm_s_per_rad: 4.1e-3,
             relative_residual: 0.02,
             holding_torque_nm: 0.31,
+            cart_coulomb_n: 6.4,
+            cart_viscous_n_s_per_m: 9.2,
         }
     }
 
@@ -481,8 +508,10 @@ mod tests {
             f.viscous_nm_s_per_rad,
             f.coulomb_nm,
         );
-        // the breakaway of the validation: 20 um at the cart
-        c.feedforward.params.coulomb_breakaway_rad = 20e-6 / des.input.model.i_t;
+        // the breakaway of the validation: 20 um at the cart beyond the
+        // stretch of the cart's Coulomb friction (the model's stiffness)
+        let m = des.input.model;
+        c.feedforward.params.coulomb_breakaway_rad = (20e-6 + f.cart_coulomb_n / m.c) / m.i_t;
         c.filter_desired_velocity = true;
         c.feedforward_preview = true;
         c
@@ -542,6 +571,10 @@ mod tests {
                     compliance_slope_per_n: 0.0,
                     compliance_curvature_per_n_m: 0.0,
                     static_force_n: f.holding_torque_nm / 0.0124141,
+                    // the cart's friction the friction-aware model found
+                    cart_viscous_n_s_per_m: 9.2,
+                    cart_coulomb_n: 6.4,
+                    coulomb_velocity_m_s: crate::procedure::result::CART_COULOMB_VELOCITY_M_S,
                 }),
             )
             .unwrap();

@@ -63,6 +63,8 @@ pub fn commission_recorded(
         linear_viscous_nm_s_per_rad: m.viscous.max(0.0),
         relative_residual: m.relative_residual,
         holding_torque_nm: m.offset,
+        cart_coulomb_n: 0.0,
+        cart_viscous_n_s_per_m: 0.0,
     });
     let input = DesignInput {
         model: p,

@@ -84,6 +84,18 @@ pub struct TargetStiffness {
     pub compliance_curvature_per_n_m: f64,
 }
 
+/// Cart speed over which the setpoint's lead for the cart's Coulomb
+/// friction ramps in and out (quadratically), m/s
+/// ([`beltune_rt::control::BeltProfile::coulomb_velocity_m_s`]). The lead
+/// `K F_c` retreats at `2 K F_c |a| / v_c^2` times the speed at the end of a
+/// move; with the Table A.8 jerk (40 m/s^3, `|a| <= sqrt(2 j v)`) and a
+/// 0.15 mm lead that stays below the speed, so the motor setpoint does not
+/// reverse. A wider ramp left slow moves' carts short: inside it the belt
+/// carries less than the kinetic friction (issue 12: 0.05 m/s left a heavy
+/// cart on a slow reduced move 0.25 mm short; 0.02 m/s passed the 15
+/// plants that missed 100 um with the wider or a linear ramp but one).
+pub const CART_COULOMB_VELOCITY_M_S: f64 = 0.02;
+
 impl TargetStiffness {
     /// One stiffness for the whole stroke.
     pub fn constant(position_m: f64, c_n_per_m: f64, f_z_hz: f64, measured: bool) -> Self {
@@ -112,12 +124,15 @@ impl TargetStiffness {
     /// The setpoint conversion's belt model for the moving mass `m_c_kg`
     /// and the force the belt carries at rest `static_force_n` (the
     /// holding torque over `i_t`), with positions measured from
-    /// `origin_m` (the cart position at motor angle 0).
+    /// `origin_m` (the cart position at motor angle 0), and the cart's
+    /// friction of `friction` (its stretch is led too, the Coulomb share
+    /// ramped in over [`CART_COULOMB_VELOCITY_M_S`]).
     pub fn belt_profile(
         &self,
         m_c_kg: f64,
         static_force_n: f64,
         origin_m: f64,
+        friction: &FrictionResult,
     ) -> beltune_rt::control::BeltProfile<f64> {
         beltune_rt::control::BeltProfile {
             m_c_kg,
@@ -126,6 +141,9 @@ impl TargetStiffness {
             compliance_slope_per_n: self.compliance_slope_per_n,
             compliance_curvature_per_n_m: self.compliance_curvature_per_n_m,
             static_force_n,
+            cart_viscous_n_s_per_m: friction.cart_viscous_n_s_per_m,
+            cart_coulomb_n: friction.cart_coulomb_n,
+            coulomb_velocity_m_s: CART_COULOMB_VELOCITY_M_S,
         }
     }
 

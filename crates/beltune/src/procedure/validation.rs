@@ -177,13 +177,47 @@ pub fn run_move(
         };
         move_to(runner, positioning, spec.start_m, &creep, 0.02)?;
     }
+    // The move starts where the cart rests, not where the motor is: under a
+    // static force the belt is stretched, and a trajectory from the motor's
+    // position made the setpoint jump by the static stretch at its first
+    // sample (issue 12: 0.35 mm on a soft 46 deg axis, the move's largest error).
+    let start = cart_at_rest_m(runner.position_m(), runner.origin_m(), &opts.belt_stretch);
     let traj = Trajectory::plan(
-        &State::at_rest(runner.position_m()),
+        &State::at_rest(start),
         &State::at_rest(spec.target_m),
         &spec.limits,
     )?;
     let record = track(runner, controller, &traj, spec.settle_s, opts)?;
     summarize(record)
+}
+
+/// Where the cart rests when the motor holds it at `motor_position_m`
+/// (`i_t phi`, m, positions from `origin_m` in the belt model's
+/// coordinates): `xi = i_t phi - K(xi) F_s` for the static force of a
+/// [`BeltStretch::Profile`](beltune_rt::control::BeltStretch::Profile)
+/// (fixed-point iteration; the stretch is a millimetre, `K` changes by a
+/// few per cent over it), the motor's position otherwise. Friction may hold
+/// the cart anywhere within `K F_c` of it.
+pub fn cart_at_rest_m(
+    motor_position_m: f64,
+    origin_m: f64,
+    belt: &beltune_rt::control::BeltStretch<f64>,
+) -> f64 {
+    match belt {
+        beltune_rt::control::BeltStretch::Profile(p) => {
+            let mut xi = motor_position_m;
+            for _ in 0..4 {
+                let k = p.compliance_at(xi - origin_m);
+                let next = motor_position_m - k * p.static_force_n;
+                if !next.is_finite() {
+                    return motor_position_m;
+                }
+                xi = next;
+            }
+            xi
+        }
+        _ => motor_position_m,
+    }
 }
 
 /// Breakaway threshold of the Coulomb hold at the cart, m (beltune-rt
@@ -196,9 +230,25 @@ pub fn run_move(
 /// failures of the 1000-plant study).
 pub const COULOMB_BREAKAWAY_CART_M: f64 = 20e-6;
 
-/// [`COULOMB_BREAKAWAY_CART_M`] in motor angle for transmission `i_t` (m/rad), rad.
-pub fn coulomb_breakaway_rad(i_t_m_per_rad: f64) -> f64 {
-    COULOMB_BREAKAWAY_CART_M / i_t_m_per_rad
+/// The breakaway threshold in motor angle for transmission `i_t` (m/rad),
+/// rad: [`COULOMB_BREAKAWAY_CART_M`] beyond the stretch of the cart's
+/// Coulomb friction `friction.cart_coulomb_n` on the belt of stiffness
+/// `c_n_per_m` (N/m) where the move ends. The setpoint leads the motor by
+/// that stretch while the cart moves and retreats from it as the cart
+/// stops (`beltune_rt::control::BeltProfile`); the motor then rests up to
+/// that far beyond its setpoint with the cart at its target, held by its
+/// friction. Issue 12: a push inside that band, with the whole Coulomb
+/// torque on a motor whose cart stuck, made the motor hunt against the belt
+/// and dragged carts that had stopped 20 um from the target 130 um off
+/// (8 static-error failures of the 1000-plant study; none beyond it).
+pub fn coulomb_breakaway_rad(
+    i_t_m_per_rad: f64,
+    friction: &super::result::FrictionResult,
+    c_n_per_m: f64,
+) -> f64 {
+    let lead = friction.cart_coulomb_n.max(0.0) / c_n_per_m;
+    let lead = if lead.is_finite() { lead } else { 0.0 };
+    (COULOMB_BREAKAWAY_CART_M + lead) / i_t_m_per_rad
 }
 
 /// The three feedforward variants of the validation (chapter 5).
@@ -236,13 +286,15 @@ impl FeedforwardVariant {
 /// rigid inertia `m_e_kg_m2` and `friction`, the desired velocity filtered by
 /// `G_R` and the feedforward previewed by the current-loop dead time; the
 /// nonlinear variant with the Coulomb breakaway ([`coulomb_breakaway_rad`] for
-/// transmission `i_t_m_per_rad`). Stage 8 of the commissioning and the tuning
-/// page's simulated move both use it.
+/// transmission `i_t_m_per_rad` and the belt stiffness `c_n_per_m` where the
+/// move ends). Stage 8 of the commissioning and the tuning page's simulated
+/// move both use it.
 pub fn validation_controller(
     feedback: &CascadeConfig<f64>,
     m_e_kg_m2: f64,
     i_t_m_per_rad: f64,
     friction: &super::result::FrictionResult,
+    c_n_per_m: f64,
     variant: FeedforwardVariant,
 ) -> CascadeConfig<f64> {
     use beltune_rt::control::Feedforward;
@@ -258,7 +310,8 @@ pub fn validation_controller(
                 friction.viscous_nm_s_per_rad,
                 friction.coulomb_nm,
             );
-            f.params.coulomb_breakaway_rad = coulomb_breakaway_rad(i_t_m_per_rad);
+            f.params.coulomb_breakaway_rad =
+                coulomb_breakaway_rad(i_t_m_per_rad, friction, c_n_per_m);
             f
         }
     };
@@ -283,6 +336,7 @@ pub fn validation_track_options(
     preview_samples: usize,
     holding_nm: f64,
     belt: &super::result::TargetStiffness,
+    friction: &super::result::FrictionResult,
     origin_m: f64,
 ) -> TrackOptions {
     TrackOptions {
@@ -291,6 +345,7 @@ pub fn validation_track_options(
             p.m_c,
             holding_nm / p.i_t,
             origin_m,
+            friction,
         )),
         check_following_error: true,
         following_error_unlimited: false,
@@ -373,18 +428,19 @@ pub fn simulate_validation_move(
         stop_limits,
     )?;
     let model = des.input.model;
+    let belt = belt.copied().unwrap_or_else(|| {
+        super::result::TargetStiffness::constant(spec.target_m, model.c, model.f_z_hz(), false)
+    });
     let controller = validation_controller(
         &feedback,
         model.rigid_inertia(),
         model.i_t,
         friction,
+        belt.stiffness_at(spec.target_m),
         variant,
     );
     let preview = (des.input.dead_time_s / des.input.ts_s).round() as usize;
-    let belt = belt.copied().unwrap_or_else(|| {
-        super::result::TargetStiffness::constant(spec.target_m, model.c, model.f_z_hz(), false)
-    });
-    let opts = validation_track_options(&model, preview, 0.0, &belt, spec.start_m);
+    let opts = validation_track_options(&model, preview, 0.0, &belt, friction, spec.start_m);
     run_move(
         &mut runner,
         &feedback,
@@ -393,4 +449,47 @@ pub fn simulate_validation_move(
         opts,
         spec,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use beltune_rt::control::{BeltProfile, BeltStretch, CartSample, SetpointConversion};
+
+    /// Issue 12: the validation move starts where the cart rests. The
+    /// setpoint conversion at rest at that position must ask for exactly
+    /// the motor position that holds it (no jump at the first sample), on a
+    /// soft belt whose compliance changes along the stroke, under the static
+    /// force of a 46 deg slope (-65 N, 0.3-0.6 mm of stretch).
+    #[test]
+    fn the_move_starts_where_the_cart_rests_issue_12() {
+        let i_t = 0.0124;
+        let profile = BeltProfile {
+            m_c_kg: 9.2,
+            reference_m: 0.45,
+            compliance_m_per_n: 9.5e-6,
+            compliance_slope_per_n: 7.5e-6,
+            compliance_curvature_per_n_m: -5.8e-6,
+            static_force_n: -64.8,
+            ..BeltProfile::default()
+        };
+        let belt = BeltStretch::Profile(profile);
+        let conv = SetpointConversion::new(i_t, belt).unwrap();
+        let origin = 0.05;
+        for motor_m in [0.052, 0.3, 0.55] {
+            let xi = cart_at_rest_m(motor_m, origin, &belt);
+            let sp = conv.motor_sample(&CartSample {
+                position_m: xi - origin,
+                ..CartSample::default()
+            });
+            // the motor position (from the origin) the conversion asks for
+            let asked = sp.angle_rad * i_t + origin;
+            assert!((asked - motor_m).abs() < 1e-12, "{motor_m}: {asked}");
+            // the cart rests ahead of the motor by the stretch F_s K(xi)
+            let stretch = -profile.static_force_n * profile.compliance_at(xi - origin);
+            assert!(((xi - motor_m) - stretch).abs() < 1e-12);
+            assert!(stretch > 2e-4 && stretch < 1e-3, "{stretch}");
+        }
+        assert_eq!(cart_at_rest_m(0.3, origin, &BeltStretch::Off), 0.3);
+    }
 }

@@ -93,7 +93,21 @@ pub fn friction_stage(
                 100.0 * super::validation_moves::MOVE_TORQUE_FRACTION
             ),
         })?;
-    let runs = friction_runs(st.runner, ctrl, ds, cfg, preview, f_ring_hz, a_run)?;
+    let mut runs = friction_runs(st.runner, ctrl, ds, cfg, preview, f_ring_hz, a_run)?;
+    // The holding torque again, from the runs (issue 12): stage 3's short
+    // runs of a sticky tilted axis were up to 0.1 N m off, and the feedforward
+    // needs it within a few hundredths (the slow position loop integrates
+    // any torque error into a lag of a millimetre).
+    let refined = refined_holding_nm(
+        &runs.iter().map(|r| r.point).collect::<Vec<_>>(),
+        holding_nm,
+        coulomb_nm,
+        torque_max,
+    );
+    for r in &mut runs {
+        r.point.mean_torque_nm -= refined - holding_nm;
+    }
+    let holding_nm = refined;
     let points: Vec<ConstantVelocityRun> = runs.iter().map(|r| r.point).collect();
     let (fit, linear_fit) = st.compute(|| -> Result<_> {
         let mut fit = fit_constant_velocity(&points)?;
@@ -117,6 +131,9 @@ pub fn friction_stage(
         linear_viscous_nm_s_per_rad: linear_fit.viscous_nm_s_per_rad.max(0.0),
         relative_residual: fit.rms_residual_nm / torque_rms.max(f64::MIN_POSITIVE),
         holding_torque_nm: holding_nm,
+        // the cart's share: set from the friction-aware model when it is used
+        cart_coulomb_n: 0.0,
+        cart_viscous_n_s_per_m: 0.0,
     };
     // Inside `compute`: a real-time axis is held every cycle meanwhile.
     let rigid_inertia = st.compute(|| {
@@ -129,12 +146,14 @@ pub fn friction_stage(
         Ok(rigid_inertia_from_phases(&phases))
     })?;
     let line = format!(
-        "d_v {:.3e} N m s/rad, tau_c {:.4} N m (viscous-only fit {:.3e}), {} runs, residual {:.3}; {}",
+        "d_v {:.3e} N m s/rad, tau_c {:.4} N m (viscous-only fit {:.3e}), {} runs, residual {:.3}; holding torque {:+.4} N m (runs up and down; stage 3 {:+.4}); {}",
         result.viscous_nm_s_per_rad,
         result.coulomb_nm,
         result.linear_viscous_nm_s_per_rad,
         points.len(),
         result.relative_residual,
+        holding_nm,
+        ctrl.torque_offset_nm,
         match rigid_inertia {
             Some(m) => format!(
                 "rigid inertia from the runs' momentum balance {:.4e} kg m^2 (+-{:.1} %, FRF fit {:.4e})",
@@ -152,6 +171,25 @@ pub fn friction_stage(
         result,
         rigid_inertia,
     })
+}
+
+/// The holding torque from the friction runs `points` (mean torques less
+/// the assumed `holding_nm`), N m: `holding_nm` plus the offset of the fit
+/// of (3.36) with a torque offset ([`crate::ident::friction::fit_with_offset`]),
+/// where the runs go both ways and the offset is within the larger of the
+/// Coulomb friction `coulomb_nm` and 5 % of `torque_max_nm` (more is not a
+/// measurement error of stage 3 but a fault: stage 3's value is kept).
+pub fn refined_holding_nm(
+    points: &[ConstantVelocityRun],
+    holding_nm: f64,
+    coulomb_nm: f64,
+    torque_max_nm: f64,
+) -> f64 {
+    let bound = coulomb_nm.max(0.05 * torque_max_nm);
+    match crate::ident::friction::fit_with_offset(points) {
+        Ok(f) if f.offset_nm.is_finite() && f.offset_nm.abs() <= bound => holding_nm + f.offset_nm,
+        _ => holding_nm,
+    }
 }
 
 /// A friction run: its constant-velocity point and the middle of its

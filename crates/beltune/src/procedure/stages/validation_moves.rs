@@ -207,7 +207,14 @@ pub fn validation_moves(
     let ts = st.runner.info().ts_s;
     let p = fit.params;
     let m_e = feedforward_inertia_kg_m2;
-    let opts = validation_track_options(&p, preview, holding_nm, belt, st.runner.origin_m());
+    let opts = validation_track_options(
+        &p,
+        preview,
+        holding_nm,
+        belt,
+        friction,
+        st.runner.origin_m(),
+    );
     let move_samples =
         ((cfg.validation.settle_s + 1.5) / ts) as u64 * FeedforwardVariant::ALL.len() as u64;
     st.start("validation moves", move_samples);
@@ -249,7 +256,14 @@ pub fn validation_moves(
     let return_limits = return_limits(&planned.limits, datasheet, worst_stop);
     for variant in FeedforwardVariant::ALL {
         // the same controller the tuning page simulates (issue 16)
-        let c = validation_controller(feedback, m_e, p.i_t, friction, variant);
+        let c = validation_controller(
+            feedback,
+            m_e,
+            p.i_t,
+            friction,
+            belt.stiffness_at(planned.target_m),
+            variant,
+        );
         // The following-error limit guards the delivered controller (the
         // nonlinear feedforward). The comparison variants lag by design: a
         // slow loop without torque feedforward trailed the Table A.8 move by
