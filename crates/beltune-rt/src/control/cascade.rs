@@ -676,6 +676,15 @@ mod tests {
         assert_eq!(c.step(&stop, 0.5).feedforward_nm, 0.0);
     }
 
+    /// The test cascade with Coulomb feedforward `tau_c` only and the
+    /// breakaway threshold `threshold_rad`.
+    fn breakaway_config(tau_c: f64, threshold_rad: f64) -> CascadeConfig<f64> {
+        let mut cfg = config();
+        cfg.feedforward = Feedforward::nonlinear(0.0, 0.0, tau_c);
+        cfg.feedforward.params.coulomb_breakaway_rad = threshold_rad;
+        cfg
+    }
+
     /// Refinement (c) with the breakaway (issue 12, static error): an axis
     /// resting beyond the threshold from its target, after an overshoot or
     /// short of it, gets the Coulomb push toward the target; inside the
@@ -685,9 +694,7 @@ mod tests {
     fn the_coulomb_breakaway_pushes_a_resting_axis_back_toward_its_target_issue_12() {
         let tau_c = 0.1;
         let th = 2e-3;
-        let mut cfg = config();
-        cfg.feedforward = Feedforward::nonlinear(0.0, 0.0, tau_c);
-        cfg.feedforward.params.coulomb_breakaway_rad = th;
+        let cfg = breakaway_config(tau_c, th);
         let mut c = CascadeController::new(cfg).unwrap();
         let stop = Setpoint::hold(1.0);
         // At rest inside the dead zone: no push either way.
@@ -714,10 +721,7 @@ mod tests {
         assert_eq!(c.step(&stop, 1.0 + 2.0 * th).feedforward_nm, 0.0);
         // A negative or non-finite threshold is refused.
         for bad in [-1e-3, f64::NAN] {
-            let mut cfg = config();
-            cfg.feedforward = Feedforward::nonlinear(0.0, 0.0, tau_c);
-            cfg.feedforward.params.coulomb_breakaway_rad = bad;
-            assert!(CascadeController::new(cfg).is_err());
+            assert!(CascadeController::new(breakaway_config(tau_c, bad)).is_err());
         }
     }
 
@@ -730,9 +734,7 @@ mod tests {
     fn a_breakaway_hunt_ends_the_threshold_doubling_issue_12() {
         let tau_c = 0.1;
         let th = 2e-3;
-        let mut cfg = config();
-        cfg.feedforward = Feedforward::nonlinear(0.0, 0.0, tau_c);
-        cfg.feedforward.params.coulomb_breakaway_rad = th;
+        let cfg = breakaway_config(tau_c, th);
         let mut c = CascadeController::new(cfg).unwrap();
         let stop = Setpoint::hold(1.0);
         // A hunt between +-5 th: pushed at th, then against it at 2 th and

@@ -313,6 +313,57 @@ mod tests {
         worst
     }
 
+    /// Accepted error of the RK4 integration of an exactly compensated cart, m.
+    const RK4_TOL_M: f64 = 1e-9;
+
+    /// A soft belt whose compliance changes with the cart's position
+    /// (quadratic, 3.8 to 9.8 um/N between 0 and 0.5 m, like a soft egc70
+    /// belt) and that carries a static force (gravity on a 30 deg slope).
+    const SOFT_BELT: BeltProfile<f64> = BeltProfile {
+        m_c_kg: M_C,
+        reference_m: 0.5,
+        compliance_m_per_n: 9.86e-6,
+        compliance_slope_per_n: 1.0e-5,
+        compliance_curvature_per_n_m: -5.0e-6,
+        static_force_n: M_C * 9.81 * 0.5,
+        cart_viscous_n_s_per_m: 0.0,
+        cart_coulomb_n: 0.0,
+        coulomb_velocity_m_s: 0.0,
+    };
+
+    /// `xi_d` from 0.01 to 0.49 m and back, `A (1 - cos w t)`, with its
+    /// analytic derivatives.
+    fn sweep(t: f64) -> CartSample<f64> {
+        let (x0, amp, w) = (0.01, 0.24, 2.0 * core::f64::consts::PI * 1.5);
+        CartSample {
+            position_m: x0 + amp * (1.0 - libm::cos(w * t)),
+            velocity_m_s: amp * w * libm::sin(w * t),
+            acceleration_m_s2: amp * w * w * libm::cos(w * t),
+            jerk_m_s3: -amp * w * w * w * libm::sin(w * t),
+        }
+    }
+
+    /// The converted velocity of [`sweep`] is the derivative of the converted
+    /// angle (central difference with step `d` s) at `times`, within
+    /// `rel_tol` of the velocity (of 1 rad/s below it).
+    fn assert_velocity_is_angle_derivative(
+        conv: &SetpointConversion<f64>,
+        times: &[f64],
+        d: f64,
+        rel_tol: f64,
+    ) {
+        for &t in times {
+            let fd = (conv.motor_sample(&sweep(t + d)).angle_rad
+                - conv.motor_sample(&sweep(t - d)).angle_rad)
+                / (2.0 * d);
+            let w_d = conv.motor_sample(&sweep(t)).velocity_rad_s;
+            assert!(
+                (fd - w_d).abs() < rel_tol * w_d.abs().max(1.0),
+                "{t}: {fd} vs {w_d}"
+            );
+        }
+    }
+
     /// Table A.4: m_c = 13.44 kg, c = 203.74 kN/m, i_t = 12.414 mm/rad.
     const M_C: f64 = 13.44;
     const C: f64 = 203.74e3;
@@ -377,36 +428,19 @@ mod tests {
     /// is the derivative of the converted angle (central difference).
     #[test]
     fn a_belt_profile_makes_the_cart_follow_where_the_stiffness_changes_issue_12() {
-        let profile = BeltProfile {
-            m_c_kg: M_C,
-            reference_m: 0.5,
-            compliance_m_per_n: 9.86e-6,
-            compliance_slope_per_n: 1.0e-5,
-            compliance_curvature_per_n_m: -5.0e-6,
-            static_force_n: M_C * 9.81 * 0.5,
-            ..BeltProfile::default()
-        };
-        // xi_d from 0.01 to 0.49 m and back: A (1 - cos w t)
-        let (x0, amp, w) = (0.01, 0.24, 2.0 * core::f64::consts::PI * 1.5);
-        let cart = |t: f64| CartSample {
-            position_m: x0 + amp * (1.0 - libm::cos(w * t)),
-            velocity_m_s: amp * w * libm::sin(w * t),
-            acceleration_m_s2: amp * w * w * libm::cos(w * t),
-            jerk_m_s3: -amp * w * w * w * libm::sin(w * t),
-        };
+        let profile = SOFT_BELT;
         let run = |belt: BeltStretch<f64>| -> f64 {
             let conv = SetpointConversion::new(I_T, belt).unwrap();
-            let p = |t: f64| I_T * conv.motor_sample(&cart(t)).angle_rad;
+            let p = |t: f64| I_T * conv.motor_sample(&sweep(t)).angle_rad;
             // the true belt: the profile's compliance, its static force
             let f = |t: f64, x: f64| {
                 ((p(t) - x) / profile.compliance_at(x) - profile.static_force_n) / M_C
             };
-            worst_cart_error_rk4(&|t, x, _v| f(t, x), &cart, 600_000)
+            worst_cart_error_rk4(&|t, x, _v| f(t, x), &sweep, 600_000)
         };
         // The cart starts where the profile's conversion puts it at rest; a
         // constant stiffness starts it with a wrong stretch too: both are
         // errors of the constant model.
-        const RK4_TOL_M: f64 = 1e-9;
         let exact = run(BeltStretch::Profile(profile));
         assert!(exact < RK4_TOL_M, "profile error {exact}");
         let end = BeltStretch::On {
@@ -417,17 +451,7 @@ mod tests {
         assert!(constant > 3e-4, "constant-stiffness error {constant}");
 
         let conv = SetpointConversion::new(I_T, BeltStretch::Profile(profile)).unwrap();
-        let d = 1e-6;
-        for t in [0.05, 0.2, 0.31] {
-            let fd = (conv.motor_sample(&cart(t + d)).angle_rad
-                - conv.motor_sample(&cart(t - d)).angle_rad)
-                / (2.0 * d);
-            let w_d = conv.motor_sample(&cart(t)).velocity_rad_s;
-            assert!(
-                (fd - w_d).abs() < 1e-6 * w_d.abs().max(1.0),
-                "{t}: {fd} vs {w_d}"
-            );
-        }
+        assert_velocity_is_angle_derivative(&conv, &[0.05, 0.2, 0.31], 1e-6, 1e-6);
     }
 
     /// Issue 12: the belt also carries the cart's friction while it moves
@@ -440,22 +464,10 @@ mod tests {
     #[test]
     fn the_cart_friction_lead_makes_the_rubbing_cart_follow_issue_12() {
         let profile = BeltProfile {
-            m_c_kg: M_C,
-            reference_m: 0.5,
-            compliance_m_per_n: 9.86e-6,
-            compliance_slope_per_n: 1.0e-5,
-            compliance_curvature_per_n_m: -5.0e-6,
-            static_force_n: M_C * 9.81 * 0.5,
             cart_viscous_n_s_per_m: 30.0,
             cart_coulomb_n: 15.0,
             coulomb_velocity_m_s: 0.05,
-        };
-        let (x0, amp, w) = (0.01, 0.24, 2.0 * core::f64::consts::PI * 1.5);
-        let cart = |t: f64| CartSample {
-            position_m: x0 + amp * (1.0 - libm::cos(w * t)),
-            velocity_m_s: amp * w * libm::sin(w * t),
-            acceleration_m_s2: amp * w * w * libm::cos(w * t),
-            jerk_m_s3: -amp * w * w * w * libm::sin(w * t),
+            ..SOFT_BELT
         };
         // the ramped Coulomb sign of the profile
         let sign = |v: f64| {
@@ -468,7 +480,7 @@ mod tests {
         };
         let run = |belt: BeltProfile<f64>| -> f64 {
             let conv = SetpointConversion::new(I_T, BeltStretch::Profile(belt)).unwrap();
-            let p = |t: f64| I_T * conv.motor_sample(&cart(t)).angle_rad;
+            let p = |t: f64| I_T * conv.motor_sample(&sweep(t)).angle_rad;
             let f = |t: f64, x: f64, v: f64| {
                 ((p(t) - x) / profile.compliance_at(x)
                     - profile.static_force_n
@@ -476,9 +488,8 @@ mod tests {
                     - profile.cart_coulomb_n * sign(v))
                     / M_C
             };
-            worst_cart_error_rk4(&f, &cart, 300_000)
+            worst_cart_error_rk4(&f, &sweep, 300_000)
         };
-        const RK4_TOL_M: f64 = 1e-9;
         let exact = run(profile);
         assert!(exact < RK4_TOL_M, "with the friction lead: {exact}");
         let without = run(BeltProfile {
@@ -490,18 +501,8 @@ mod tests {
         assert!(without > 3e-4, "without: {without}");
 
         let conv = SetpointConversion::new(I_T, BeltStretch::Profile(profile)).unwrap();
-        let d = 1e-7;
         // t = 0.002 s: v = 0.0107 m/s, inside the Coulomb ramp
-        for t in [0.002, 0.01, 0.2, 0.31] {
-            let fd = (conv.motor_sample(&cart(t + d)).angle_rad
-                - conv.motor_sample(&cart(t - d)).angle_rad)
-                / (2.0 * d);
-            let w_d = conv.motor_sample(&cart(t)).velocity_rad_s;
-            assert!(
-                (fd - w_d).abs() < 1e-5 * w_d.abs().max(1.0),
-                "{t}: {fd} vs {w_d}"
-            );
-        }
+        assert_velocity_is_angle_derivative(&conv, &[0.002, 0.01, 0.2, 0.31], 1e-7, 1e-5);
     }
 
     #[test]

@@ -460,11 +460,13 @@ pub fn commission(
     )?;
     // ---- 5b, 5c. belt stiffness where the validation move ends and near
     // where it starts: the compliance along the stroke (issue 12) ----
-    let total_coulomb = ident
+    // the friction-aware model, where it is the one used
+    let friction_aware = ident
         .nonlinear
         .as_ref()
-        .filter(|_| ident.nonlinear_note.is_none())
-        .map_or(held.friction_nm, |n| n.tau_c_motor_nm + n.cart_coulomb_nm());
+        .filter(|_| ident.nonlinear_note.is_none());
+    let total_coulomb =
+        friction_aware.map_or(held.friction_nm, |n| n.tau_c_motor_nm + n.cart_coulomb_nm());
     let target_stiffness = stages::identification::stiffness_profile(
         &mut st,
         &boot_hold,
@@ -532,11 +534,7 @@ pub fn commission(
     // 2-6 times the truth, 52 against 9 N s/m on egc70 over EtherCAT, which
     // led the cart 0.25 mm ahead at speed): it is bounded by the whole axis'
     // viscous friction the runs measured.
-    if let Some(n) = ident
-        .nonlinear
-        .as_ref()
-        .filter(|_| ident.nonlinear_note.is_none())
-    {
+    if let Some(n) = friction_aware {
         let axis_viscous = fr.result.viscous_nm_s_per_rad / (datasheet.i_t_m * datasheet.i_t_m);
         fr.result.cart_coulomb_n = n.f_c_cart_n.max(0.0);
         fr.result.cart_viscous_n_s_per_m = n.params.d_c.clamp(0.0, axis_viscous.max(0.0));

@@ -20,13 +20,21 @@ pub struct TrackOptions {
     /// hangs `K(xi) F` behind the motor), with positions measured from the
     /// runner's origin (the cart position at motor angle 0).
     pub belt_stretch: BeltStretch<f64>,
-    /// Track in closed loop with the following error checked against the
-    /// supervisor's limit (`false`: supervised as an open-loop motion).
-    pub check_following_error: bool,
-    /// With [`Self::check_following_error`]: record the following error but
-    /// do not limit it ([`Runner::step_unlimited`]): a move whose lag is
-    /// expected.
-    pub following_error_unlimited: bool,
+    /// How the supervisor treats the following error.
+    pub following_error: FollowingError,
+}
+
+/// How the supervisor treats the following error of a tracked motion.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FollowingError {
+    /// Not computed: supervised as an open-loop motion.
+    #[default]
+    Unchecked,
+    /// Closed loop, checked against the supervisor's limit.
+    Limited,
+    /// Closed loop, recorded but not limited ([`Runner::step_unlimited`]):
+    /// a move whose lag is expected.
+    Recorded,
 }
 
 /// A recorded closed-loop run.
@@ -89,12 +97,11 @@ pub fn track(
         let ahead = motor_sample(&conv, origin, traj, t + opts.preview_samples as f64 * ts);
         let sp = Setpoint::with_preview(now, ahead);
         let out = ctrl.step(&sp, runner.motor_angle_rad());
-        let following = opts
-            .check_following_error
-            .then(|| desired.position - runner.position_m());
-        let sample = match following {
-            Some(e) if opts.following_error_unlimited => runner.step_unlimited(out.torque_nm, e)?,
-            _ => runner.step(out.torque_nm, following)?,
+        let e = desired.position - runner.position_m();
+        let sample = match opts.following_error {
+            FollowingError::Unchecked => runner.step(out.torque_nm, None)?,
+            FollowingError::Limited => runner.step(out.torque_nm, Some(e))?,
+            FollowingError::Recorded => runner.step_unlimited(out.torque_nm, e)?,
         };
         // The exchange returns what the drive measured at the end of the
         // cycle ([`crate::plant::Axis::exchange`]), i.e. at (k+1) T: the record
@@ -127,7 +134,7 @@ pub fn move_to(
         &traj,
         settle_s,
         TrackOptions {
-            check_following_error: true,
+            following_error: FollowingError::Limited,
             ..Default::default()
         },
     )

@@ -109,11 +109,21 @@ impl TargetStiffness {
         }
     }
 
+    /// The compliance alone as the setpoint conversion's belt model
+    /// (positions as this record's; no mass, force or friction).
+    fn compliance(&self) -> beltune_rt::control::BeltProfile<f64> {
+        beltune_rt::control::BeltProfile {
+            reference_m: self.position_m,
+            compliance_m_per_n: 1.0 / self.c_n_per_m,
+            compliance_slope_per_n: self.compliance_slope_per_n,
+            compliance_curvature_per_n_m: self.compliance_curvature_per_n_m,
+            ..Default::default()
+        }
+    }
+
     /// The belt compliance `1 / c` at cart position `xi_m`, m/N.
     pub fn compliance_at(&self, xi_m: f64) -> f64 {
-        let x = xi_m - self.position_m;
-        1.0 / self.c_n_per_m
-            + x * (self.compliance_slope_per_n + x * self.compliance_curvature_per_n_m)
+        self.compliance().compliance_at(xi_m)
     }
 
     /// The belt stiffness at cart position `xi_m`, N/m.
@@ -137,13 +147,11 @@ impl TargetStiffness {
         beltune_rt::control::BeltProfile {
             m_c_kg,
             reference_m: self.position_m - origin_m,
-            compliance_m_per_n: 1.0 / self.c_n_per_m,
-            compliance_slope_per_n: self.compliance_slope_per_n,
-            compliance_curvature_per_n_m: self.compliance_curvature_per_n_m,
             static_force_n,
             cart_viscous_n_s_per_m: friction.cart_viscous_n_s_per_m,
             cart_coulomb_n: friction.cart_coulomb_n,
             coulomb_velocity_m_s: CART_COULOMB_VELOCITY_M_S,
+            ..self.compliance()
         }
     }
 

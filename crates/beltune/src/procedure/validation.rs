@@ -347,8 +347,7 @@ pub fn validation_track_options(
             origin_m,
             friction,
         )),
-        check_following_error: true,
-        following_error_unlimited: false,
+        following_error: super::motion::FollowingError::Limited,
     }
 }
 

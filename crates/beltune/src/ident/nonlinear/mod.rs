@@ -190,12 +190,12 @@ pub fn fit_nonlinear(
     })?;
     let n = eval.residual.len();
     let uncertainty = solved.jacobian_mat().and_then(|j| {
-        let n_free = solved.free.len();
+        let n_free = solved.n_free();
         let s2 = eval.residual.norm_squared() / (n.saturating_sub(n_free)).max(1) as f64;
         let jtj = j.transpose() * &j;
         let scale = jtj.diagonal().max();
         let cov = jtj.pseudo_inverse(1e-12 * scale).ok()? * s2;
-        let sig = |k: usize| match solved.free.iter().position(|&f| f == k) {
+        let sig = |k: usize| match solved.q_index(k) {
             Some(i) => cov[(i, i)].max(0.0).sqrt() * solved.dlnp_dq(k),
             None => 0.0,
         };
@@ -282,9 +282,9 @@ struct Problem {
     /// Start values and log half-widths of `m_c, c, d, d_c, F_c`.
     p0: [f64; N_Q],
     half_width: [f64; N_Q],
-    /// Which of `m_c, c, d, d_c, F_c` are fitted (`q` holds these, in order);
-    /// the others keep their start values.
-    free: Vec<usize>,
+    /// The first of `m_c, c, d, d_c, F_c` that is fitted (1: `m_c` held at
+    /// its start value); `q` holds it and the ones after it, in order.
+    first_free: usize,
     q: DVector<f64>,
     residual: Option<DVector<f64>>,
     evaluations: std::cell::Cell<usize>,
@@ -411,7 +411,7 @@ impl Problem {
             theta_e: cfg.theta_e,
             p0: [1.0; N_Q],
             half_width: [1.0; N_Q],
-            free: (usize::from(cfg.fixed_mass)..N_Q).collect(),
+            first_free: usize::from(cfg.fixed_mass),
             q: DVector::zeros(N_Q),
             residual: None,
             evaluations: std::cell::Cell::new(0),
@@ -443,14 +443,24 @@ impl Problem {
             DAMPING_RANGE.ln(),
             DAMPING_RANGE.ln(),
         ];
-        self.q = DVector::zeros(self.free.len());
+        self.q = DVector::zeros(self.n_free());
         self.evaluations.set(0);
         self.residual = self.evaluate(&self.q).map(|e| e.residual);
     }
 
+    /// How many parameters are fitted.
+    fn n_free(&self) -> usize {
+        N_Q - self.first_free
+    }
+
+    /// The index in `q` of parameter `k`, if it is fitted.
+    fn q_index(&self, k: usize) -> Option<usize> {
+        k.checked_sub(self.first_free)
+    }
+
     /// The coordinate of parameter `k` in `q`, if it is fitted.
     fn q_of(&self, q: &DVector<f64>, k: usize) -> Option<f64> {
-        self.free.iter().position(|&f| f == k).map(|i| q[i])
+        self.q_index(k).map(|i| q[i])
     }
 
     fn value(&self, q: &DVector<f64>, k: usize) -> f64 {
@@ -567,8 +577,8 @@ impl Problem {
             Some(r) => r.clone(),
             None => self.evaluate(&self.q)?.residual,
         };
-        let mut j = DMatrix::zeros(base.len(), self.free.len());
-        for k in 0..self.free.len() {
+        let mut j = DMatrix::zeros(base.len(), self.n_free());
+        for k in 0..self.n_free() {
             let mut qp = self.q.clone();
             qp[k] += JACOBIAN_STEP;
             let col = (self.evaluate(&qp)?.residual - &base) / JACOBIAN_STEP;

@@ -4,7 +4,7 @@
 //! torque), then the Coulomb + viscous fit (3.35)-(3.36).
 
 use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
-use super::super::motion::{move_to, track, TrackOptions, TrackRecord};
+use super::super::motion::{move_to, track, FollowingError, TrackOptions, TrackRecord};
 use super::super::result::FrictionResult;
 use super::super::runner::Runner;
 use super::momentum::{
@@ -93,22 +93,17 @@ pub fn friction_stage(
                 100.0 * super::validation_moves::MOVE_TORQUE_FRACTION
             ),
         })?;
-    let mut runs = friction_runs(st.runner, ctrl, ds, cfg, preview, f_ring_hz, a_run)?;
+    let runs = friction_runs(st.runner, ctrl, ds, cfg, preview, f_ring_hz, a_run)?;
+    let mut points: Vec<ConstantVelocityRun> = runs.iter().map(|r| r.point).collect();
     // The holding torque again, from the runs (issue 12): stage 3's short
     // runs of a sticky tilted axis were up to 0.1 N m off, and the feedforward
     // needs it within a few hundredths (the slow position loop integrates
     // any torque error into a lag of a millimetre).
-    let refined = refined_holding_nm(
-        &runs.iter().map(|r| r.point).collect::<Vec<_>>(),
-        holding_nm,
-        coulomb_nm,
-        torque_max,
-    );
-    for r in &mut runs {
-        r.point.mean_torque_nm -= refined - holding_nm;
+    let refined = refined_holding_nm(&points, holding_nm, coulomb_nm, torque_max);
+    for p in &mut points {
+        p.mean_torque_nm -= refined - holding_nm;
     }
     let holding_nm = refined;
-    let points: Vec<ConstantVelocityRun> = runs.iter().map(|r| r.point).collect();
     let (fit, linear_fit) = st.compute(|| -> Result<_> {
         let mut fit = fit_constant_velocity(&points)?;
         let linear_fit = fit_viscous_only(&points)?;
@@ -238,7 +233,7 @@ fn friction_runs(
     let mut points = Vec::new();
     let opts = TrackOptions {
         preview_samples: preview,
-        check_following_error: true,
+        following_error: FollowingError::Limited,
         ..Default::default()
     };
     // Back to back (the momentum balance between consecutive runs needs no

@@ -164,26 +164,40 @@ const NONLINEAR_BAND_RESONANCES: f64 = 2.5;
 /// The friction-aware fit of the nonlinear model (2.30) to the excitation
 /// `e` ([`crate::ident::nonlinear`]), started from the FRF fit `fit`, with
 /// the dead time, the cart force the holding torque balances and the
-/// Coulomb friction measured in stage 3 as its start.
+/// Coulomb friction measured in stage 3 as its start. `held`: a model whose
+/// mass `m_c` and motor inertia `Theta_e` are held (the stiffness elsewhere
+/// along the stroke, stages 5b/5c: they do not change with the position);
+/// `None`: both are solved.
+#[allow(clippy::too_many_arguments)]
 fn fit_friction_aware(
     e: &Excitation,
     ecfg: &EtfeConfig,
     fit: &TwoMassFit,
+    held: Option<&TwoMassParams>,
     dead_time_s: f64,
     holding_nm: f64,
     coulomb_hint_nm: f64,
     datasheet: &DataSheet,
 ) -> Result<NonlinearFit> {
     let (lo, hi) = ecfg.band_hz.unwrap_or((0.0, 0.5 / ecfg.ts_s));
+    let start = match held {
+        Some(m) => TwoMassParams {
+            m_c: m.m_c,
+            theta_e: m.theta_e,
+            ..fit.params
+        },
+        None => fit.params,
+    };
     fit_nonlinear(
         &e.cmd,
         &e.ang,
-        &fit.params,
+        &start,
         &NonlinearConfig {
-            // solved: the data sheet's motor inertia lacks what else turns
-            // with the belt (the end pulley: the fitted rigid inertia was 2 %
-            // light on average with it fixed, within 0.1 % solved)
-            theta_e: None,
+            // solved where not held: the data sheet's motor inertia lacks
+            // what else turns with the belt (the end pulley: the fitted rigid
+            // inertia was 2 % light on average with it fixed, within 0.1 %
+            // solved)
+            theta_e: held.map(|m| m.theta_e),
             i_t: datasheet.i_t_m,
             ts_s: ecfg.ts_s,
             period_samples: ecfg.period_samples,
@@ -192,7 +206,7 @@ fn fit_friction_aware(
             band_hz: (lo, hi.min(NONLINEAR_BAND_RESONANCES * fit.f_r_hz)),
             cart_force_n: -holding_nm / datasheet.i_t_m,
             coulomb_hint_nm: coulomb_hint_nm.max(0.0),
-            fixed_mass: false,
+            fixed_mass: held.is_some(),
         },
     )
 }
@@ -294,6 +308,7 @@ pub fn identification(
             &e,
             &ecfg,
             &fit,
+            None,
             dead_time.seconds,
             holding_nm,
             coulomb_hint_nm,
@@ -430,28 +445,15 @@ fn measure_stiffness(
         let ecfg = etfe_config(ts, e.period, skip, ex);
         let frf = etfe(&e.cmd, &e.ang, &ecfg)?;
         let frf_fit = fit_frf(&frf, &ecfg, ex, inp.datasheet)?;
-        let (lo, hi) = ecfg.band_hz.unwrap_or((0.0, 0.5 / ts));
-        let start = TwoMassParams {
-            m_c: main.m_c,
-            theta_e: main.theta_e,
-            ..frf_fit.params
-        };
-        let nl = fit_nonlinear(
-            &e.cmd,
-            &e.ang,
-            &start,
-            &NonlinearConfig {
-                theta_e: Some(main.theta_e),
-                i_t: inp.datasheet.i_t_m,
-                ts_s: ts,
-                period_samples: e.period,
-                skip_periods: skip,
-                dead_time_s: inp.dead_time_s,
-                band_hz: (lo, hi.min(NONLINEAR_BAND_RESONANCES * frf_fit.f_r_hz)),
-                cart_force_n: -inp.holding_nm / inp.datasheet.i_t_m,
-                coulomb_hint_nm: inp.coulomb_nm.max(0.0),
-                fixed_mass: true,
-            },
+        let nl = fit_friction_aware(
+            &e,
+            &ecfg,
+            &frf_fit,
+            Some(&main),
+            inp.dead_time_s,
+            inp.holding_nm,
+            inp.coulomb_nm,
+            inp.datasheet,
         );
         Ok(match nl {
             Ok(nl) if nl.improves_on_linear() => (nl.params.c, nl.f_z_hz),

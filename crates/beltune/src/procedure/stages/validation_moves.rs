@@ -3,7 +3,7 @@
 //! to the start runs under the feedback cascade.
 
 use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
-use super::super::motion::TrackOptions;
+use super::super::motion::{FollowingError, TrackOptions};
 use super::super::result::{FrictionResult, Validation};
 use super::super::validation::{
     run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
@@ -272,7 +272,11 @@ pub fn validation_moves(
         // their error recorded, not limited; the closed loop's travel
         // look-ahead, the torque and the velocity limits still guard them.
         let variant_opts = TrackOptions {
-            following_error_unlimited: variant != FeedforwardVariant::Nonlinear,
+            following_error: if variant == FeedforwardVariant::Nonlinear {
+                FollowingError::Limited
+            } else {
+                FollowingError::Recorded
+            },
             ..opts
         };
         // Return to the start within the return limits (it is not measured).
