@@ -9,8 +9,13 @@ use beltune::study::{run_plant, Class, OutcomeKind, Ranges, Table};
 
 /// Seed of the CI sample (the README's study uses the same generator).
 const SEED: u64 = 12;
-/// Plants in the CI sample: a few dozen, a few minutes on two cores.
-const PLANTS: u64 = 24;
+/// Plants in the CI sample: about 20 s on two cores (the cart observer's
+/// exact step made a plant's commissioning 3x cheaper; the sample was 24).
+const PLANTS: u64 = 96;
+/// Successes the sample must keep: the full study (README) has 88 among
+/// these plants and 8 correct refusals of axes too heavy to hold; more
+/// refusals than 16 would be a commissioning that gives up on feasible axes.
+const MIN_SUCCESSES: usize = 80;
 /// Issue 12: the true-plant velocity margin never below this, deg.
 const MIN_TRUE_PHASE_MARGIN_DEG: f64 = 30.0;
 
@@ -56,9 +61,26 @@ fn the_coulomb_breakaway_brings_an_overshooting_cart_back_issue_12() {
 fn the_seeded_ci_sample_has_no_defects_and_keeps_its_margins_issue_12() {
     let cfg = CommissioningConfig::default();
     let ranges = Ranges::default();
-    let outcomes: Vec<_> = (0..PLANTS)
-        .map(|i| run_plant(SEED, i, &ranges, &cfg).unwrap())
-        .collect();
+    // two threads, each every other plant (the study's own runner is the
+    // CLI's; the outcome of a plant does not depend on the thread)
+    let mut outcomes: Vec<_> = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..2u64)
+            .map(|w| {
+                let (cfg, ranges) = (&cfg, &ranges);
+                s.spawn(move || {
+                    (w..PLANTS)
+                        .step_by(2)
+                        .map(|i| run_plant(SEED, i, ranges, cfg).unwrap())
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|h| h.join().unwrap())
+            .collect()
+    });
+    outcomes.sort_by_key(|o| o.index);
     let table = Table::new(&outcomes);
     eprintln!("{}", table.markdown());
     for o in &outcomes {
@@ -83,5 +105,8 @@ fn the_seeded_ci_sample_has_no_defects_and_keeps_its_margins_issue_12() {
         .iter()
         .filter(|o| o.kind == OutcomeKind::Success)
         .count();
-    assert!(successes >= 16, "{successes} successes of {PLANTS}");
+    assert!(
+        successes >= MIN_SUCCESSES,
+        "{successes} successes of {PLANTS}"
+    );
 }
