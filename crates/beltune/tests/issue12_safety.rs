@@ -1,5 +1,5 @@
 //! Issue 12, the safety defects of the excitation, holding-torque and
-//! validation stages: plants of the seeded study (seed 12) that ended in a
+//! validation stages: plants of the seeded study (seed 12; one of seed 13) that ended in a
 //! travel stop or left their travel window, and the measurement noise as a
 //! plant parameter.
 
@@ -44,6 +44,30 @@ fn the_validation_return_ends_in_no_travel_stop_issue_12() {
 #[test]
 fn a_stop_ends_inside_the_window_issue_12() {
     let o = plant(8);
+    assert!(
+        !o.travel_violation,
+        "cart {:.1} mm outside: {}",
+        o.travel_excess_m * 1e3,
+        o.message
+    );
+}
+
+/// Seed 13, plant #787 (16.9 kg on a 59 deg slope, little friction): the
+/// identification's open-loop PRBS drifted to 2.5 mm below the window's
+/// upper edge, the next stage's first closed-loop sample tripped the
+/// look-ahead, and the stop, preloaded with the mean command of the last
+/// 20 ms (mostly one PRBS level, 0.44 N m short of the 1.84 N m holding the
+/// load), let the load push the cart 4.6 mm out of the window. The stop
+/// after an open-loop stage now starts from the mean over the last second:
+/// the axis stops inside (the commissioning still ends in the stop).
+#[test]
+fn a_stop_after_an_open_loop_excitation_holds_the_load_issue_12() {
+    let o = run_plant(13, 787, &Ranges::default(), &CommissioningConfig::default()).unwrap();
+    assert!(
+        o.message.contains("safety stop"),
+        "the plant no longer shows the stop: {}",
+        o.message
+    );
     assert!(
         !o.travel_violation,
         "cart {:.1} mm outside: {}",
