@@ -514,11 +514,11 @@ impl<'a> Runner<'a> {
         Error::SafetyStop { reason }
     }
 
-    /// Mean torque command of the last [`RIGID_VELOCITY_WINDOW_S`] in closed
-    /// loop, of the whole history ([`STOP_HISTORY_S`]) in open loop or
-    /// within that window of it, N m:
-    /// what has been holding the load, the loop's vibration and an
-    /// excitation averaged out; 0 before any sample. In open loop the
+    /// Mean torque command, N m: what has been holding the load, the loop's
+    /// vibration and an excitation averaged out; 0 before any sample. Over
+    /// the last [`RIGID_VELOCITY_WINDOW_S`] in closed loop, over the whole
+    /// history ([`STOP_HISTORY_S`]) in open loop or within that window of
+    /// it (a closed-loop stage may have just begun). In open loop the
     /// command is the holding torque plus a PRBS, which averages out over
     /// many of its bits, not over 20 ms (issue 12, seed 13 plant #787: 20 ms
     /// of mostly one PRBS level preloaded the stop 0.44 N m short of the
@@ -526,8 +526,6 @@ impl<'a> Runner<'a> {
     /// stop 6.9 mm on, 3.8 mm out of the window).
     fn recent_torque_nm(&self) -> f64 {
         let short = ((RIGID_VELOCITY_WINDOW_S / self.info.ts_s).round() as usize).max(1);
-        // open loop within the short window (a closed-loop stage may have
-        // just begun): the whole history
         let open = self.open_loop
             || self
                 .history

@@ -43,6 +43,25 @@ pub(crate) struct Mech<const N: usize, const S: usize> {
 }
 
 #[inline(always)]
+/// The velocity-level (Moreau) Coulomb step of one body (module docs):
+/// from `(q0, v0)` at the start of a step of `h` s, the smooth step's end
+/// `(q, v_f)` and the largest velocity change friction can make in it,
+/// `dv_max = h F_c / m`, the position and velocity after friction. Sticks
+/// (`v = 0`, position on the trapezoid of the velocity: exactly `q0` when it
+/// was at rest) when `|v_f| <= dv_max`, else slides with `v_f - sign(v_f)
+/// dv_max`; `dv_max <= 0` (no friction) leaves the smooth step as it is.
+/// Shared by the simulator and the friction-aware fit's cart observer.
+pub(crate) fn coulomb_step(q0: f64, v0: f64, q: f64, v_f: f64, dv_max: f64, h: f64) -> (f64, f64) {
+    if dv_max <= 0.0 {
+        (q, v_f)
+    } else if v_f.abs() <= dv_max {
+        (q0 + 0.5 * h * v0, 0.0)
+    } else {
+        let vn = v_f - dv_max.copysign(v_f);
+        (q + 0.5 * h * (vn - v_f), vn)
+    }
+}
+
 fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
     let mut s = 0.0;
     for i in 0..N {
@@ -133,20 +152,7 @@ impl<const N: usize, const S: usize> Mech<N, S> {
         // Coulomb friction: velocity-level stick-slip (module docs).
         for i in 0..N {
             let dv_max = h * self.coulomb[i] * self.inv_mass[i];
-            if dv_max <= 0.0 {
-                continue;
-            }
-            let vf = self.v[i];
-            if vf.abs() <= dv_max {
-                // stick: the body stops within the step; its position follows
-                // the trapezoid of its velocity (exactly unchanged when it was at rest)
-                self.q[i] = q0[i] + 0.5 * h * v0[i];
-                self.v[i] = 0.0;
-            } else {
-                let vn = vf - dv_max.copysign(vf);
-                self.q[i] += 0.5 * h * (vn - vf);
-                self.v[i] = vn;
-            }
+            (self.q[i], self.v[i]) = coulomb_step(q0[i], v0[i], self.q[i], self.v[i], dv_max, h);
         }
     }
 

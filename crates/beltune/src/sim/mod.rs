@@ -24,6 +24,7 @@
 
 mod linear;
 mod mech;
+pub(crate) use mech::coulomb_step;
 
 use crate::error::{require_finite, require_positive};
 use crate::model::params::{FrictionTotals, MeasurementNoise, PhysicalParams};

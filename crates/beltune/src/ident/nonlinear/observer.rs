@@ -31,11 +31,14 @@
 //! four evaluations of the acceleration, about 40 flops, and the friction-
 //! aware fit spent three quarters of a commissioning's CPU time in it.)
 //!
-//! Stick-slip: the velocity-level (Moreau) step of [`crate::sim`]: after the
+//! Stick-slip: the velocity-level (Moreau) step of [`crate::sim`] (the same
+//! function, `coulomb_step`): after the
 //! smooth step the friction impulse over the step is at most `h F_c`; a
 //! cart whose free velocity it can cancel sticks.
 //!
 //! Cost: about 20 flops and one branch per sample.
+
+use crate::sim::coulomb_step;
 
 /// Parameters of the cart and belt (SI): the nonlinear part of the fit.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,19 +86,8 @@ pub fn belt_torque(
         let p1 = i_t * angle_rad[k];
         // the belt end moves linearly over the sample
         let pd = (p1 - p0) / h;
-        let (x0, v0) = (xi, v);
-        (xi, v) = step.advance(x0, v0, p0, pd);
-        if dv_max > 0.0 {
-            if v.abs() <= dv_max {
-                // stick: the cart stops within the step
-                xi = x0 + 0.5 * h * v0;
-                v = 0.0;
-            } else {
-                let vn = v - dv_max.copysign(v);
-                xi += 0.5 * h * (vn - v);
-                v = vn;
-            }
-        }
+        let (x_f, v_f) = step.advance(xi, v, p0, pd);
+        (xi, v) = coulomb_step(xi, v, x_f, v_f, dv_max, h);
         out[k] = i_t * (c * (p1 - xi) + d * (pd - v));
     }
     out
@@ -298,16 +290,7 @@ mod tests {
                     * (v + 2.0 * (v + 0.5 * h * a1) + 2.0 * (v + 0.5 * h * a2) + (v + h * a3));
                 v += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
             }
-            if dv_max > 0.0 {
-                if v.abs() <= dv_max {
-                    xi = x0 + 0.5 * ts * v0;
-                    v = 0.0;
-                } else {
-                    let vn = v - dv_max.copysign(v);
-                    xi += 0.5 * ts * (vn - v);
-                    v = vn;
-                }
-            }
+            (xi, v) = coulomb_step(x0, v0, xi, v, dv_max, ts);
             out.push(i_t * (c * (i_t * angle[k] - xi) + d * (pd - v)));
         }
         out
