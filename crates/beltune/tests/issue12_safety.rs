@@ -53,26 +53,23 @@ fn a_stop_ends_inside_the_window_issue_12() {
 }
 
 /// Seed 13, plant #787 (16.9 kg on a 59 deg slope, little friction): the
-/// identification's open-loop PRBS drifted to 2.5 mm below the window's
-/// upper edge, the next stage's first closed-loop sample tripped the
-/// look-ahead, and the stop, preloaded with the mean command of the last
-/// 20 ms (mostly one PRBS level, 0.44 N m short of the 1.84 N m holding the
-/// load), let the load push the cart 4.6 mm out of the window. The stop
-/// after an open-loop stage now starts from the mean over the last second:
-/// the axis stops inside (the commissioning still ends in the stop).
+/// identification's open-loop PRBS drifted 57 mm, to 2.5 mm below the
+/// window's upper edge, the next stage's first closed-loop sample tripped
+/// the look-ahead, and the stop (preloaded then with the mean command of the
+/// last 20 ms, 0.44 N m short of the load: fixed in the runner, see
+/// `the_stop_preload_after_an_open_loop_excitation_is_its_mean_issue_12`)
+/// let the load push the cart 4.6 mm out of the window. An open-loop
+/// excitation now ends early where the closed loop could no longer take the
+/// axis over with 10 mm to spare, and starts again against its drift: the
+/// plant commissions, inside its window.
 #[test]
-fn a_stop_after_an_open_loop_excitation_holds_the_load_issue_12() {
+fn an_open_loop_excitation_that_drifts_starts_again_against_its_drift_issue_12() {
     let o = run_plant(13, 787, &Ranges::default(), &CommissioningConfig::default()).unwrap();
-    assert!(
-        o.message.contains("safety stop"),
-        "the plant no longer shows the stop: {}",
-        o.message
-    );
+    assert_eq!(o.class, Class::Success, "{}", o.message);
     assert!(
         !o.travel_violation,
-        "cart {:.1} mm outside: {}",
-        o.travel_excess_m * 1e3,
-        o.message
+        "cart {:.1} mm outside",
+        o.travel_excess_m * 1e3
     );
 }
 

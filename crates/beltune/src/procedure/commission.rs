@@ -475,7 +475,7 @@ pub fn commission(
         &stages::identification::StiffnessInputs {
             main: &ident.fit,
             ident_position_m: ident.measured_position_m,
-            excitation_center_m: id_pos,
+            excitation_center_m: ident.center_m,
             limits: &pos_limits,
             holding_nm: holding,
             amplitude_nm: amplitude,

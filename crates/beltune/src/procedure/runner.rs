@@ -375,13 +375,7 @@ impl<'a> Runner<'a> {
         let (velocity, lag) = if self.open_loop {
             (self.rigid_velocity_m_s, 0.0)
         } else {
-            let v = stop_start_velocity(self.velocity_m_s, self.rigid_velocity_m_s);
-            let lag = if v.abs() < self.velocity_m_s.abs() {
-                RIGID_VELOCITY_WINDOW_S
-            } else {
-                0.0
-            };
-            (v, lag)
+            self.closed_loop_velocity()
         };
         // a tracking loop whose error is not limited is judged as one with no
         // error (the closed loop's look-ahead)
@@ -393,6 +387,39 @@ impl<'a> Runner<'a> {
             return Err(self.stop_after(v, torque, following_error_m));
         }
         self.raw_step(torque, following_error_m)
+    }
+
+    /// The velocity the closed loop's look-ahead judges and its lag, m/s and
+    /// s: the fast estimate where the rigid-body estimate confirms it, else
+    /// the smaller one with the rigid estimate's lag.
+    fn closed_loop_velocity(&self) -> (f64, f64) {
+        let v = stop_start_velocity(self.velocity_m_s, self.rigid_velocity_m_s);
+        let lag = if v.abs() < self.velocity_m_s.abs() {
+            RIGID_VELOCITY_WINDOW_S
+        } else {
+            0.0
+        };
+        (v, lag)
+    }
+
+    /// Whether a closed-loop stage could take the axis over now with
+    /// `margin_m` to spare: the position is `margin_m` inside the travel
+    /// window, and the closed loop's look-ahead (as [`Runner::step`] judges
+    /// its first sample) passes from `margin_m` further in the direction of
+    /// motion. An open-loop excitation ends early where it does not (issue
+    /// 12: seed 13 plant #787's PRBS drifted 57 mm, to 2.5 mm from the edge,
+    /// and the next stage's first closed-loop sample tripped).
+    pub fn closed_loop_handover_clear(&self, margin_m: f64) -> bool {
+        let l = self.supervisor.limits();
+        let pos = self.position_m();
+        if !(pos - margin_m >= l.travel_min_m && pos + margin_m <= l.travel_max_m) {
+            return false;
+        }
+        let (v, lag) = self.closed_loop_velocity();
+        let ahead = pos + if v < 0.0 { -margin_m } else { margin_m };
+        self.supervisor
+            .check_lagged(ahead, v, lag, 0.0, Some(0.0))
+            .is_ok()
     }
 
     fn raw_step(&mut self, torque_nm: f64, following_error_m: Option<f64>) -> Result<Sample> {
@@ -1063,6 +1090,62 @@ mod tests {
             runner.rigid_velocity_m_s().abs() < 0.01,
             "{}",
             runner.rigid_velocity_m_s()
+        );
+    }
+
+    /// Issue 12, seed 13 plant #787: a stop right after an open-loop PRBS
+    /// starts from the mean command over the last second (the holding
+    /// torque, the PRBS averaged out over its bits), not from the last
+    /// 20 ms, which are mostly one PRBS level (0.44 N m short of the load
+    /// on #787). egc70, open loop, a PRBS of 20 ms bits around 0.1 N m.
+    #[test]
+    fn the_stop_preload_after_an_open_loop_excitation_is_its_mean_issue_12() {
+        let plant = rigs::builtin("egc70", None).unwrap();
+        let start = 0.3;
+        let mut axis = sim_at(&plant, start);
+        let info = plant.info();
+        let model = plant.worst_case_two_mass().unwrap();
+        let boot = bootstrap_controller(
+            model.rigid_inertia(),
+            model.i_t,
+            info.ts_s,
+            info.torque_max_nm,
+        )
+        .unwrap();
+        let mut progress = NoProgress;
+        let mut runner = Runner::new(
+            &mut axis,
+            &mut progress,
+            test_supervisor(info.torque_max_nm, 2.5, 0.05),
+            model.i_t,
+            start,
+            boot,
+            TEST_STOP_LIMITS,
+        )
+        .unwrap();
+        let clock = (20e-3 / info.ts_s).round() as u32;
+        let mut prbs = beltune_rt::prbs::Prbs::new(9, clock, 0.6).unwrap();
+        let n = (1.5 / info.ts_s) as usize;
+        let mut cmd = Vec::with_capacity(n);
+        for _ in 0..n {
+            cmd.push(
+                runner
+                    .step(0.1 + prbs.step(), None)
+                    .unwrap()
+                    .torque_command_nm,
+            );
+        }
+        let mean = |k: usize| cmd[n - k..].iter().sum::<f64>() / k as f64;
+        let second = mean(runner.history.len());
+        let last_20_ms = mean((RIGID_VELOCITY_WINDOW_S / info.ts_s).round() as usize);
+        assert!(
+            (last_20_ms - second).abs() > 0.2,
+            "the example needs one PRBS level at the end: {last_20_ms} vs {second}"
+        );
+        let preload = runner.recent_torque_nm();
+        assert!(
+            (preload - second).abs() < 1e-9,
+            "preload {preload} N m, mean of the last second {second} N m"
         );
     }
 
