@@ -26,8 +26,10 @@ const STATIC_ERROR_M: f64 = 100e-6;
 /// travel stop) and add 1.0 s (measured 21.1 s). The belt stiffness near
 /// the validation start (stage 5c: one more PRBS of three periods, for the
 /// compliance along the stroke the setpoint conversion uses) adds 3.2 s
-/// (measured 24.3 s), hence 25 s.
-const EXPERIMENT_TIME_GUARD_S: f64 = 25.0;
+/// (measured 24.3 s). The final approach of the three validation moves
+/// (about 1 mm crept at 2 mm/s each) adds 1.7 s (measured 26.0 s), hence
+/// 27 s.
+const EXPERIMENT_TIME_GUARD_S: f64 = 27.0;
 
 fn run(payload_kg: Option<f64>, tilt_deg: Option<f64>) -> (Plant, Commissioning) {
     let mut plant = rigs::builtin("egc70", payload_kg).unwrap();
@@ -146,7 +148,9 @@ fn egc70_vertical_meets_the_same_limits() {
 }
 
 /// A light cart excited with a generous fixed amplitude in a narrow window:
-/// the supervisor must stop it inside the window with a clear message.
+/// the commissioning must stop it inside the window with a clear message.
+/// Issue 12: the excitation's guard band ends the PRBS before the supervisor
+/// has to, and refuses the window as too short for the drift.
 #[test]
 fn excitation_that_would_leave_the_travel_window_is_stopped_inside_it() {
     let plant = rigs::builtin("sim-b", None).unwrap();
@@ -168,10 +172,13 @@ fn excitation_that_would_leave_the_travel_window_is_stopped_inside_it() {
     cfg.excitation.prbs_order = 7;
     cfg.excitation.clock_period_s = 512.0 * 100e-6;
     let err = commission(&mut axis, &ds, &cfg, &mut NoProgress).unwrap_err();
-    let Error::SafetyStop { reason } = &err else {
-        panic!("expected a safety stop, got {err}");
-    };
-    assert!(reason.contains("travel window"), "{reason}");
+    match &err {
+        Error::SafetyStop { reason } => assert!(reason.contains("travel window"), "{reason}"),
+        Error::Infeasible { reason } => {
+            assert!(reason.contains("does not fit its drift"), "{reason}")
+        }
+        _ => panic!("expected a stop or a refusal for the drift, got {err}"),
+    }
     let x = axis.cart_position_m();
     assert!(x > window.0 && x < window.1, "cart at {x} m");
     assert!(

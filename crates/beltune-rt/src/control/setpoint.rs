@@ -268,6 +268,43 @@ impl<T: Real> SetpointConversion<T> {
         }
     }
 
+    /// [`Self::motor_sample`] with the cart's Coulomb lead held in the
+    /// direction `hold` (+1 or -1; 0: as [`Self::motor_sample`]): where the
+    /// ramped sign `s(v)` of [`BeltProfile::coulomb_velocity_m_s`] falls
+    /// short of `hold`, the angle gets the missing `K F_c (hold - s) / i_t`.
+    /// The velocity and acceleration setpoints stay those of the ramp, so
+    /// the velocity loop still sees the lead's retreat while the move
+    /// slows (the form measured on the robustness study; a latched lead
+    /// with a consistent velocity setpoint was not measured with the final
+    /// creep as built). For the final approach of
+    /// [`crate::trajectory::Approach`] (issue 12): a cart dragged slowly
+    /// lags its motor by the stretch of its kinetic friction, and the held
+    /// lead stops it on the target. Cost: [`Self::motor_sample`] plus 6
+    /// multiplications and a division.
+    #[inline]
+    pub fn motor_sample_held(&self, cart: &CartSample<T>, hold: T) -> MotionSample<T> {
+        let mut m = self.motor_sample(cart);
+        let b = &self.belt;
+        if hold != T::ZERO && b.cart_coulomb_n != T::ZERO {
+            let r = cart.velocity_m_s / b.coulomb_velocity_m_s;
+            let s = if r > T::ONE {
+                T::ONE
+            } else if r < T::ZERO - T::ONE {
+                T::ZERO - T::ONE
+            } else if r < T::ZERO {
+                T::ZERO - r * r
+            } else {
+                r * r
+            };
+            let missing = hold - s;
+            if missing * hold > T::ZERO {
+                let k = b.compliance_at(cart.position_m);
+                m.angle_rad += k * b.cart_coulomb_n * missing * self.inv_i_t;
+            }
+        }
+        m
+    }
+
     /// The belt model the conversion uses (all zero when off).
     pub fn belt(&self) -> BeltProfile<T> {
         self.belt
@@ -503,6 +540,45 @@ mod tests {
         let conv = SetpointConversion::new(I_T, BeltStretch::Profile(profile)).unwrap();
         // t = 0.002 s: v = 0.0107 m/s, inside the Coulomb ramp
         assert_velocity_is_angle_derivative(&conv, &[0.002, 0.01, 0.2, 0.31], 1e-7, 1e-5);
+    }
+
+    /// Issue 12, the held Coulomb lead of the final approach: at rest (and
+    /// below the ramp's speed) the angle leads by the whole stretch of the
+    /// cart's kinetic friction in the held direction, so that a cart
+    /// dragged there from behind (belt force `F_s + F_c` at the edge of its
+    /// friction band: static equilibrium `xi = i_t phi - K (F_s + F_c)`)
+    /// rests on `xi_d`; beyond the ramp's speed, without a hold and against
+    /// it the conversion is unchanged; the velocity setpoint is never
+    /// changed.
+    #[test]
+    fn the_held_lead_rests_a_dragged_cart_on_its_target_issue_12() {
+        let profile = BeltProfile {
+            cart_coulomb_n: 15.0,
+            coulomb_velocity_m_s: 0.02,
+            ..SOFT_BELT
+        };
+        let conv = SetpointConversion::new(I_T, BeltStretch::Profile(profile)).unwrap();
+        let at = |x: f64, v: f64| CartSample {
+            position_m: x,
+            velocity_m_s: v,
+            ..CartSample::default()
+        };
+        for (x, hold) in [(0.1, 1.0), (0.45, 1.0), (0.3, -1.0)] {
+            let held = conv.motor_sample_held(&at(x, 0.0), hold);
+            let k = profile.compliance_at(x);
+            let force = profile.static_force_n + hold * profile.cart_coulomb_n;
+            let cart = I_T * held.angle_rad - k * force;
+            assert!((cart - x).abs() < 1e-12, "{x} {hold}: cart at {cart}");
+            let plain = conv.motor_sample(&at(x, 0.0));
+            assert_eq!(held.velocity_rad_s, plain.velocity_rad_s);
+            assert_eq!(conv.motor_sample_held(&at(x, 0.0), 0.0), plain);
+            // slower than the ramp in the held direction: topped up to full
+            let slow = conv.motor_sample_held(&at(x, hold * 0.01), hold);
+            let full = conv.motor_sample_held(&at(x, hold * 0.05), hold);
+            let lead = |m: MotionSample<f64>| I_T * m.angle_rad - x;
+            assert!((lead(slow) - lead(held)).abs() < 1e-12);
+            assert_eq!(full, conv.motor_sample(&at(x, hold * 0.05)));
+        }
     }
 
     #[test]

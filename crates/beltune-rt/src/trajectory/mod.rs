@@ -88,6 +88,7 @@
 //! SOFTWARE.
 //! ```
 
+mod approach;
 mod asymmetric;
 mod block;
 mod brake;
@@ -96,6 +97,8 @@ mod poly;
 mod profile;
 mod roots;
 mod step1;
+
+pub use approach::{Approach, ApproachConfig, CREEP_RAMP_S};
 
 use crate::error::{finite, positive};
 use crate::Error;

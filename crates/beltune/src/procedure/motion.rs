@@ -7,7 +7,7 @@ use beltune_rt::control::{
     BeltStretch, CartSample, CascadeConfig, CascadeController, MotionSample, Setpoint,
     SetpointConversion,
 };
-use beltune_rt::trajectory::{Limits, State, Trajectory};
+use beltune_rt::trajectory::{Approach, Limits, State, Trajectory};
 
 /// How the desired cart trajectory becomes the controller's motor setpoint.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -52,20 +52,59 @@ pub struct TrackRecord {
     pub trajectory_duration_s: f64,
 }
 
-/// Motor setpoint for the cart trajectory at `time_s` (relative to the encoder origin).
+/// A planned cart path [`track`] follows: a [`Trajectory`], or an
+/// [`Approach`] (a move with its slow final approach).
+pub trait Path {
+    /// The desired cart state at `t_s` after the start (m, m/s, m/s^2, m/s^3).
+    fn sample(&self, t_s: f64) -> beltune_rt::trajectory::Sample;
+    /// Duration of the path, s.
+    fn duration_s(&self) -> f64;
+    /// Direction whose Coulomb lead the setpoint holds at `t_s` (+1, -1,
+    /// or 0: none; [`SetpointConversion::motor_sample_held`]).
+    fn lead_hold(&self, _t_s: f64) -> f64 {
+        0.0
+    }
+}
+
+impl Path for Trajectory {
+    fn sample(&self, t_s: f64) -> beltune_rt::trajectory::Sample {
+        Trajectory::sample(self, t_s)
+    }
+    fn duration_s(&self) -> f64 {
+        Trajectory::duration_s(self)
+    }
+}
+
+impl Path for Approach {
+    fn sample(&self, t_s: f64) -> beltune_rt::trajectory::Sample {
+        Approach::sample(self, t_s)
+    }
+    fn duration_s(&self) -> f64 {
+        Approach::duration_s(self)
+    }
+    fn lead_hold(&self, t_s: f64) -> f64 {
+        Approach::lead_hold(self, t_s)
+    }
+}
+
+/// Motor setpoint for the cart path at `time_s` (relative to the encoder
+/// origin), with the path's held Coulomb lead.
 fn motor_sample(
     conv: &SetpointConversion<f64>,
     origin_m: f64,
-    t: &Trajectory,
+    t: &impl Path,
     time_s: f64,
 ) -> MotionSample<f64> {
     let s = t.sample(time_s);
-    conv.motor_sample(&CartSample {
-        position_m: s.position - origin_m,
-        velocity_m_s: s.velocity,
-        acceleration_m_s2: s.acceleration,
-        jerk_m_s3: s.jerk,
-    })
+    conv.motor_sample_held(
+        &CartSample {
+            position_m: s.position - origin_m,
+            velocity_m_s: s.velocity,
+            acceleration_m_s2: s.acceleration,
+            jerk_m_s3: s.jerk,
+        },
+        t.lead_hold(time_s),
+    )
 }
 
 /// Follow `traj` (cart coordinates) with a controller built from `config`, then
@@ -74,7 +113,7 @@ fn motor_sample(
 pub fn track(
     runner: &mut Runner,
     config: &CascadeConfig<f64>,
-    traj: &Trajectory,
+    traj: &impl Path,
     settle_s: f64,
     opts: TrackOptions,
 ) -> Result<TrackRecord> {

@@ -8,7 +8,7 @@ use super::result::MoveSummary;
 use super::runner::Runner;
 use crate::{Error, Result};
 use beltune_rt::control::CascadeConfig;
-use beltune_rt::trajectory::{Limits, State, Trajectory};
+use beltune_rt::trajectory::{Approach, ApproachConfig, Limits, State, Trajectory};
 
 /// Band within which the error counts as settled, m: the thesis' static
 /// positioning limit (chapter 5, 100 um). A narrower band (it was 50 um)
@@ -24,6 +24,44 @@ pub const APPROACH_DISTANCE_M: f64 = 0.015;
 /// Speed of the creep to the validation start, m/s.
 pub const CREEP_SPEED_M_S: f64 = 0.2;
 
+/// What the final approach creeps beyond twice the cart's friction band,
+/// m: the swing a soft position loop leaves the cart at the end of a fast
+/// move (up to 0.3 mm on the robustness study's soft, sticky axes), with
+/// room, so that the creep starts with the cart behind the target.
+pub const FINAL_APPROACH_MARGIN_M: f64 = 1e-3;
+/// Speed of the final approach, m/s: slow enough that the cart, dragged
+/// by the belt, stops without a swing of its own (`v / w_z`, 20 um at
+/// 15 Hz), fast enough that the creep of about 1.3 mm takes 0.7 s. With
+/// the margin above the creep lasts long enough for the cascade's
+/// integrator to settle the torque (issue 12).
+pub const FINAL_APPROACH_SPEED_M_S: f64 = 2e-3;
+
+/// The final approach of a move to `target_m` (cart coordinates of the
+/// runner, origin `origin_m`) for the belt model `belt`: where the setpoint
+/// leads the cart's Coulomb friction `F_c` (a [`BeltStretch::Profile`]),
+/// the last `2 K(target) F_c +` [`FINAL_APPROACH_MARGIN_M`] at
+/// [`FINAL_APPROACH_SPEED_M_S`]; `None` otherwise. Issue 12: the cart rests
+/// anywhere in its friction band `+-K F_c` (up to 0.18 mm on the study's
+/// soft, sticky axes) depending on how the fast move's end left it; dragged
+/// slowly from behind with the lead held, it stops at the target (static
+/// error median 19 -> 4 um, p99 71 -> 33 um on the 1000-plant study, seed 12).
+///
+/// [`BeltStretch::Profile`]: beltune_rt::control::BeltStretch::Profile
+pub fn final_approach(
+    belt: &beltune_rt::control::BeltStretch<f64>,
+    target_m: f64,
+    origin_m: f64,
+) -> Option<ApproachConfig> {
+    let beltune_rt::control::BeltStretch::Profile(p) = belt else {
+        return None;
+    };
+    let band = p.cart_coulomb_n * p.compliance_at(target_m - origin_m);
+    (band.is_finite() && band > 0.0).then_some(ApproachConfig {
+        distance_m: FINAL_APPROACH_MARGIN_M + 2.0 * band,
+        speed_m_s: FINAL_APPROACH_SPEED_M_S,
+    })
+}
+
 /// The validation move.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MoveSpec {
@@ -35,6 +73,10 @@ pub struct MoveSpec {
     pub limits: Limits,
     /// Time recorded after the trajectory ends, s.
     pub settle_s: f64,
+    /// End the move with the slow final approach of
+    /// [`final_approach`] where the setpoint leads the cart's Coulomb
+    /// friction (the trajectory is then the move and its creep).
+    pub final_approach: bool,
 }
 
 impl Default for MoveSpec {
@@ -46,6 +88,7 @@ impl Default for MoveSpec {
             target_m: 0.5,
             limits: table_a8_limits(),
             settle_s: 1.0,
+            final_approach: true,
         }
     }
 }
@@ -143,7 +186,8 @@ pub fn summarize(record: TrackRecord) -> Result<MoveResult> {
 }
 
 /// Bring the axis to `spec.start_m` with `positioning` (at moderate limits),
-/// then run the move with `controller` and summarize it.
+/// then run the move with `controller` (ending in its [`final_approach`]
+/// unless the spec turns it off) and summarize it.
 pub fn run_move(
     runner: &mut Runner,
     positioning: &CascadeConfig<f64>,
@@ -182,12 +226,17 @@ pub fn run_move(
     // position made the setpoint jump by the static stretch at its first
     // sample (issue 12: 0.35 mm on a soft 46 deg axis, the move's largest error).
     let start = cart_at_rest_m(runner.position_m(), runner.origin_m(), &opts.belt_stretch);
-    let traj = Trajectory::plan(
-        &State::at_rest(start),
-        &State::at_rest(spec.target_m),
-        &spec.limits,
-    )?;
-    let record = track(runner, controller, &traj, spec.settle_s, opts)?;
+    let approach = final_approach(&opts.belt_stretch, spec.target_m, runner.origin_m())
+        .filter(|_| spec.final_approach);
+    let path = match approach {
+        Some(a) => Approach::plan(&State::at_rest(start), spec.target_m, &spec.limits, &a)?,
+        None => Approach::direct(Trajectory::plan(
+            &State::at_rest(start),
+            &State::at_rest(spec.target_m),
+            &spec.limits,
+        )?),
+    };
+    let record = track(runner, controller, &path, spec.settle_s, opts)?;
     summarize(record)
 }
 

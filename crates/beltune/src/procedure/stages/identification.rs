@@ -96,7 +96,8 @@ const EXCITATION_ATTEMPTS: usize = 3;
 /// as far against the drift as the drift of the whole record extrapolates
 /// to (linear in time), so that it ends near where the first began; where
 /// the window is too short for that drift, or after
-/// [`EXCITATION_ATTEMPTS`] attempts, [`Error::Infeasible`].
+/// [`EXCITATION_ATTEMPTS`] attempts, the axis is stopped and the result is
+/// [`Error::Infeasible`].
 ///
 /// [`Runner::closed_loop_handover_clear`]: super::super::runner::Runner::closed_loop_handover_clear
 #[allow(clippy::too_many_arguments)]
@@ -161,10 +162,13 @@ fn excite(
             center * 1e3
         );
         if lo > hi || attempt == EXCITATION_ATTEMPTS {
+            // the axis still moves open loop: bring it to rest first
+            let rest = st.runner.stop()?;
             return Err(Error::Infeasible {
                 reason: format!(
-                    "{stage}: {why}; the travel window does not fit its drift of {:.0} mm over the whole excitation (check the holding torque, or lower the PRBS amplitude)",
-                    drift.abs() * 1e3
+                    "{stage}: {why}; the travel window does not fit its drift, extrapolated to {:.0} mm over the whole excitation (check the holding torque, or lower the PRBS amplitude); axis stopped at {:.1} mm",
+                    drift.abs() * 1e3,
+                    rest * 1e3
                 ),
             });
         }

@@ -316,6 +316,24 @@ pub fn validation_moves(
         validation.nonlinear.max_tracking_error_m * 1e3,
         validation.nonlinear.static_error_m * 1e6
     );
+    let approach = super::super::validation::final_approach(
+        &opts.belt_stretch,
+        planned.target_m,
+        st.runner.origin_m(),
+    )
+    .filter(|_| spec.final_approach);
+    let line = match approach {
+        Some(a) => line.replacen(
+            "; max cart error",
+            &format!(
+                ", the last {:.2} mm crept at {:.0} mm/s; max cart error",
+                a.distance_m * 1e3,
+                a.speed_m_s * 1e3
+            ),
+            1,
+        ),
+        None => line,
+    };
     st.finish("validation", line);
     let moves: [MoveResult; 3] = moves.try_into().map_err(|_| Error::TooShort {
         what: "validation moves".into(),
