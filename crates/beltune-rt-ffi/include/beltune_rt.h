@@ -478,6 +478,23 @@ int32_t bt_setpoint_convert(const BtSetpointConversion *conv,
                             const BtCartSample *cart,
                             BtMotionSample *out);
 
+/**
+ * The motor setpoint of a cart sample into `out` with the cart's Coulomb
+ * lead held in the direction `hold` (+1 or -1; 0: as
+ * [`bt_setpoint_convert`]; NaN is refused): for the final approach of a move (issue 12),
+ * `hold` is the move's direction from the middle of the main move on
+ * (`beltune_rt::trajectory::Approach::lead_hold`; the exported
+ * `FINAL_APPROACH_DISTANCE_M` and `FINAL_APPROACH_SPEED_M_S` give the
+ * creep).
+ *
+ * # Safety
+ * All pointers are null or valid.
+ */
+int32_t bt_setpoint_convert_held(const BtSetpointConversion *conv,
+                                 const BtCartSample *cart,
+                                 double hold,
+                                 BtMotionSample *out);
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif  // __cplusplus

@@ -684,9 +684,113 @@ pub unsafe extern "C" fn bt_setpoint_convert(
     BT_OK
 }
 
+/// The motor setpoint of a cart sample into `out` with the cart's Coulomb
+/// lead held in the direction `hold` (+1 or -1; 0: as
+/// [`bt_setpoint_convert`]; NaN is refused): for the final approach of a move (issue 12),
+/// `hold` is the move's direction from the middle of the main move on
+/// (`beltune_rt::trajectory::Approach::lead_hold`; the exported
+/// `FINAL_APPROACH_DISTANCE_M` and `FINAL_APPROACH_SPEED_M_S` give the
+/// creep).
+///
+/// # Safety
+/// All pointers are null or valid.
+#[no_mangle]
+pub unsafe extern "C" fn bt_setpoint_convert_held(
+    conv: *const BtSetpointConversion,
+    cart: *const BtCartSample,
+    hold: f64,
+    out: *mut BtMotionSample,
+) -> i32 {
+    // SAFETY: null or valid, by the contract.
+    let c = match unsafe { setpoint_ref(conv) } {
+        Ok(c) => c,
+        Err(e) => return e,
+    };
+    // SAFETY: null or valid, by the contract.
+    let (Some(cart), Some(out)) = (unsafe { cart.as_ref() }, unsafe { out.as_mut() }) else {
+        return BT_ERR_NULL;
+    };
+    let hold = if hold > 0.0 {
+        1.0
+    } else if hold < 0.0 {
+        -1.0
+    } else if hold == 0.0 {
+        0.0
+    } else {
+        return BT_ERR_INVALID;
+    };
+    let m = c.motor_sample_held(
+        &CartSample {
+            position_m: cart.position_m,
+            velocity_m_s: cart.velocity_m_s,
+            acceleration_m_s2: cart.acceleration_m_s2,
+            jerk_m_s3: cart.jerk_m_s3,
+        },
+        hold,
+    );
+    *out = BtMotionSample {
+        angle_rad: m.angle_rad,
+        velocity_rad_s: m.velocity_rad_s,
+        acceleration_rad_s2: m.acceleration_rad_s2,
+    };
+    BT_OK
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `bt_setpoint_convert_held` is the Rust `motor_sample_held`: at rest
+    /// the angle leads by the cart's Coulomb stretch `F_c / c` in the held
+    /// direction, with hold 0 it is `bt_setpoint_convert`; a non-finite hold
+    /// and null pointers are refused.
+    #[test]
+    fn the_held_conversion_leads_by_the_coulomb_stretch_at_rest() {
+        let cfg = BtSetpointConfig {
+            i_t_m_per_rad: 0.0124,
+            belt_stretch: true,
+            m_c_kg: 10.0,
+            c_n_per_m: 200e3,
+            cart_coulomb_n: 20.0,
+            coulomb_velocity_m_s: 0.02,
+            ..Default::default()
+        };
+        let mut conv = BtSetpointConversion {
+            magic: 0,
+            storage: [0; BT_SETPOINT_WORDS],
+        };
+        let cart = BtCartSample {
+            position_m: 0.3,
+            ..Default::default()
+        };
+        let (mut held, mut plain) = (BtMotionSample::default(), BtMotionSample::default());
+        // SAFETY: valid pointers or null.
+        unsafe {
+            assert_eq!(bt_setpoint_init(&mut conv, &cfg), BT_OK);
+            assert_eq!(bt_setpoint_convert(&conv, &cart, &mut plain), BT_OK);
+            for hold in [1.0, -1.0] {
+                assert_eq!(
+                    bt_setpoint_convert_held(&conv, &cart, hold, &mut held),
+                    BT_OK
+                );
+                let lead = (held.angle_rad - plain.angle_rad) * 0.0124;
+                assert!((lead - hold * 20.0 / 200e3).abs() < 1e-12, "{lead}");
+            }
+            assert_eq!(
+                bt_setpoint_convert_held(&conv, &cart, 0.0, &mut held),
+                BT_OK
+            );
+            assert_eq!(held.angle_rad, plain.angle_rad);
+            assert_eq!(
+                bt_setpoint_convert_held(&conv, &cart, f64::NAN, &mut held),
+                BT_ERR_INVALID
+            );
+            assert_eq!(
+                bt_setpoint_convert_held(core::ptr::null(), &cart, 1.0, &mut held),
+                BT_ERR_NULL
+            );
+        }
+    }
 
     #[test]
     fn null_and_uninitialized_are_errors_not_crashes() {

@@ -113,6 +113,14 @@ pub fn values(file: &ControllerFile) -> Vec<(String, Value)> {
         ),
         ("cart_coulomb_n".into(), Real(s.cart_coulomb_n)),
         ("coulomb_velocity_m_s".into(), Real(s.coulomb_velocity_m_s)),
+        (
+            "final_approach_distance_m".into(),
+            Real(s.final_approach_distance_m),
+        ),
+        (
+            "final_approach_speed_m_s".into(),
+            Real(s.final_approach_speed_m_s),
+        ),
         ("t_r_s".into(), Real(file.velocity_filter.t_r_s)),
         // drive-menu form (information)
         (

@@ -190,10 +190,25 @@ pub struct SetpointSection {
     /// Cart speed over which the Coulomb lead ramps in and out, m/s.
     #[serde(default = "default_coulomb_velocity")]
     pub coulomb_velocity_m_s: f64,
+    /// Distance of the validated move's final approach, m (0: none;
+    /// [`super::validation::final_approach`]): the last part of a move,
+    /// crept at [`Self::final_approach_speed_m_s`] with the cart's Coulomb
+    /// lead held in the move's direction (`beltune_rt::trajectory::Approach`,
+    /// `SetpointConversion::motor_sample_held`). It is `2 F_c / c + 1 mm`
+    /// at the stiffness `c` of [`Self::stiffness_position_m`].
+    #[serde(default)]
+    pub final_approach_distance_m: f64,
+    /// Speed of the final approach, m/s.
+    #[serde(default = "default_final_approach_speed")]
+    pub final_approach_speed_m_s: f64,
 }
 
 fn default_coulomb_velocity() -> f64 {
     super::result::CART_COULOMB_VELOCITY_M_S
+}
+
+fn default_final_approach_speed() -> f64 {
+    super::validation::FINAL_APPROACH_SPEED_M_S
 }
 
 impl SetpointSection {
@@ -314,6 +329,11 @@ impl ControllerFile {
                 cart_viscous_n_s_per_m: friction.cart_viscous_n_s_per_m,
                 cart_coulomb_n: friction.cart_coulomb_n,
                 coulomb_velocity_m_s: super::result::CART_COULOMB_VELOCITY_M_S,
+                final_approach_distance_m: super::validation::final_approach_for_band(
+                    friction.cart_coulomb_n / c_setpoint,
+                )
+                .map_or(0.0, |a| a.distance_m),
+                final_approach_speed_m_s: super::validation::FINAL_APPROACH_SPEED_M_S,
             },
             drive_form: DriveForm::of(des),
         };
@@ -640,6 +660,10 @@ mod tests {
         .unwrap();
         let back = ControllerFile::parse(&file.to_toml().unwrap(), "c.toml").unwrap();
         assert_eq!(back.setpoint, file.setpoint);
+        // the final approach at the target's stiffness (250 kN/m): 2 F_c / c + 1 mm
+        let approach = 1e-3 + 2.0 * 6.4 / 250e3;
+        assert!((back.setpoint.final_approach_distance_m - approach).abs() < 1e-15);
+        assert_eq!(back.setpoint.final_approach_speed_m_s, 2e-3);
         let conv = back.setpoint_conversion().unwrap();
         let force = 0.31 / 0.0124141;
         let at_rest = |x: f64| {

@@ -55,9 +55,16 @@ pub fn final_approach(
     let beltune_rt::control::BeltStretch::Profile(p) = belt else {
         return None;
     };
-    let band = p.cart_coulomb_n * p.compliance_at(target_m - origin_m);
-    (band.is_finite() && band > 0.0).then_some(ApproachConfig {
-        distance_m: FINAL_APPROACH_MARGIN_M + 2.0 * band,
+    final_approach_for_band(p.cart_coulomb_n * p.compliance_at(target_m - origin_m))
+}
+
+/// The final approach for a cart whose Coulomb friction stretches the belt
+/// by `band_m` (`F_c / c` at the target, m): `2 band +`
+/// [`FINAL_APPROACH_MARGIN_M`] at [`FINAL_APPROACH_SPEED_M_S`]; `None` for
+/// no (or a non-finite) band.
+pub fn final_approach_for_band(band_m: f64) -> Option<ApproachConfig> {
+    (band_m.is_finite() && band_m > 0.0).then_some(ApproachConfig {
+        distance_m: FINAL_APPROACH_MARGIN_M + 2.0 * band_m,
         speed_m_s: FINAL_APPROACH_SPEED_M_S,
     })
 }
