@@ -661,33 +661,15 @@ pub unsafe extern "C" fn bt_setpoint_convert(
     cart: *const BtCartSample,
     out: *mut BtMotionSample,
 ) -> i32 {
-    // SAFETY: null or valid, by the contract.
-    let c = match unsafe { setpoint_ref(conv) } {
-        Ok(c) => c,
-        Err(e) => return e,
-    };
-    // SAFETY: null or valid, by the contract.
-    let (Some(cart), Some(out)) = (unsafe { cart.as_ref() }, unsafe { out.as_mut() }) else {
-        return BT_ERR_NULL;
-    };
-    let m = c.motor_sample(&CartSample {
-        position_m: cart.position_m,
-        velocity_m_s: cart.velocity_m_s,
-        acceleration_m_s2: cart.acceleration_m_s2,
-        jerk_m_s3: cart.jerk_m_s3,
-    });
-    *out = BtMotionSample {
-        angle_rad: m.angle_rad,
-        velocity_rad_s: m.velocity_rad_s,
-        acceleration_rad_s2: m.acceleration_rad_s2,
-    };
-    BT_OK
+    // SAFETY: the same contract; without a hold the held conversion is this one.
+    unsafe { bt_setpoint_convert_held(conv, cart, 0.0, out) }
 }
 
 /// The motor setpoint of a cart sample into `out` with the cart's Coulomb
 /// lead held in the direction `hold` (+1 or -1; 0: as
-/// [`bt_setpoint_convert`]; NaN is refused): for the final approach of a move (issue 12),
-/// `hold` is the move's direction from the middle of the main move on
+/// [`bt_setpoint_convert`]; NaN is refused): for the final approach of a
+/// move (issue 12), `hold` is the move's direction from the middle of the
+/// main move on
 /// (`beltune_rt::trajectory::Approach::lead_hold`; the exported
 /// `FINAL_APPROACH_DISTANCE_M` and `FINAL_APPROACH_SPEED_M_S` give the
 /// creep).
