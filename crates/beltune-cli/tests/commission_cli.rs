@@ -149,6 +149,47 @@ fn safety_stop_exits_non_zero_and_writes_only_its_diagnostic() {
         .args([
             "commission",
             "--plant",
+            "egc70",
+            "--following-error-max",
+            "0.003",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("safety stop") && err.contains("following error"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
+    assert!(
+        files_in(&out).is_empty(),
+        "left behind: {:?}",
+        files_in(&out)
+    );
+    // Only the diagnostic, beside the output folder (issue 16; tests/cli_output.rs reads it).
+    let mut left = files_in(&dir.join("out-safety-stop"));
+    left.sort();
+    assert_eq!(left, ["safety-stop.csv", "safety-stop.json"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 12: a light cart excited with a generous fixed amplitude in a
+/// narrow window (until then a travel stop during the excitation): the
+/// excitation's guard band ends it, the axis is stopped inside the window,
+/// and the window is refused for the drift in one line, status 4, nothing
+/// written.
+#[test]
+fn an_excitation_drifting_out_of_a_narrow_window_is_refused_in_one_line() {
+    let dir = temp_dir("drift");
+    let out = dir.join("out");
+    let o = beltune()
+        .args([
+            "commission",
+            "--plant",
             "sim-b",
             "--excitation-amplitude",
             "1.5",
@@ -166,10 +207,10 @@ fn safety_stop_exits_non_zero_and_writes_only_its_diagnostic() {
         .arg(&out)
         .output()
         .unwrap();
-    assert!(!o.status.success());
+    assert_eq!(o.status.code(), Some(4));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("safety stop") && err.contains("travel window"),
+        err.contains("does not fit its drift") && err.contains("axis stopped at"),
         "{err}"
     );
     assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
@@ -178,10 +219,6 @@ fn safety_stop_exits_non_zero_and_writes_only_its_diagnostic() {
         "left behind: {:?}",
         files_in(&out)
     );
-    // Only the diagnostic, beside the output folder (issue 16; tests/cli_output.rs reads it).
-    let mut left = files_in(&dir.join("out-safety-stop"));
-    left.sort();
-    assert_eq!(left, ["safety-stop.csv", "safety-stop.json"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
