@@ -66,16 +66,18 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
     // antiresonance: the deepest interior local minimum below the resonance;
     // a dip narrower than the running median (two lines on a short PRBS
     // period) survives only on the raw lines, where it must be clearly
-    // deeper than its smoothed surroundings to count (issue 12: seed 13
-    // plant #23, a sticky, very viscous axis, dip at 14.7 Hz on two lines).
+    // deeper than its neighbours to count (issue 12: seed 13 plant #23, a
+    // sticky, very viscous axis, dip at 14.7 Hz on two lines; seed 14 #378,
+    // 24.6 kg on a soft belt, at 7.3 Hz).
     let local_min = |v: &[f64], k: usize| v[k] < v[k - 1] && v[k] <= v[k + 1];
     let dip = (1..peak)
         .filter(|&k| local_min(&comp, k))
         .min_by(|&a, &b| comp[a].total_cmp(&comp[b]))
         .or_else(|| {
+            let depth = |k: usize| raw[k] / (0.5 * (raw[k - 1] + raw[k + 1]));
             (1..peak)
-                .filter(|&k| local_min(&raw, k) && raw[k] < NARROW_DIP_DEPTH * comp[k])
-                .min_by(|&a, &b| (raw[a] / comp[a]).total_cmp(&(raw[b] / comp[b])))
+                .filter(|&k| local_min(&raw, k) && depth(k) < NARROW_DIP_DEPTH)
+                .min_by(|&a, &b| depth(a).total_cmp(&depth(b)))
         })
         .ok_or_else(|| Error::FitFailed {
             reason: "no antiresonance dip below the resonance inside the usable band".into(),
@@ -132,10 +134,10 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
 const MEDIAN_HALF_WIDTH: usize = 2;
 
 /// A raw line counts as a narrow antiresonance (one the running median
-/// erased) only below this fraction of the smoothed magnitude there. Seed 13
-/// plant #23's dip line lay at 0.36 of it; a single line's relative scatter
-/// at coherence 0.9 is about a quarter (one sigma), so a factor of two is
-/// not noise.
+/// erased) only below this fraction of the mean of its two neighbours. The
+/// dip lines of seed 13 plant #23 and seed 14 plant #378 lay at 0.41 and
+/// 0.47 of it; a single line's relative scatter at coherence 0.9 is about a
+/// quarter (one sigma), so a factor of two is not noise.
 const NARROW_DIP_DEPTH: f64 = 0.5;
 
 /// Lines whose input power is more than this far below the strongest line
