@@ -143,6 +143,21 @@ fn egc70_reuses_the_identified_stiffness_at_its_target_issue_12() {
     assert!(run.verdict.meets_limits, "{:?}", run.verdict);
 }
 
+/// Plant `index` of the robustness study with seed `seed`, commissioned as
+/// `beltune montecarlo` does; it must succeed.
+fn study_success(seed: u64, index: u64) -> beltune::study::Outcome {
+    use beltune::study::{run_plant, Class, Ranges};
+    let o = run_plant(
+        seed,
+        index,
+        &Ranges::default(),
+        &CommissioningConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(o.class, Class::Success, "{seed}/#{index}: {}", o.message);
+    o
+}
+
 /// Seed 13 plant #23 (16.3 kg on a +44 deg slope, belt x0.70, viscous
 /// x2.69, Coulomb x2.77) and seed 14 plant #378 (24.6 kg on +16 deg, belt
 /// x0.51, Coulomb x2.87) failed "during identification (open loop): fit
@@ -154,16 +169,8 @@ fn egc70_reuses_the_identified_stiffness_at_its_target_issue_12() {
 /// issue's 2 %.
 #[test]
 fn a_narrow_antiresonance_dip_is_found_issue_12() {
-    use beltune::study::{run_plant, Class, Ranges};
     for (seed, index) in [(13, 23), (14, 378)] {
-        let o = run_plant(
-            seed,
-            index,
-            &Ranges::default(),
-            &CommissioningConfig::default(),
-        )
-        .unwrap();
-        assert_eq!(o.class, Class::Success, "{seed}/#{index}: {}", o.message);
+        let o = study_success(seed, index);
         let f_z_error = o.f_z_error.expect("a success identifies f_z");
         assert!(
             f_z_error < 0.02,
@@ -186,16 +193,8 @@ const STATIC_LIMIT_M: f64 = 100e-6;
 /// 2 um.
 #[test]
 fn the_final_approach_rests_sticky_carts_on_their_targets_issue_12() {
-    use beltune::study::{run_plant, Class, Ranges};
     for (seed, index) in [(12, 792), (13, 345), (13, 411)] {
-        let o = run_plant(
-            seed,
-            index,
-            &Ranges::default(),
-            &CommissioningConfig::default(),
-        )
-        .unwrap();
-        assert_eq!(o.class, Class::Success, "{seed}/#{index}: {}", o.message);
+        let o = study_success(seed, index);
         let e = o.static_error_m.expect("a success has a static error");
         assert!(e < STATIC_LIMIT_M, "{seed}/#{index}: {:.0} um", e * 1e6);
     }
