@@ -86,6 +86,19 @@ pub struct MoveSpec {
     pub final_approach: bool,
 }
 
+impl MoveSpec {
+    /// The final approach this move ends in for the belt model `belt`
+    /// (origin `origin_m`): [`final_approach`] at the target, `None` where
+    /// [`Self::final_approach`] is off.
+    pub fn approach(
+        &self,
+        belt: &beltune_rt::control::BeltStretch<f64>,
+        origin_m: f64,
+    ) -> Option<ApproachConfig> {
+        final_approach(belt, self.target_m, origin_m).filter(|_| self.final_approach)
+    }
+}
+
 impl Default for MoveSpec {
     /// The thesis move 0 -> 0.5 m with Table A.8: j 40 m/s^3, a 45 m/s^2,
     /// v 5 m/s, positions -0.01 .. 0.57 m; 1.0 s recorded after the move.
@@ -233,9 +246,7 @@ pub fn run_move(
     // position made the setpoint jump by the static stretch at its first
     // sample (issue 12: 0.35 mm on a soft 46 deg axis, the move's largest error).
     let start = cart_at_rest_m(runner.position_m(), runner.origin_m(), &opts.belt_stretch);
-    let approach = final_approach(&opts.belt_stretch, spec.target_m, runner.origin_m())
-        .filter(|_| spec.final_approach);
-    let path = match approach {
+    let path = match spec.approach(&opts.belt_stretch, runner.origin_m()) {
         Some(a) => Approach::plan(&State::at_rest(start), spec.target_m, &spec.limits, &a)?,
         None => Approach::direct(Trajectory::plan(
             &State::at_rest(start),

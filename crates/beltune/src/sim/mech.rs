@@ -42,7 +42,6 @@ pub(crate) struct Mech<const N: usize, const S: usize> {
     pub d: [f64; S],
 }
 
-#[inline(always)]
 /// The velocity-level (Moreau) Coulomb step of one body (module docs):
 /// from `(q0, v0)` at the start of a step of `h` s, the smooth step's end
 /// `(q, v_f)` and the largest velocity change friction can make in it,
@@ -51,6 +50,7 @@ pub(crate) struct Mech<const N: usize, const S: usize> {
 /// was at rest) when `|v_f| <= dv_max`, else slides with `v_f - sign(v_f)
 /// dv_max`; `dv_max <= 0` (no friction) leaves the smooth step as it is.
 /// Shared by the simulator and the friction-aware fit's cart observer.
+#[inline]
 pub(crate) fn coulomb_step(q0: f64, v0: f64, q: f64, v_f: f64, dv_max: f64, h: f64) -> (f64, f64) {
     if dv_max <= 0.0 {
         (q, v_f)
@@ -62,6 +62,7 @@ pub(crate) fn coulomb_step(q0: f64, v0: f64, q: f64, v_f: f64, dv_max: f64, h: f
     }
 }
 
+#[inline(always)]
 fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
     let mut s = 0.0;
     for i in 0..N {

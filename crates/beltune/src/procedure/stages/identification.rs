@@ -114,14 +114,15 @@ fn excite(
     ex: &ExcitationConfig,
 ) -> Result<Excitation> {
     let ts = st.runner.info().ts_s;
-    let clock = ex.clock_samples(ts);
-    let period = Prbs::new(order, clock, amplitude_nm)?.period_samples() as usize;
+    // each attempt runs a copy of the same sequence from its start
+    let sequence = Prbs::new(order, ex.clock_samples(ts), amplitude_nm)?;
+    let period = sequence.period_samples() as usize;
     let n = period * periods;
     st.start(stage, n as u64);
     let mut center = center_m;
     let mut attempt = 1;
     loop {
-        let mut prbs = Prbs::new(order, clock, amplitude_nm)?;
+        let mut prbs = sequence;
         move_to(st.runner, hold, center, limits, 0.05)?;
         let mut e = Excitation {
             t_start_s: st.runner.busy_time_s(),

@@ -294,8 +294,17 @@ pub fn validation_moves(
         linear: moves[1].summary.clone(),
         nonlinear: moves[2].summary.clone(),
     };
+    let approach = spec
+        .approach(&opts.belt_stretch, st.runner.origin_m())
+        .map_or(String::new(), |a| {
+            format!(
+                ", the last {:.2} mm crept at {:.0} mm/s",
+                a.distance_m * 1e3,
+                a.speed_m_s * 1e3
+            )
+        });
     let line = format!(
-        "{}; max cart error: none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm; static (nonlinear) {:.1} um",
+        "{}{approach}; max cart error: none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm; static (nonlinear) {:.1} um",
         if planned.reduced {
             format!(
                 "the fastest move the axis can do {:.0} -> {:.0} mm (v <= {:.2} m/s, a <= {:.2} m/s^2; Table A.8's is beyond its torque)",
@@ -316,24 +325,6 @@ pub fn validation_moves(
         validation.nonlinear.max_tracking_error_m * 1e3,
         validation.nonlinear.static_error_m * 1e6
     );
-    let approach = super::super::validation::final_approach(
-        &opts.belt_stretch,
-        planned.target_m,
-        st.runner.origin_m(),
-    )
-    .filter(|_| spec.final_approach);
-    let line = match approach {
-        Some(a) => line.replacen(
-            "; max cart error",
-            &format!(
-                ", the last {:.2} mm crept at {:.0} mm/s; max cart error",
-                a.distance_m * 1e3,
-                a.speed_m_s * 1e3
-            ),
-            1,
-        ),
-        None => line,
-    };
     st.finish("validation", line);
     let moves: [MoveResult; 3] = moves.try_into().map_err(|_| Error::TooShort {
         what: "validation moves".into(),
