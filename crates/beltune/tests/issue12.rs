@@ -180,6 +180,23 @@ fn a_narrow_antiresonance_dip_is_found_issue_12() {
     }
 }
 
+/// Seed 14 plant #994 (24.0 kg on +23 deg, belt x0.52, Coulomb x2.89, noise
+/// x4.6) failed "fit failed: the fit ran to the edge of its range: `m_c`
+/// went a factor 10 away": the sticking cart's friction hid the (about 12 Hz)
+/// antiresonance, and a 2 % wiggle on the broad 86 Hz resonance's flank was
+/// taken for it (start m_c 3.1 kg of 25). A dip now counts only below half
+/// the peak of `|G| w^2`, and without one the antiresonance is read from the
+/// resonance's rising flank (`ident::features`). The plant commissions with
+/// f_z and m_c within the issue's 2 % and 5 % (measured 0.7 % and 1.6 %).
+#[test]
+fn a_hidden_antiresonance_is_read_from_the_resonance_flank_issue_12() {
+    let o = study_success(14, 994);
+    let f_z_error = o.f_z_error.expect("a success identifies f_z");
+    let m_c_error = o.m_c_error.expect("a success identifies m_c");
+    assert!(f_z_error < 0.02, "f_z error {:.1} %", f_z_error * 100.0);
+    assert!(m_c_error < 0.05, "m_c error {:.1} %", m_c_error * 100.0);
+}
+
 /// The thesis' limit of the static error (chapter 5), m.
 const STATIC_LIMIT_M: f64 = 100e-6;
 

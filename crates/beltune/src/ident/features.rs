@@ -70,32 +70,51 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
     // sticky, very viscous axis, dip at 14.7 Hz on two lines; seed 14 #378,
     // 24.6 kg on a soft belt, at 7.3 Hz).
     let local_min = |v: &[f64], k: usize| v[k] < v[k - 1] && v[k] <= v[k + 1];
+    // A dip at the foot of the resonance is a wiggle of its flank, not an
+    // antiresonance: (2.42) puts |G| w^2 at w_z far below its peak (issue 12:
+    // seed 14 #994, a 2 % wiggle 2 Hz below a broad 86 Hz peak).
+    let deep = |k: usize| comp[k] < DIP_BELOW_PEAK * comp[peak];
     let dip = (1..peak)
-        .filter(|&k| local_min(&comp, k))
+        .filter(|&k| local_min(&comp, k) && deep(k))
         .min_by(|&a, &b| comp[a].total_cmp(&comp[b]))
         .or_else(|| {
             let depth = |k: usize| raw[k] / (0.5 * (raw[k - 1] + raw[k + 1]));
             (1..peak)
-                .filter(|&k| local_min(&raw, k) && depth(k) < NARROW_DIP_DEPTH)
+                .filter(|&k| local_min(&raw, k) && depth(k) < NARROW_DIP_DEPTH && deep(k))
                 .min_by(|&a, &b| depth(a).total_cmp(&depth(b)))
-        })
-        .ok_or_else(|| Error::FitFailed {
-            reason: "no antiresonance dip below the resonance inside the usable band".into(),
-        })?;
-    // The antiresonance is low in frequency where the response is strong: its
-    // sharp dip is refined on the raw lines next to the smoothed minimum.
-    let dip = (dip.saturating_sub(MEDIAN_HALF_WIDTH).max(1)
-        ..(dip + MEDIAN_HALF_WIDTH + 1).min(peak))
-        .min_by(|&a, &b| raw[a].total_cmp(&raw[b]))
-        .unwrap_or(dip);
+        });
     let f = |k: usize| frf.freq_hz[idx[k]];
+    let (dip, antiresonance_hz) = match dip {
+        Some(dip) => {
+            // The antiresonance is low in frequency where the response is
+            // strong: its sharp dip is refined on the raw lines next to the
+            // smoothed minimum.
+            let dip = (dip.saturating_sub(MEDIAN_HALF_WIDTH).max(1)
+                ..(dip + MEDIAN_HALF_WIDTH + 1).min(peak))
+                .min_by(|&a, &b| raw[a].total_cmp(&raw[b]))
+                .unwrap_or(dip);
+            let hz = parabolic_vertex(
+                [f(dip - 1), f(dip), f(dip + 1)],
+                [raw[dip - 1].ln(), raw[dip].ln(), raw[dip + 1].ln()],
+            );
+            (dip, hz)
+        }
+        None => {
+            let hz = flank_antiresonance_hz(frf, &idx, &raw, f(peak)).ok_or_else(|| {
+                Error::FitFailed {
+                    reason: "no antiresonance dip below the resonance inside the usable band"
+                        .into(),
+                }
+            })?;
+            let nearest = (1..peak)
+                .min_by(|&a, &b| (f(a) - hz).abs().total_cmp(&(f(b) - hz).abs()))
+                .unwrap_or(1);
+            (nearest, hz)
+        }
+    };
     let resonance_hz = parabolic_vertex(
         [f(peak - 1), f(peak), f(peak + 1)],
         [comp[peak - 1].ln(), comp[peak].ln(), comp[peak + 1].ln()],
-    );
-    let antiresonance_hz = parabolic_vertex(
-        [f(dip - 1), f(dip), f(dip + 1)],
-        [raw[dip - 1].ln(), raw[dip].ln(), raw[dip + 1].ln()],
     );
 
     // rigid-body asymptote from the lines below 0.7 f_z (at least those below f_z)
@@ -139,6 +158,82 @@ const MEDIAN_HALF_WIDTH: usize = 2;
 /// 0.47 of it; a single line's relative scatter at coherence 0.9 is about a
 /// quarter (one sigma), so a factor of two is not noise.
 const NARROW_DIP_DEPTH: f64 = 0.5;
+
+/// A local minimum of `|G| w^2` counts as the antiresonance only below this
+/// fraction of the resonance peak. Undamped, (2.42) puts it at zero; with
+/// modal damping `zeta_z`, `zeta_r` the peak over the dip is
+/// `kappa^2 / (4 zeta_z zeta_r (1 + kappa))` (inertia ratio `kappa`, (2.46)),
+/// 3.7 for egc70's empty cart (`kappa` about 2) at damping 0.3 on both modes
+/// and 8 at 0.2; the factor of 2 asked here fails only at `kappa` near 2
+/// with damping above 0.4. The flank wiggle of seed 14 #994 lay at 0.98.
+const DIP_BELOW_PEAK: f64 = 0.5;
+
+/// The flank of the resonance the antiresonance is read from when the FRF
+/// shows no dip, as fractions of the resonance frequency: far enough above a
+/// low antiresonance that friction does not distort the lines, far enough
+/// below the resonance that its damping does not (seed 14 #994: the lines of
+/// 0.15-0.5 f_r gave 10.0 Hz, of 0.1-0.5 9.8 Hz, of 0.15-0.4 9.8 Hz).
+const FLANK_BAND: (f64, f64) = (0.15, 0.5);
+
+/// The band above the resonance `|G| w^2` gives `1/Theta_e` in (fractions
+/// of the resonance frequency); the resonance's damping is negligible there.
+const HIGH_BAND: (f64, f64) = (2.0, 5.0);
+
+/// Fewest lines in each of [`FLANK_BAND`] and [`HIGH_BAND`] for the flank
+/// estimate.
+const FLANK_MIN_LINES: usize = 3;
+
+/// The antiresonance of an FRF that shows no dip below its resonance, read
+/// from the resonance's rising flank, Hz; `None` where the band lacks lines.
+///
+/// A heavy cart on a soft belt with much Coulomb friction puts the
+/// antiresonance at a few Hz, where the cart sticks for part of each PRBS
+/// period and friction, not the belt, shapes the lines (issue 12: seed 14
+/// #994, 24 kg, Coulomb x2.9, its dip 0.7 of its neighbours, level with the
+/// friction's scatter). Above the dip the undamped two-mass shape of (2.42),
+/// written with `w_r` and `Theta_e` (`J = Theta_e (w_r/w_z)^2`), is
+/// `|G| w^2 = (w^2 - w_z^2) / (Theta_e |w_r^2 - w^2|)`, linear in
+/// `(1/Theta_e, w_z^2)`: the lines far above the resonance give `Theta_e`
+/// (for a given `w_z`), the lines of the flank give `w_z^2` (for a given
+/// `Theta_e`); a few alternations of both medians converge (they are nearly
+/// decoupled: `w_z^2` is a small correction above the resonance).
+fn flank_antiresonance_hz(frf: &Frf, idx: &[usize], raw: &[f64], resonance_hz: f64) -> Option<f64> {
+    let in_band = |band: (f64, f64)| -> Vec<(f64, f64)> {
+        idx.iter()
+            .zip(raw)
+            .filter(|(&i, _)| {
+                let r = frf.freq_hz[i] / resonance_hz;
+                r > band.0 && r < band.1
+            })
+            .map(|(&i, &m)| (frf.omega_rad_s(i).powi(2), m))
+            .collect()
+    };
+    let (flank, high) = (in_band(FLANK_BAND), in_band(HIGH_BAND));
+    if flank.len() < FLANK_MIN_LINES || high.len() < FLANK_MIN_LINES {
+        return None;
+    }
+    let wr2 = (2.0 * PI * resonance_hz).powi(2);
+    let mut wz2 = 0.0;
+    for _ in 0..FLANK_ITERATIONS {
+        let theta_e = median(high.iter().map(|&(w2, m)| (w2 - wz2) / (m * (w2 - wr2))));
+        wz2 = median(flank.iter().map(|&(w2, m)| w2 - m * theta_e * (wr2 - w2)));
+        if wz2.is_nan() || wz2 <= 0.0 {
+            return None;
+        }
+    }
+    Some(wz2.sqrt() / (2.0 * PI))
+}
+
+/// Alternations of the flank estimate; the second already agrees with the
+/// fifth to 0.1 % on seed 14 #994.
+const FLANK_ITERATIONS: usize = 5;
+
+/// Median of a non-empty sequence (the upper one of an even count).
+fn median(x: impl Iterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = x.collect();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
 
 /// Lines whose input power is more than this far below the strongest line
 /// are left out of the features: there the response is mostly measurement
@@ -190,11 +285,99 @@ fn parabolic_vertex(x: [f64; 3], y: [f64; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::TwoMassParams;
 
     #[test]
     fn parabola_vertex_is_exact_for_a_parabola() {
         let p = |x: f64| -(x - 2.3).powi(2) + 4.0;
         let v = parabolic_vertex([2.0, 2.5, 3.5], [p(2.0), p(2.5), p(3.5)]);
         assert!((v - 2.3).abs() < 1e-12);
+    }
+
+    /// An FRF of the analytic two-mass model (2.42) on the PRBS line grid
+    /// (1.2236 Hz to 530 Hz), its lines below `fill_below_hz` replaced by a
+    /// level rising from a third of the rigid-body one, scattered by 10 %
+    /// line to line (a sticking cart: friction, not the belt, shapes them;
+    /// #994's lines below its dip lay at 0.4-0.7 of `1/J`, rising).
+    fn distorted_frf(p: &TwoMassParams, fill_below_hz: f64) -> Frf {
+        let tf = p.tf_torque_to_motor_angle();
+        let freq_hz: Vec<f64> = (1..=433).map(|k| k as f64 * 1.2236).collect();
+        let level = 0.3 / p.rigid_inertia();
+        let response = freq_hz
+            .iter()
+            .enumerate()
+            .map(|(k, &f)| {
+                let w = 2.0 * PI * f;
+                let g = tf.freq_response(w);
+                if f < fill_below_hz {
+                    let scatter = if k % 2 == 0 { 1.1 } else { 0.9 };
+                    g / g.norm() * level * (1.0 + 3.0 * f / fill_below_hz) * scatter / (w * w)
+                } else {
+                    g
+                }
+            })
+            .collect();
+        let n = freq_hz.len();
+        Frf {
+            freq_hz,
+            response,
+            coherence: vec![1.0; n],
+            line_status: vec![super::super::etfe::LineStatus::Usable; n],
+            input_power: vec![1.0; n],
+            ts_s: 1e-4,
+            n_periods: 4,
+        }
+    }
+
+    /// Issue 12, seed 14 #994 (24 kg on a soft belt, Coulomb x2.9): friction
+    /// hid the antiresonance and a wiggle on the resonance's flank was taken
+    /// for it, which started the fit at a tenth of the cart mass (the
+    /// wiggle, a median artefact of a noisy flat top, is refused by
+    /// `DIP_BELOW_PEAK`; the study test of #994 covers it). Here an analytic
+    /// plant of the same shape (f_z 11 Hz, f_r 82 Hz) loses its dip to a
+    /// friction-like fill; the features must read f_z from the flank within
+    /// 10 % (measured 4.5 %; the fit refines it: #994 commissions with f_z
+    /// 0.7 % and m_c 1.6 % off). Without the flank estimate: "no
+    /// antiresonance dip".
+    #[test]
+    fn a_hidden_antiresonance_is_read_from_the_resonance_flank_issue_12() {
+        let p = TwoMassParams {
+            theta_e: 71.7e-6,
+            m_c: 25.0,
+            c: 1.2e5,
+            d: 0.0,
+            d_m: 3.0,
+            d_c: 200.0,
+            i_t: 0.0124,
+        };
+        let (fz, fr) = (p.f_z_hz(), p.f_r_hz());
+        assert!(
+            (fz - 11.0).abs() < 0.2 && (fr - 81.5).abs() < 1.0,
+            "{fz} {fr}"
+        );
+        let feat = frf_features(&distorted_frf(&p, 1.5 * fz)).unwrap();
+        assert!((feat.resonance_hz / fr - 1.0).abs() < 0.03, "{feat:?}");
+        assert!(
+            (feat.antiresonance_hz / fz - 1.0).abs() < FLANK_TOL,
+            "f_z {:.2} Hz, true {fz:.2} Hz",
+            feat.antiresonance_hz
+        );
+    }
+
+    /// Tolerance of the flank estimate of f_z (relative): the undamped shape
+    /// it inverts is off by the modal damping on the flank.
+    const FLANK_TOL: f64 = 0.1;
+
+    /// The same grid without distortion: the dip itself is found (the flank
+    /// is a fallback), within the 2 % of the issue's f_z target.
+    #[test]
+    fn an_undistorted_antiresonance_is_found_at_its_dip() {
+        let p = TwoMassParams::thesis_table_a4();
+        let frf = distorted_frf(&p, 0.0);
+        let clean = frf_features(&frf).unwrap();
+        assert!(
+            (clean.antiresonance_hz / p.f_z_hz() - 1.0).abs() < 0.02,
+            "{clean:?}"
+        );
     }
 }
