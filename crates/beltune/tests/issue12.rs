@@ -197,29 +197,6 @@ fn a_hidden_antiresonance_is_read_from_the_resonance_flank_issue_12() {
     assert!(m_c_error < 0.05, "m_c error {:.1} %", m_c_error * 100.0);
 }
 
-/// Seed 12 plant #472 (holding 2.39 N m of 3.1 N m with 0.22 N m of
-/// Coulomb friction: inside the study's 10 % band of the feasibility
-/// limit) was stopped for a 50 mm following error: the fixed 4 m/s^2
-/// positioning moves asked 1.2 N m of the 0.3 N m it had left. The
-/// positioning moves now use half the torque reserve
-/// (`positioning_limits_for`); the plant gets through identification and
-/// is refused in one clear line at the friction runs, where the measured
-/// holding torque and friction leave nothing of 90 % of the limit, with
-/// no safety stop.
-#[test]
-fn a_marginal_axis_is_refused_by_its_torque_budget_not_a_following_error_stop_issue_12() {
-    use beltune::study::{run_plant, Class, Ranges};
-    let o = run_plant(12, 472, &Ranges::default(), &CommissioningConfig::default()).unwrap();
-    assert_eq!(o.class, Class::CorrectRefusal, "{}", o.message);
-    assert!(o.feasibility.marginal);
-    assert!(
-        o.message.contains("infeasible design") && !o.message.contains("safety stop"),
-        "{}",
-        o.message
-    );
-    assert!(!o.travel_violation);
-}
-
 /// The thesis' limit of the static error (chapter 5), m.
 const STATIC_LIMIT_M: f64 = 100e-6;
 

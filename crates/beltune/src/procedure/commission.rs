@@ -307,57 +307,6 @@ pub(super) fn positioning_limits(ds: &DataSheet) -> Limits {
     }
 }
 
-/// The positioning limits of an axis whose holding torque and friction are
-/// known (stage 3 on): [`positioning_limits`] with the acceleration (and
-/// the jerk in proportion) cut to [`POSITIONING_RESERVE_SHARE`] of what the
-/// torque left after holding, Coulomb and viscous friction at the top speed
-/// gives the rigid inertia `inertia_kg_m2` (kg m^2) in the weaker direction
-/// (uphill: `T_max - |hold| - T_c - d v / i_t`; a downhill stop has the same
-/// torque less the friction's help). `torque_max_nm`, `holding_nm`,
-/// `coulomb_nm` in N m, `viscous_nm_s_per_rad` in N m s/rad.
-///
-/// Issue 12: 12 plants of the three studies holding 2.33-2.45 N m of
-/// 3.1 N m with 0.2-0.4 N m of Coulomb friction (0.2-0.4 N m left) tracked
-/// the fixed 4 m/s^2 positioning moves 50 mm behind and were stopped for
-/// their following error (seed 12 #472: 0.46 m/s^2 was all it could do).
-pub(super) fn positioning_limits_for(
-    ds: &DataSheet,
-    torque_max_nm: f64,
-    inertia_kg_m2: f64,
-    holding_nm: f64,
-    coulomb_nm: f64,
-    viscous_nm_s_per_rad: f64,
-) -> Limits {
-    let base = positioning_limits(ds);
-    let speed_rad_s = base.v_max / ds.i_t_m;
-    let reserve = torque_max_nm
-        - holding_nm.abs()
-        - coulomb_nm.max(0.0)
-        - viscous_nm_s_per_rad.max(0.0) * speed_rad_s;
-    let a = (POSITIONING_RESERVE_SHARE * reserve * ds.i_t_m / inertia_kg_m2)
-        .clamp(POSITIONING_MIN_ACCELERATION_M_S2, base.a_max);
-    if !a.is_finite() {
-        return base;
-    }
-    let scale = a / base.a_max;
-    Limits {
-        a_max: a,
-        a_min: -a,
-        j_max: base.j_max * scale,
-        j_min: base.j_min * scale,
-        ..base
-    }
-}
-
-/// Share of the torque reserve a positioning move may use to accelerate
-/// the rigid body; the rest is the loop's, for the belt's swing and the
-/// errors of the holding torque and friction estimates.
-pub const POSITIONING_RESERVE_SHARE: f64 = 0.5;
-
-/// Slowest acceleration of a positioning move, m/s^2 (an axis with less
-/// reserve than this needs is refused by its stop capability before).
-pub const POSITIONING_MIN_ACCELERATION_M_S2: f64 = 0.1;
-
 /// The identification experiment as recorded (stage 5): the PRBS torque
 /// command and the motor-side position, with the limits it ran under.
 #[derive(Clone, Debug, Default)]
@@ -460,6 +409,7 @@ pub fn commission(
         log: vec![format!("plausibility: {}", plaus.line)],
         compute_s: 0.0,
     };
+    let pos_limits = positioning_limits(datasheet);
 
     // ---- 2. take the axis, identification position ----
     let taken = stages::take_axis::take_axis(&mut st, plaus.bootstrap, datasheet, torque_max)?;
@@ -482,15 +432,7 @@ pub fn commission(
     )?;
     boot_hold.torque_offset_nm = holding;
     st.runner.set_stop_controller(boot_hold);
-    let pos_limits = positioning_limits_for(
-        datasheet,
-        torque_max,
-        datasheet.rigid_inertia(),
-        holding,
-        held.friction_nm,
-        held.viscous_nm_s_per_rad,
-    );
-    stages::take_axis::move_to_worst_case(&mut st, &boot_hold, id_pos, &pos_limits)?;
+    stages::take_axis::move_to_worst_case(&mut st, &boot_hold, id_pos, datasheet)?;
 
     // ---- 4. excitation amplitude ----
     let ex = &cfg.excitation;
@@ -759,58 +701,4 @@ pub fn cascade_from_design(
     c.feedforward = Feedforward::none();
     c.torque_offset_nm = torque_offset_nm;
     Ok(c)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// egc70 with 25 kg on a level axis: a data sheet by hand (Table A.4's
-    /// motor-side inertia and transmission).
-    fn heavy_egc70() -> DataSheet {
-        DataSheet {
-            theta_e_kg_m2: 71.73e-6,
-            i_t_m: 0.078 / (2.0 * std::f64::consts::PI),
-            moving_mass_kg: 25.96,
-            origin_m: 0.05,
-            travel_min_m: -0.01,
-            travel_max_m: 0.6,
-            torque_max_nm: 3.1,
-            velocity_max_m_s: 2.5,
-        }
-    }
-
-    /// A level axis with little friction keeps the fixed positioning limits:
-    /// 4 m/s^2 on 25 kg ask 1.2 N m of the 2.9 N m left, under half.
-    #[test]
-    fn a_level_axis_keeps_the_positioning_limits() {
-        let ds = heavy_egc70();
-        let l = positioning_limits_for(&ds, 3.1, ds.rigid_inertia(), 0.0, 0.13, 1e-4);
-        assert_eq!(l, positioning_limits(&ds));
-    }
-
-    /// Seed 12 #472 of the issue-12 study (24 kg, holding -2.435 N m,
-    /// Coulomb 0.401 N m as stage 3 measured them): the move's acceleration
-    /// torque on the rigid body is half the torque left, in both directions,
-    /// and the jerk shrinks with the acceleration (the move keeps its shape).
-    /// It was 4 m/s^2 (1.2 N m asked of 0.26 N m): a 50 mm following-error
-    /// stop; now the plant reaches the friction runs and is refused there
-    /// with the torque budget's message.
-    #[test]
-    fn positioning_moves_fit_the_torque_reserve_issue_12() {
-        let ds = heavy_egc70();
-        let (t_max, hold, coulomb) = (3.1, -2.435, 0.401);
-        let j = ds.rigid_inertia();
-        let l = positioning_limits_for(&ds, t_max, j, hold, coulomb, 0.0);
-        let reserve = t_max - hold.abs() - coulomb;
-        for a in [l.a_max, -l.a_min] {
-            let torque = j * a / ds.i_t_m;
-            assert!((torque / reserve - POSITIONING_RESERVE_SHARE).abs() < 1e-12);
-        }
-        assert!((l.j_max / l.a_max - 10.0).abs() < 1e-9, "{l:?}");
-        assert!(l.a_max < 0.5, "{l:?}");
-        // the torque limit itself: nothing left, the slowest moves
-        let none = positioning_limits_for(&ds, t_max, j, 3.0, 0.4, 0.0);
-        assert_eq!(none.a_max, POSITIONING_MIN_ACCELERATION_M_S2);
-    }
 }

@@ -5,14 +5,13 @@
 //! segment, lowest resonance: the worst case, thesis 2.2), with the
 //! bootstrap controller fitted to the measured friction.
 
-use super::super::commission::DataSheet;
+use super::super::commission::{positioning_limits, DataSheet};
 use super::super::motion::move_to;
 use super::super::runner::{Runner, Sample};
 use super::super::safety::{StopCapability, STOP_COMMAND_FRACTION, STOP_TORQUE_FRACTION};
 use super::Stages;
 use crate::Result;
 use beltune_rt::control::{CascadeConfig, CascadeController, Setpoint};
-use beltune_rt::trajectory::Limits;
 
 /// How long the axis is held when it is taken, s.
 const CATCH_S: f64 = 0.3;
@@ -79,17 +78,21 @@ pub fn identification_position_m(ds: &DataSheet) -> f64 {
 }
 
 /// Stage 3b: move to the identification position `id_pos_m` with the
-/// bootstrap `ctrl` fitted to the measured friction, within `limits` (the
-/// positioning limits cut to the axis' torque reserve,
-/// `commission::positioning_limits_for`).
+/// bootstrap `ctrl` fitted to the measured friction.
 pub fn move_to_worst_case(
     st: &mut Stages,
     ctrl: &CascadeConfig<f64>,
     id_pos_m: f64,
-    limits: &Limits,
+    datasheet: &DataSheet,
 ) -> Result<()> {
     st.start("move to worst-case position", 0);
-    move_to(st.runner, ctrl, id_pos_m, limits, 0.1)?;
+    move_to(
+        st.runner,
+        ctrl,
+        id_pos_m,
+        &positioning_limits(datasheet),
+        0.1,
+    )?;
     let line = format!(
         "at {:.1} mm (cart far from the motor: longest belt segment, lowest resonance)",
         st.runner.position_m() * 1e3
