@@ -137,15 +137,15 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
             reason: "no usable line below the antiresonance for the rigid-body asymptote".into(),
         });
     }
-    low.sort_by(f64::total_cmp);
-    let rigid_inertia = low[low.len() / 2];
+    let asymptote_lines = low.len();
+    let rigid_inertia = median(low.into_iter());
     Ok(FrfFeatures {
         resonance_hz,
         antiresonance_hz,
         resonance_magnitude: comp[peak] / frf.omega_rad_s(idx[peak]).powi(2),
         antiresonance_magnitude: frf.response[idx[dip]].norm(),
         rigid_inertia,
-        asymptote_lines: low.len(),
+        asymptote_lines,
     })
 }
 
@@ -257,9 +257,7 @@ pub(crate) fn running_median(x: &[f64], h: usize) -> Vec<f64> {
         .map(|k| {
             let lo = k.saturating_sub(h);
             let hi = (k + h + 1).min(x.len());
-            let mut w: Vec<f64> = x[lo..hi].to_vec();
-            w.sort_by(f64::total_cmp);
-            w[w.len() / 2]
+            median(x[lo..hi].iter().copied())
         })
         .collect()
 }
