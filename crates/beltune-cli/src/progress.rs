@@ -3,8 +3,8 @@
 //! stop's record for the diagnostic file.
 
 use crate::term;
-use beltune::procedure::runner::{AxisFailureRecord, SafetyStopRecord};
-use beltune::procedure::Progress;
+use beltune::commission::runner::{AxisFailureRecord, SafetyStopRecord};
+use beltune::commission::Progress;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Columns of the stage name in front of a stage line.

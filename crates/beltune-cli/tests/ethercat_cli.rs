@@ -5,9 +5,9 @@
 //! real-time scheduling are unavailable), and the one-line errors without a
 //! raw socket.
 
+use beltune::commission::NoProgress;
+use beltune::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::model::rigs::{self, Plant};
-use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
-use beltune::procedure::NoProgress;
 use beltune::sim::{SimAxis, SimConfig};
 use beltune_ethercat::netns::Netns;
 use std::path::PathBuf;

@@ -5,8 +5,8 @@
 //! recorded, and `commission --csv` with the metadata's arguments
 //! identifies the true resonance and antiresonance at the cart's position.
 
+use beltune::axis::Axis;
 use beltune::model::{rigs, TwoMassParams};
-use beltune::plant::Axis;
 use beltune::sim::{SimAxis, SimConfig};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

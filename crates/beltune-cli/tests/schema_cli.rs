@@ -2,7 +2,7 @@
 //! `identify` and `commission` into `design`, the export and the excitation;
 //! units carried through for a record in current units.
 
-use beltune::procedure::controller_file::ControllerFile;
+use beltune::record::controller::ControllerFile;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

@@ -1,4 +1,4 @@
-//! EtherCAT for beltune: a CiA 402 servo drive as a [`beltune::plant::Axis`].
+//! EtherCAT for beltune: a CiA 402 servo drive as a [`beltune::axis::Axis`].
 //!
 //! - [`cia402`], [`pdo`], [`scaling`]: the drive profile without a bus (state
 //!   machine, process-data codec, units);

@@ -4,9 +4,9 @@
 //! simulator's own linearization at the identification position (truth), the
 //! thesis' chapter-5 limits on the cart.
 
+use beltune::commission::NoProgress;
+use beltune::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
 use beltune::model::rigs::{self, Plant};
-use beltune::procedure::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
-use beltune::procedure::NoProgress;
 use beltune::sim::SimConfig;
 use beltune_ethercat::drive::{DriveConfig, VirtualDrive};
 use beltune_ethercat::master::inprocess::InProcess;

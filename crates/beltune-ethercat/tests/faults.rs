@@ -3,10 +3,10 @@
 //! allowed cycles, and a master that stops sending (the drive's SM watchdog
 //! removes the torque).
 
+use beltune::axis::AxisError;
+use beltune::commission::Progress;
+use beltune::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::model::rigs;
-use beltune::plant::AxisError;
-use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
-use beltune::procedure::Progress;
 use beltune::sim::SimConfig;
 use beltune::Error;
 use beltune_ethercat::cia402::State;

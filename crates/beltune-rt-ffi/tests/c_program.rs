@@ -6,7 +6,7 @@
 //! difference is an ABI or export error).
 
 use beltune::export::{c_header, Lang};
-use beltune::procedure::controller_file::ControllerFile;
+use beltune::record::controller::ControllerFile;
 use beltune_rt::control::{CascadeController, Setpoint};
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use std::path::{Path, PathBuf};

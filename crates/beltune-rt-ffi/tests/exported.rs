@@ -4,7 +4,7 @@
 //! tests/data/controller.toml (regenerate with `BELTUNE_BLESS=1`).
 
 use beltune::export::{c_header, parse_values, rust_module, values, Value};
-use beltune::procedure::controller_file::ControllerFile;
+use beltune::record::controller::ControllerFile;
 use std::path::Path;
 
 #[allow(dead_code)]

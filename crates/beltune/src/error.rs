@@ -113,9 +113,9 @@ pub enum Error {
     #[error("axis: {error}{}", quick_stop.map(|q| format!("; the quick stop failed too: {q}")).unwrap_or_default())]
     Axis {
         /// Why the exchange failed.
-        error: crate::plant::AxisError,
+        error: crate::axis::AxisError,
         /// Why the quick stop failed, if it did.
-        quick_stop: Option<crate::plant::AxisError>,
+        quick_stop: Option<crate::axis::AxisError>,
     },
 
     // ---- report ----

@@ -10,7 +10,7 @@
 //! carry the current spelling of the unit (`TORQUE_MAX_A`, see [`crate::units`]).
 
 use crate::ident::ModelUnits;
-use crate::procedure::controller_file::{AntiWindupKind, ControllerFile};
+use crate::record::controller::{AntiWindupKind, ControllerFile};
 use std::fmt::Write as _;
 
 /// Target language of [`export`].

@@ -17,6 +17,8 @@
 //! Units are SI everywhere; the conventions (e.g. `d_m` in N s/m as a
 //! translational equivalent, `i_t = r / i_g` in m) are those of docs/thesis-map.md.
 
+pub mod axis;
+pub mod commission;
 pub mod design;
 pub mod error;
 pub mod export;
@@ -24,12 +26,11 @@ pub mod ident;
 pub mod io;
 pub mod lti;
 pub mod model;
-pub mod plant;
-pub mod procedure;
-pub mod provenance;
+pub mod record;
 pub mod report;
 pub mod sim;
 pub mod study;
 pub mod units;
+pub mod verdict;
 
 pub use error::{Error, Result};

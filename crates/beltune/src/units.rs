@@ -7,7 +7,7 @@
 //! the key names of the SI record and say `units = "current"`; the output files
 //! (`commissioning.json`, `controller.toml`) rename the unit suffixes of their
 //! keys ([`relabel_keys`]) so that no key claims N m for a value in A, and
-//! [`ControllerFile`](crate::procedure::controller_file::ControllerFile) maps
+//! [`ControllerFile`](crate::record::controller::ControllerFile) maps
 //! them back when reading.
 
 use crate::ident::ModelUnits;

@@ -4,10 +4,10 @@
 //! feedforward: dynamic error below 1 mm, static error below 100 um) and the
 //! simulator's own linearization at the identification position (truth).
 
+use beltune::axis::Axis;
+use beltune::commission::NoProgress;
+use beltune::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
 use beltune::model::rigs::{self, Plant};
-use beltune::plant::Axis;
-use beltune::procedure::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
-use beltune::procedure::NoProgress;
 use beltune::sim::{SimAxis, SimConfig};
 use beltune::Error;
 
@@ -206,24 +206,24 @@ struct FailingAxis {
     quick_stopped: bool,
 }
 
-impl beltune::plant::Axis for FailingAxis {
-    fn info(&self) -> beltune::plant::AxisInfo {
+impl beltune::axis::Axis for FailingAxis {
+    fn info(&self) -> beltune::axis::AxisInfo {
         self.inner.info()
     }
 
     fn exchange(
         &mut self,
         torque_command_nm: f64,
-    ) -> Result<beltune::plant::Measurement, beltune::plant::AxisError> {
+    ) -> Result<beltune::axis::Measurement, beltune::axis::AxisError> {
         assert!(!self.quick_stopped, "exchange after the quick stop");
         self.exchanges += 1;
         if self.exchanges > self.fail_after {
-            return Err(beltune::plant::AxisError::DriveFault { error_code: 0x7500 });
+            return Err(beltune::axis::AxisError::DriveFault { error_code: 0x7500 });
         }
         Ok(self.inner.step(torque_command_nm))
     }
 
-    fn quick_stop(&mut self) -> Result<(), beltune::plant::AxisError> {
+    fn quick_stop(&mut self) -> Result<(), beltune::axis::AxisError> {
         self.quick_stopped = true;
         Ok(())
     }
@@ -265,7 +265,7 @@ fn a_drive_fault_ends_the_commissioning_with_a_quick_stop_issue_14() {
         matches!(
             err,
             Error::Axis {
-                error: beltune::plant::AxisError::DriveFault { error_code: 0x7500 },
+                error: beltune::axis::AxisError::DriveFault { error_code: 0x7500 },
                 quick_stop: None
             }
         ),
@@ -282,7 +282,7 @@ fn a_drive_fault_ends_the_commissioning_with_a_quick_stop_issue_14() {
 /// and windows scale alike.
 #[test]
 fn excitation_settings_derive_their_sample_counts_from_the_cycle_time_issue_14() {
-    let ex = beltune::procedure::commission::ExcitationConfig::default();
+    let ex = beltune::commission::ExcitationConfig::default();
     assert_eq!(ex.clock_samples(100e-6), 16);
     assert_eq!(ex.clock_samples(1e-3), 2);
     assert_eq!(ex.clock_samples(250e-6), 6);
@@ -291,7 +291,7 @@ fn excitation_settings_derive_their_sample_counts_from_the_cycle_time_issue_14()
     assert_eq!(ex.moving_window_samples(100e-6), 20);
     assert_eq!(ex.moving_window_samples(1e-3), 2);
     // Degenerate values never give zero samples.
-    let odd = beltune::procedure::commission::ExcitationConfig {
+    let odd = beltune::commission::ExcitationConfig {
         clock_period_s: 0.0,
         burst_s: f64::NAN,
         ..ex

@@ -7,10 +7,11 @@
 //! about 30 s together in the dev profile (opt-level 2). A longer run:
 //! `PROPTEST_CASES=20000 cargo test -p beltune --test fuzz_readers`.
 
-use beltune::design::{design, DesignKnobs, ModelFile, PrefilterKind};
+use beltune::design::{design, DesignKnobs, PrefilterKind};
 use beltune::ident::read_csv_columns;
 use beltune::model::rigs::{egc70_params, load_toml};
 use beltune::model::Plant;
+use beltune::record::model::ModelFile;
 use proptest::prelude::*;
 use std::path::PathBuf;
 

@@ -1,15 +1,12 @@
 //! Issue 12: built-in plants that the thesis' move does not fit, and the
 //! verdict of the result.
 
+use beltune::commission::NoProgress;
+use beltune::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::model::rigs;
-use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
-use beltune::procedure::NoProgress;
 use beltune::sim::{SimAxis, SimConfig};
 
-fn commission_builtin(
-    name: &str,
-    payload_kg: Option<f64>,
-) -> beltune::procedure::commission::Commissioning {
+fn commission_builtin(name: &str, payload_kg: Option<f64>) -> beltune::commission::Commissioning {
     let plant = rigs::builtin(name, payload_kg).unwrap();
     let start = 0.05;
     let mut axis = SimAxis::new(
@@ -114,7 +111,7 @@ fn static_stretch_uses_the_stiffness_measured_at_the_target_issue_12() {
     // The compliance along the stroke (stage 5c and the identification
     // position): the stiffness between the start side and the target is
     // (2.26)'s within the same tolerance.
-    let side = beltune::procedure::stages::identification::start_side_position_m(&ds, 0.0);
+    let side = beltune::commission::stages::identification::start_side_position_m(&ds, 0.0);
     for x in [side, 0.5 * (side + 0.5)] {
         let c = g.params.replacement_stiffness_n_per_m(x);
         assert!(

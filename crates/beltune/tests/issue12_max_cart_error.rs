@@ -2,9 +2,9 @@
 //! (thesis chapter 5: below 1 mm): plants of the seeded study (seed 12)
 //! whose feedforward inertia came from an FRF fit that was far too heavy.
 
+use beltune::commission::NoProgress;
+use beltune::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
 use beltune::model::rigs::Plant;
-use beltune::procedure::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
-use beltune::procedure::NoProgress;
 use beltune::sim::SimAxis;
 use beltune::study::{generate, GeneratedPlant, Ranges};
 

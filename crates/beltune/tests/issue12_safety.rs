@@ -3,9 +3,9 @@
 //! travel stop or left their travel window, and the measurement noise as a
 //! plant parameter.
 
+use beltune::commission::NoProgress;
+use beltune::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::model::{rigs, MeasurementNoise};
-use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
-use beltune::procedure::NoProgress;
 use beltune::sim::{SimAxis, SimConfig};
 use beltune::study::{run_plant, Class, Outcome, OutcomeKind, Ranges};
 

@@ -4,7 +4,7 @@
 //! velocity-loop phase margin of at least 30 deg on the true linearized plant.
 //! (`beltune montecarlo --plants 1000` runs the full study; README.)
 
-use beltune::procedure::commission::CommissioningConfig;
+use beltune::commission::CommissioningConfig;
 use beltune::study::{run_plant, Class, OutcomeKind, Ranges, Table};
 use rayon::prelude::*;
 

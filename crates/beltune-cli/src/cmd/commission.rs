@@ -16,21 +16,21 @@ use super::verdict::Verdict;
 use crate::exit::{ExitStatus, Failure};
 use crate::progress::BarProgress;
 use anyhow::Context;
+use beltune::commission::recorded::commission_recorded;
+use beltune::commission::result::Truth;
+use beltune::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::design::DesignKnobs;
 use beltune::ident::{
     identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig, ModelUnits,
     MotionFrictionConfig, RecordedExcitation,
 };
 use beltune::model::rigs::Plant;
-use beltune::procedure::commission::{commission, CommissioningConfig, DataSheet};
-use beltune::procedure::outputs::{
+use beltune::record::folder::{
     build_report, commissioning_json, controller_toml, data_files, recorded_data_files,
     recorded_outputs,
 };
-use beltune::procedure::outputs::{write_outputs_with_data, AxisRecord, OutputTarget};
-use beltune::procedure::recorded::commission_recorded;
-use beltune::procedure::result::Truth;
-use beltune::provenance::Provenance;
+use beltune::record::folder::{write_outputs_with_data, AxisRecord, OutputTarget};
+use beltune::record::provenance::Provenance;
 use beltune::report::render_html;
 use beltune::sim::{SimAxis, SimConfig};
 use beltune_ethercat::master::BusAxis;
@@ -536,7 +536,7 @@ fn stopped(e: beltune::Error, progress: &mut BarProgress, args: &Args) -> anyhow
 /// the status (0, or 5 when the validation misses a limit).
 struct AxisRun<'a> {
     source: String,
-    run: &'a beltune::procedure::commission::Commissioning,
+    run: &'a beltune::commission::Commissioning,
     truth: Option<&'a Truth>,
     validation_start_m: f64,
     validation_target_m: f64,
@@ -658,7 +658,7 @@ fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
         )));
     }
     let start_position = args.start_position.unwrap_or(0.05);
-    beltune::procedure::commission::check_travel_window(&plant, args.travel_window)?;
+    beltune::commission::check_travel_window(&plant, args.travel_window)?;
     let ds = DataSheet::for_plant(&plant, start_position, args.travel_window);
     let mut cfg = CommissioningConfig {
         knobs: args.knobs.knobs()?,

@@ -2,7 +2,7 @@
 //! both FRFs and fits, the loops and the moves overlaid, and the change of
 //! every parameter in percent.
 
-use beltune::procedure::compare::compare_report;
+use beltune::report::compare::compare_report;
 use beltune::report::render_html;
 use std::path::PathBuf;
 

@@ -5,7 +5,8 @@
 //! `--dynamics` (one-knob mode), then the explicit expert flags.
 
 use anyhow::Context;
-use beltune::design::{self, ControllerDesign, DesignSummary, ModelFile};
+use beltune::design::{self, ControllerDesign, DesignSummary};
+use beltune::record::model::ModelFile;
 use std::path::PathBuf;
 
 /// Arguments of `beltune design`.

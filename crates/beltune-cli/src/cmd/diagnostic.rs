@@ -25,10 +25,10 @@
 //! `provenance`.
 
 use crate::progress::{StopCapture, StopCause};
-use beltune::plant::AxisError;
-use beltune::procedure::outputs::OutputTarget;
-use beltune::procedure::runner::HistorySample;
-use beltune::procedure::Violation;
+use beltune::axis::AxisError;
+use beltune::commission::runner::HistorySample;
+use beltune::commission::Violation;
+use beltune::record::folder::OutputTarget;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -86,7 +86,7 @@ struct Description<'a> {
     reason: &'a str,
     limit: &'static str,
     violation: Cause<'a>,
-    limits: &'a beltune::procedure::SafetyLimits,
+    limits: &'a beltune::commission::SafetyLimits,
     time_s: f64,
     position_m: f64,
     velocity_m_s: f64,
@@ -96,7 +96,7 @@ struct Description<'a> {
     stop_error: Option<&'a str>,
     samples_file: &'static str,
     samples: usize,
-    provenance: beltune::provenance::Provenance,
+    provenance: beltune::record::provenance::Provenance,
 }
 
 /// The short name of the violated limit.
@@ -142,7 +142,7 @@ pub fn folder(target: &OutputTarget) -> PathBuf {
     match target {
         OutputTarget::Exact { dir, .. } => sibling(dir),
         OutputTarget::History { root } => {
-            let stamp = beltune::provenance::Provenance::now(Vec::new(), None)
+            let stamp = beltune::record::provenance::Provenance::now(Vec::new(), None)
                 .created_utc
                 .replace(':', "");
             let mut name = format!("{stamp}{FOLDER_SUFFIX}");
@@ -196,7 +196,7 @@ pub fn write(
     seed: Option<u64>,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let dir = folder(target);
-    let provenance = beltune::provenance::Provenance::of_this_process(seed);
+    let provenance = beltune::record::provenance::Provenance::of_this_process(seed);
     let (description, history) = match &stop.cause {
         StopCause::Limit(r) => (
             Description {

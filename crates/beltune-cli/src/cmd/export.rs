@@ -3,7 +3,7 @@
 //! (crate beltune-rt-ffi), with the same values to the last digit.
 
 use beltune::export::{export, Lang};
-use beltune::procedure::controller_file::ControllerFile;
+use beltune::record::controller::ControllerFile;
 use std::path::PathBuf;
 
 /// Target language.

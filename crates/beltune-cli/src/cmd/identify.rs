@@ -3,12 +3,12 @@
 //! model, optional current-loop dead time. Thesis chapter 3.
 
 use super::util::write_atomic;
-use beltune::design::model_file::{IdentifiedModel, ModelFile, DEFAULT_DEAD_TIME_S};
 use beltune::ident::{
     fit::model_magnitude_db, identify_recorded, DeadTime, EtfeConfig, FitConfig, ModelUnits,
     RecordedExcitation, TwoMassFit,
 };
-use beltune::provenance::Provenance;
+use beltune::record::model::{IdentifiedModel, ModelFile, DEFAULT_DEAD_TIME_S};
+use beltune::record::provenance::Provenance;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 

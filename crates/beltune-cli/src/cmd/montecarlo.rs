@@ -4,7 +4,7 @@
 //! classified (correct refusal of an infeasible plant vs defect), and writes
 //! one JSON line per plant with `--out`.
 
-use beltune::procedure::commission::CommissioningConfig;
+use beltune::commission::CommissioningConfig;
 use beltune::study::{run_plant, Class, Outcome, Ranges, Table};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;

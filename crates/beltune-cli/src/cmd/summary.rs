@@ -26,8 +26,8 @@
 
 use super::verdict::Verdict;
 use crate::term;
+use beltune::commission::result::{IdentifiedModel, Truth, Validation};
 use beltune::design::ControllerDesign;
-use beltune::procedure::result::{IdentifiedModel, Truth, Validation};
 use serde::Serialize;
 use std::f64::consts::PI;
 use std::path::PathBuf;

@@ -6,15 +6,15 @@
 //! Kept small on purpose: when the library gives its own verdict, [`judge`]
 //! becomes a conversion of it.
 
-use beltune::procedure::result::MoveSummary;
+use beltune::commission::result::MoveSummary;
 use serde::Serialize;
 
 /// Thesis chapter 5: largest cart tracking error of the validation move, m
-/// (the library's [`beltune::procedure::acceptance::MAX_TRACKING_ERROR_M`]).
-pub const THESIS_MAX_TRACKING_ERROR_M: f64 = beltune::procedure::acceptance::MAX_TRACKING_ERROR_M;
+/// (the library's [`beltune::verdict::MAX_TRACKING_ERROR_M`]).
+pub const THESIS_MAX_TRACKING_ERROR_M: f64 = beltune::verdict::MAX_TRACKING_ERROR_M;
 /// Thesis chapter 5: static positioning error after the move, m
-/// ([`beltune::procedure::acceptance::MAX_STATIC_ERROR_M`]).
-pub const THESIS_MAX_STATIC_ERROR_M: f64 = beltune::procedure::acceptance::MAX_STATIC_ERROR_M;
+/// ([`beltune::verdict::MAX_STATIC_ERROR_M`]).
+pub const THESIS_MAX_STATIC_ERROR_M: f64 = beltune::verdict::MAX_STATIC_ERROR_M;
 
 /// The limits on the command line (`--max-tracking-error`, `--max-static-error`).
 #[derive(clap::Args, Clone, Debug)]

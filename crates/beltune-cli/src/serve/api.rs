@@ -284,7 +284,7 @@ pub struct Curve {
     pub phase_deg: Vec<f64>,
 }
 
-/// Frequency responses for the plots, from `beltune::procedure::plots::loop_data`
+/// Frequency responses for the plots, from `beltune::report::plot_data::loop_data`
 /// (the same numbers the report draws).
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct BodeData {
@@ -377,7 +377,7 @@ pub struct SaveResponse {
 }
 
 /// The measured FRF of a loaded commissioning and its fitted model, decimated
-/// for display (`beltune::procedure::plots::frf_display`, as in the report).
+/// for display (`beltune::report::plot_data::frf_display`, as in the report).
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct FrfOverlay {
     /// Measured points, Hz.

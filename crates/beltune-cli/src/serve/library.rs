@@ -3,8 +3,8 @@
 //! built-in axis, commissioned once at start-up exactly as `beltune commission`
 //! does with its defaults (egc70, 11.2 kg, seed 1): the page then shows the
 //! model, the design and the numbers of the report. Plot data and the simulated
-//! validation move come from the library (`beltune::procedure::plots`,
-//! `beltune::procedure::validation::simulate_validation_move`), the same code
+//! validation move come from the library (`beltune::report::plot_data`,
+//! `beltune::commission::validation::simulate_validation_move`), the same code
 //! the report and the commissioning use.
 
 use anyhow::Context;
@@ -17,6 +17,12 @@ use super::api::{
     FrfOverlay, Gains, Knobs, LoopMargins, MoveData, PrefilterInfo, PrefilterKind,
 };
 use super::tuner::{ModelSummary, SavedFile, TuneError, Tuner};
+use beltune::commission::result::{FrictionResult, MoveSummary, TargetStiffness};
+use beltune::commission::validation::{
+    simulate_validation_move, FeedforwardVariant, MoveResult, MoveSpec,
+};
+use beltune::commission::NoProgress;
+use beltune::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
 use beltune::design::robust::{design_identified, DesignRule};
 use beltune::design::{
     ControllerDesign, DesignInput, DesignKnobs, Dynamics, FrictionParams, Prefilter,
@@ -26,16 +32,10 @@ use beltune::ident::FitModel;
 use beltune::ident::ModelUnits;
 use beltune::lti::StabilityMargins;
 use beltune::model::rigs::{self, LinearPlant, Plant};
-use beltune::procedure::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
-use beltune::procedure::outputs::{self, AxisRecord};
-use beltune::procedure::plots::{self, FrfLines};
-use beltune::procedure::report_build;
-use beltune::procedure::result::{FrictionResult, MoveSummary, TargetStiffness};
-use beltune::procedure::validation::{
-    simulate_validation_move, FeedforwardVariant, MoveResult, MoveSpec,
-};
-use beltune::procedure::NoProgress;
-use beltune::provenance::Provenance;
+use beltune::record::folder::{self as outputs, AxisRecord};
+use beltune::record::provenance::Provenance;
+use beltune::report::build as report_build;
+use beltune::report::plot_data::{self as plots, FrfLines};
 use beltune::report::{
     render_html, BodeCurve, ExcitationPlot, FrictionPlot, ParameterRow, Report, Table,
 };
@@ -88,7 +88,7 @@ pub struct ValidationFile {
 #[derive(Debug, Clone, Deserialize)]
 pub struct CommissioningFile {
     /// Identified model (the keys `beltune design` reads; extra keys are ignored).
-    pub identified: beltune::design::IdentifiedModel,
+    pub identified: beltune::record::model::IdentifiedModel,
     /// Identified friction (optional).
     #[serde(default)]
     pub friction: Option<FrictionTotals>,
@@ -142,7 +142,7 @@ pub struct DesignModel {
 pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     let path = dir.join(COMMISSIONING_FILE);
     let text = beltune::io::read_to_string_capped(&path, beltune::io::MAX_TEXT_BYTES)?;
-    let file = beltune::design::ModelFile::parse(&text, &path.display().to_string())
+    let file = beltune::record::model::ModelFile::parse(&text, &path.display().to_string())
         .with_context(|| format!("parsing {}", path.display()))?;
     let json: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
@@ -918,7 +918,7 @@ impl LibraryTuner {
         let mut input = report_build::verdict_input(None, d, sim.map(|m| &m.summary));
         input.mean_coherence = number("mean_coherence");
         input.fit_rms_db = number("fit_rms_db");
-        let verdict = beltune::procedure::verdict::verdict(&input);
+        let verdict = beltune::report::verdict_old::verdict(&input);
         let row = |name: &str, unit: &str, v: f64, digits: usize| ParameterRow {
             name: name.into(),
             unit: unit.into(),
@@ -1114,7 +1114,7 @@ pub fn write_saved_set(dir: &Path, files: &[SavedFile]) -> anyhow::Result<SavedS
 }
 
 /// The rest position of a safety stop, mm, from the supervisor's text
-/// ("...; axis stopped at 619.8 mm", [`beltune::procedure::runner`]).
+/// ("...; axis stopped at 619.8 mm", [`beltune::commission::runner`]).
 fn stop_position_mm(text: &str) -> Option<f64> {
     text.rsplit("axis stopped at ")
         .next()

@@ -17,7 +17,7 @@ use crate::cia402::{self, Command, State, MODE_CST};
 use crate::pdo::{self, Codec, Inputs, Outputs};
 use crate::scaling::{self, Scaling, Unwrap32};
 use crate::Error;
-use beltune::plant::{Axis, AxisError, AxisInfo, Measurement};
+use beltune::axis::{Axis, AxisError, AxisInfo, Measurement};
 use core::future::Future;
 use core::task::{Context, Poll};
 use ethercrab::subdevice_group::{DcConfiguration, HasDc, NoDc, Op};

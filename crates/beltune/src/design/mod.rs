@@ -8,7 +8,6 @@
 //! - [`dynamics`]: the one-knob mode,
 //! - [`robust`]: the design rule for lightly damped axes (issue 12): friction separated from
 //!   damping, the prefilter chosen for margins that hold over the identification's uncertainty,
-//! - [`model_file`]: reading the identified model (TOML or `beltune identify` JSON).
 //!
 //! Interpretation (docs/thesis-map.md, "The printed controller gains"): the prefilter sits
 //! inside the velocity loop in series with the PI controller and is part of the
@@ -19,7 +18,6 @@
 pub mod drive_form;
 pub mod dynamics;
 pub mod feedforward;
-pub mod model_file;
 pub mod position;
 pub mod prefilter;
 pub mod robust;
@@ -29,7 +27,6 @@ pub mod velocity;
 pub use drive_form::DriveForm;
 pub use dynamics::Dynamics;
 pub use feedforward::{Feedforward, FrictionParams};
-pub use model_file::{IdentifiedModel, ModelFile, SCHEMA_VERSION};
 pub use prefilter::{Prefilter, PrefilterKind};
 pub use sampled::{DiscreteController, DiscreteLoops, DiscreteStability};
 pub use velocity::{PiGains, VelocityPlant, VelocityRule};

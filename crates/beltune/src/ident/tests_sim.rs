@@ -4,8 +4,8 @@
 
 use super::testutil::prbs;
 use super::*;
+use crate::axis::Axis;
 use crate::model::{builtin, Plant};
-use crate::plant::Axis;
 use crate::sim::{SimAxis, SimConfig};
 
 struct Record {

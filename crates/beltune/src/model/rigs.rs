@@ -3,9 +3,9 @@
 //! simulation sets `sim-a`, `sim-b`, `sim-c` (Tables A.11-A.13), plus plants
 //! loaded from TOML. [`Plant`] is what the simulator and the CLI accept.
 
+use crate::axis::AxisInfo;
 use crate::model::params::{FrictionTotals, PhysicalParams};
 use crate::model::TwoMassParams;
-use crate::plant::AxisInfo;
 use crate::{Error, Result};
 use std::f64::consts::PI;
 use std::path::Path;

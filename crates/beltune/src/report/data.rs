@@ -179,9 +179,9 @@ pub struct Report {
     /// Validation summary table rows: (variant, max error, static error, settling time) as text.
     pub validation_rows: Vec<[String; 4]>,
     /// Pass/fail per limit, warnings and the next step (shown first).
-    pub verdict: Option<crate::procedure::verdict::Verdict>,
+    pub verdict: Option<crate::report::verdict_old::Verdict>,
     /// Version, date, command line and seed of the run.
-    pub provenance: Option<crate::provenance::Provenance>,
+    pub provenance: Option<crate::record::provenance::Provenance>,
     /// Closed loops and sensitivities (magnitude).
     pub closed_loops: Vec<BodePlot>,
     /// Before/after overlays (e.g. the bootstrap against the designed controller).

@@ -210,8 +210,8 @@ mod tests {
             ..Default::default()
         };
         let mut r = r;
-        r.verdict = Some(crate::procedure::verdict::verdict(
-            &crate::procedure::verdict::VerdictInput {
+        r.verdict = Some(crate::report::verdict_old::verdict(
+            &crate::report::verdict_old::VerdictInput {
                 max_tracking_error_m: Some(2e-3),
                 static_error_m: Some(20e-6),
                 velocity_phase_margin_deg: (60.0, 60.0),
@@ -221,7 +221,7 @@ mod tests {
                 ..Default::default()
             },
         ));
-        r.provenance = Some(crate::provenance::Provenance::now(
+        r.provenance = Some(crate::record::provenance::Provenance::now(
             vec!["beltune".into(), "commission".into()],
             Some(3),
         ));

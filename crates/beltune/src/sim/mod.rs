@@ -26,11 +26,11 @@ mod linear;
 mod mech;
 pub(crate) use mech::coulomb_step;
 
+use crate::axis::{Axis, AxisError, AxisInfo, Measurement};
 use crate::error::{require_finite, require_positive};
 use crate::model::params::{FrictionTotals, MeasurementNoise, PhysicalParams};
 use crate::model::three_mass::ThreeMassState;
 use crate::model::{Plant, TwoMassParams};
-use crate::plant::{Axis, AxisError, AxisInfo, Measurement};
 use crate::{Error, Result};
 use mech::Mech;
 use nalgebra::{SMatrix, SVector};

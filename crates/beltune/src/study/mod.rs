@@ -15,12 +15,12 @@ mod table;
 pub use generator::{generate, GeneratedPlant, Ranges};
 pub use table::{Table, TableRow};
 
+use crate::axis::{Axis, AxisError, AxisInfo, Measurement};
+use crate::commission::safety::StopCapability;
+use crate::commission::validation::{table_a8_limits, MoveSpec};
+use crate::commission::{commission, CommissioningConfig, DataSheet};
 use crate::design::ControllerDesign;
 use crate::model::rigs::Plant;
-use crate::plant::{Axis, AxisError, AxisInfo, Measurement};
-use crate::procedure::commission::{commission, CommissioningConfig, DataSheet};
-use crate::procedure::safety::StopCapability;
-use crate::procedure::validation::{table_a8_limits, MoveSpec};
 use crate::sim::SimAxis;
 use beltune_rt::trajectory::{State, Trajectory};
 use serde::Serialize;
@@ -168,7 +168,7 @@ pub struct Outcome {
 #[derive(Default)]
 struct StageName(String);
 
-impl crate::procedure::Progress for StageName {
+impl crate::commission::Progress for StageName {
     fn stage_started(&mut self, name: &str, _total_samples: u64) {
         self.0 = name.to_string();
     }
@@ -207,7 +207,7 @@ impl Axis for Watched {
 pub const TRAVEL_TOLERANCE_M: f64 = 1e-3;
 
 fn velocity_margin_on(design: &ControllerDesign, truth: &crate::model::TwoMassParams) -> f64 {
-    match crate::procedure::acceptance::margins_on(design, truth) {
+    match crate::verdict::margins_on(design, truth) {
         Ok(m) => m.velocity_phase_margin_deg,
         Err(_) => f64::NAN,
     }

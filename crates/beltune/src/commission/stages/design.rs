@@ -2,7 +2,7 @@
 //! and the real-time cascade that takes over the axis from the bootstrap
 //! controller.
 
-use super::super::commission::{cascade_from_design, CommissioningConfig};
+use super::super::{cascade_from_design, CommissioningConfig};
 use super::Stages;
 use crate::design::robust::{design_identified, RobustDesign};
 use crate::design::{ControllerDesign, DesignInput};

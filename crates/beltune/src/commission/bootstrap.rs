@@ -101,11 +101,11 @@ pub fn bootstrap_with_friction(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::commission::motion::{move_to, TrackRecord};
+    use crate::commission::progress::NoProgress;
+    use crate::commission::runner::Runner;
+    use crate::commission::safety::{SafetyLimits, SafetySupervisor};
     use crate::model::rigs;
-    use crate::procedure::motion::{move_to, TrackRecord};
-    use crate::procedure::progress::NoProgress;
-    use crate::procedure::runner::Runner;
-    use crate::procedure::safety::{SafetyLimits, SafetySupervisor};
     use crate::sim::{SimAxis, SimConfig};
     use beltune_rt::trajectory::Limits;
 

@@ -16,26 +16,38 @@
 //! 7. friction runs at constant velocity with the designed controller (3.6);
 //! 8. validation move with no, linear and nonlinear feedforward (chapter 5).
 //!
-//! Each stage lives in its own file under [`super::stages`]; this file holds
+//! Each stage lives in its own file under [`stages`]; this file holds
 //! the configuration, the result and the order of the stages.
 //! Every setting is in seconds, hertz or SI units, never in samples: the
 //! sample counts are derived for the axis' cycle time
-//! ([`crate::plant::AxisInfo::ts_s`]), so the same configuration
+//! ([`crate::axis::AxisInfo::ts_s`]), so the same configuration
 //! commissions a 10 kHz simulator and a 1 kHz fieldbus master.
 
-use super::progress::Progress;
-use super::result::{FrictionResult, IdentifiedModel, Validation};
-use super::runner::Runner;
-use super::safety::StopCapability;
-use super::stages::{self, Stages};
-use super::validation::{MoveResult, MoveSpec};
+pub mod bootstrap;
+pub mod motion;
+pub mod progress;
+pub mod recorded;
+pub mod result;
+pub mod runner;
+pub mod safety;
+pub mod stages;
+pub mod validation;
+
+pub use progress::{LogProgress, NoProgress, Progress};
+pub use safety::{SafetyLimits, SafetySupervisor, Violation};
+
+use self::result::{FrictionResult, IdentifiedModel, Validation};
+use self::runner::Runner;
+use self::safety::StopCapability;
+use self::stages::Stages;
+use self::validation::{MoveResult, MoveSpec};
+use crate::axis::Axis;
 use crate::design::robust::DesignRule;
 use crate::design::{ControllerDesign, DesignKnobs, FrictionParams};
 use crate::ident::dead_time::DeadTime;
 use crate::ident::etfe::Frf;
 use crate::ident::fit::TwoMassFit;
 use crate::ident::friction::{ConstantVelocityRun, FrictionFit};
-use crate::plant::Axis;
 use crate::{Error, Result};
 use beltune_rt::control::{CascadeConfig, Feedforward};
 use beltune_rt::trajectory::Limits;
@@ -337,7 +349,7 @@ pub struct Commissioning {
     pub holding_torque_nm: f64,
     /// The belt stiffness where the validation move ends (stage 5b), which
     /// the static belt stretch uses.
-    pub target_stiffness: super::result::TargetStiffness,
+    pub target_stiffness: self::result::TargetStiffness,
     /// PRBS amplitude `A_PRBS` used (values +-A/2), N m.
     pub excitation_amplitude_nm: f64,
     /// FRF from the torque command to the motor angle.
@@ -370,7 +382,7 @@ pub struct Commissioning {
     pub validation_move: stages::validation_moves::PlannedMove,
     /// Whether the commissioning met its own limits, and the margins it
     /// guarantees over the identification's uncertainty (issue 12).
-    pub verdict: super::acceptance::Verdict,
+    pub verdict: crate::verdict::Verdict,
     /// The open-loop excitation of stage 5 and the axis' response.
     pub excitation: ExcitationTrace,
     /// Time the axis was busy, s.
@@ -423,7 +435,7 @@ pub fn commission(
         &mut st, &boot, center, datasheet, torque_max,
     )?;
     let holding = held.holding_nm;
-    let mut boot_hold = super::bootstrap::bootstrap_with_friction(
+    let mut boot_hold = self::bootstrap::bootstrap_with_friction(
         datasheet.rigid_inertia(),
         datasheet.i_t_m,
         ts,
@@ -641,7 +653,7 @@ pub fn commission(
         datasheet,
         cfg,
     )?;
-    let verdict = super::acceptance::judge(
+    let verdict = crate::verdict::judge(
         &val.validation.nonlinear,
         torque_max,
         guaranteed,

@@ -5,10 +5,10 @@
 //! segment, lowest resonance: the worst case, thesis 2.2), with the
 //! bootstrap controller fitted to the measured friction.
 
-use super::super::commission::{positioning_limits, DataSheet};
 use super::super::motion::move_to;
 use super::super::runner::{Runner, Sample};
 use super::super::safety::{StopCapability, STOP_COMMAND_FRACTION, STOP_TORQUE_FRACTION};
+use super::super::{positioning_limits, DataSheet};
 use super::Stages;
 use crate::Result;
 use beltune_rt::control::{CascadeConfig, CascadeController, Setpoint};

@@ -10,10 +10,11 @@
 //! keys are the current spelling (`torque_max_a`, `k_p_a_s_per_rad`, see
 //! [`crate::units`]).
 
-use crate::design::{ControllerDesign, DriveForm, Prefilter, SCHEMA_VERSION};
+use super::SCHEMA_VERSION;
+use crate::commission::result::{FrictionResult, TargetStiffness};
+use crate::design::{ControllerDesign, DriveForm, Prefilter};
 use crate::ident::ModelUnits;
-use crate::procedure::result::{FrictionResult, TargetStiffness};
-use crate::provenance::Provenance;
+use crate::record::provenance::Provenance;
 use crate::units::{current_key, relabel_keys, torque_key};
 use crate::{Error, Result};
 use beltune_rt::control::{
@@ -191,7 +192,7 @@ pub struct SetpointSection {
     #[serde(default = "default_coulomb_velocity")]
     pub coulomb_velocity_m_s: f64,
     /// Distance of the validated move's final approach, m (0: none;
-    /// [`super::validation::final_approach`]): the last part of a move,
+    /// [`crate::commission::validation::final_approach`]): the last part of a move,
     /// crept at [`Self::final_approach_speed_m_s`] with the cart's Coulomb
     /// lead held in the move's direction (`beltune_rt::trajectory::Approach`,
     /// `SetpointConversion::motor_sample_held`). It is `2 F_c / c + 1 mm`
@@ -204,11 +205,11 @@ pub struct SetpointSection {
 }
 
 fn default_coulomb_velocity() -> f64 {
-    super::result::CART_COULOMB_VELOCITY_M_S
+    crate::commission::result::CART_COULOMB_VELOCITY_M_S
 }
 
 fn default_final_approach_speed() -> f64 {
-    super::validation::FINAL_APPROACH_SPEED_M_S
+    crate::commission::validation::FINAL_APPROACH_SPEED_M_S
 }
 
 impl SetpointSection {
@@ -305,7 +306,7 @@ impl ControllerFile {
                 viscous_nm_s_per_rad: friction.viscous_nm_s_per_rad,
                 coulomb_nm: friction.coulomb_nm,
                 coulomb_deadband_rad_s: beltune_rt::control::DEFAULT_COULOMB_DEADBAND_RAD_S,
-                coulomb_breakaway_rad: super::validation::coulomb_breakaway_rad(
+                coulomb_breakaway_rad: crate::commission::validation::coulomb_breakaway_rad(
                     model.i_t,
                     friction,
                     belt.c_n_per_m,
@@ -328,12 +329,12 @@ impl ControllerFile {
                 static_force_n: Some(static_force_n),
                 cart_viscous_n_s_per_m: friction.cart_viscous_n_s_per_m,
                 cart_coulomb_n: friction.cart_coulomb_n,
-                coulomb_velocity_m_s: super::result::CART_COULOMB_VELOCITY_M_S,
-                final_approach_distance_m: super::validation::final_approach_for_band(
+                coulomb_velocity_m_s: crate::commission::result::CART_COULOMB_VELOCITY_M_S,
+                final_approach_distance_m: crate::commission::validation::final_approach_for_band(
                     friction.cart_coulomb_n / c_setpoint,
                 )
                 .map_or(0.0, |a| a.distance_m),
-                final_approach_speed_m_s: super::validation::FINAL_APPROACH_SPEED_M_S,
+                final_approach_speed_m_s: crate::commission::validation::FINAL_APPROACH_SPEED_M_S,
             },
             drive_form: DriveForm::of(des),
         };
@@ -520,9 +521,7 @@ mod tests {
     /// The configuration commissioning validates, built the way
     /// `procedure::commission` builds it (independently of this module).
     fn reference(des: &ControllerDesign, f: &FrictionResult, tmax: f64) -> CascadeConfig<f64> {
-        let mut c =
-            crate::procedure::commission::cascade_from_design(des, tmax, f.holding_torque_nm)
-                .unwrap();
+        let mut c = crate::commission::cascade_from_design(des, tmax, f.holding_torque_nm).unwrap();
         c.feedforward = Feedforward::nonlinear(
             des.input.model.rigid_inertia(),
             f.viscous_nm_s_per_rad,
@@ -594,7 +593,7 @@ mod tests {
                     // the cart's friction the friction-aware model found
                     cart_viscous_n_s_per_m: 9.2,
                     cart_coulomb_n: 6.4,
-                    coulomb_velocity_m_s: crate::procedure::result::CART_COULOMB_VELOCITY_M_S,
+                    coulomb_velocity_m_s: crate::commission::result::CART_COULOMB_VELOCITY_M_S,
                 }),
             )
             .unwrap();

@@ -3,10 +3,10 @@
 //! the running-in part discarded; one point per run (mean motor velocity, mean
 //! torque), then the Coulomb + viscous fit (3.35)-(3.36).
 
-use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
 use super::super::motion::{move_to, track, FollowingError, TrackOptions, TrackRecord};
 use super::super::result::FrictionResult;
 use super::super::runner::Runner;
+use super::super::{positioning_limits, CommissioningConfig, DataSheet};
 use super::momentum::{
     momentum_phase, plateau_middle, rigid_inertia_from_phases, MomentumPhase, RigidInertia,
     VelocityWindow,
@@ -383,7 +383,7 @@ const MOMENTUM_WINDOW_S: f64 = 0.01;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::procedure::runner::Sample;
+    use crate::commission::runner::Sample;
 
     /// A rigid body `J` whose velocity still settles on the plateau
     /// (`omega = omega_0 (1 + 0.08 (1 - e^{-t/tau}))`, as plant #26 of the

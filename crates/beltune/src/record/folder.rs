@@ -4,20 +4,23 @@
 //! [`write_outputs`], which writes each file atomically and only after all
 //! three were built, so a failed run leaves nothing half-written.
 
-use super::commission::Commissioning;
-use super::controller_file::ControllerFile;
-use super::recorded::RecordedCommissioning;
-use super::result::{FrictionResult, IdentifiedModel, TargetStiffness, Truth, Validation};
-use crate::design::{ControllerDesign, DesignSummary, DriveForm, SCHEMA_VERSION};
+use super::controller::ControllerFile;
+use super::SCHEMA_VERSION;
+use crate::commission::recorded::RecordedCommissioning;
+use crate::commission::result::{
+    FrictionResult, IdentifiedModel, TargetStiffness, Truth, Validation,
+};
+use crate::commission::Commissioning;
+use crate::design::{ControllerDesign, DesignSummary, DriveForm};
 use crate::ident::ModelUnits;
-use crate::provenance::Provenance;
+use crate::record::provenance::Provenance;
 use crate::report::{ParameterRow, Report};
 use crate::{Error, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
 /// `commissioning.json` (schema [`SCHEMA_VERSION`], docs/schema.md): an
-/// identified-model record ([`crate::design::ModelFile`]) with the controller,
+/// identified-model record ([`super::model::ModelFile`]) with the controller,
 /// the validation and the log.
 #[derive(Clone, Debug, Serialize)]
 pub struct CommissioningJson {
@@ -196,7 +199,7 @@ pub fn commissioning_json(
     }
 }
 
-pub use super::report_build::{build_report, data_files, recorded_data_files};
+pub use crate::report::build::{build_report, data_files, recorded_data_files};
 
 fn sig(x: f64, sig: usize) -> String {
     if x == 0.0 || !x.is_finite() {
@@ -320,7 +323,7 @@ pub fn recorded_outputs(
     run_with_limit.identified.torque_max_nm = Some(torque_max_nm);
     let id = &run.identified;
     let l = crate::units::labels(id.units);
-    let mut report = super::report_build::recorded_report(run, source, Some(&json.provenance))?;
+    let mut report = crate::report::build::recorded_report(run, source, Some(&json.provenance))?;
     report.parameters = recorded_rows(&run_with_limit);
     report.summary = format!(
         "From recorded data ({source}, {:.1} s): resonance {:.2} Hz, antiresonance {:.2} Hz, fit {:.2} dB rms. \

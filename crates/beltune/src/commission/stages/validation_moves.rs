@@ -2,12 +2,12 @@
 //! and nonlinear feedforward, each from the same start; the unmeasured return
 //! to the start runs under the feedback cascade.
 
-use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
 use super::super::motion::{FollowingError, TrackOptions};
 use super::super::result::{FrictionResult, Validation};
 use super::super::validation::{
     run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
 };
+use super::super::{positioning_limits, CommissioningConfig, DataSheet};
 use super::Stages;
 use crate::ident::fit::TwoMassFit;
 use crate::{Error, Result};

@@ -7,11 +7,11 @@ use serde::Serialize;
 
 /// Largest cart tracking error during the validation move, m (thesis chapter
 /// 5: < 1 mm; the same limit the commissioning judges itself by,
-/// [`super::acceptance::MAX_TRACKING_ERROR_M`]).
-pub const DYNAMIC_ERROR_LIMIT_M: f64 = super::acceptance::MAX_TRACKING_ERROR_M;
+/// [`crate::verdict::MAX_TRACKING_ERROR_M`]).
+pub const DYNAMIC_ERROR_LIMIT_M: f64 = crate::verdict::MAX_TRACKING_ERROR_M;
 /// Largest static error after the validation move, m (thesis chapter 5:
-/// < 100 um; [`super::acceptance::MAX_STATIC_ERROR_M`]).
-pub const STATIC_ERROR_LIMIT_M: f64 = super::acceptance::MAX_STATIC_ERROR_M;
+/// < 100 um; [`crate::verdict::MAX_STATIC_ERROR_M`]).
+pub const STATIC_ERROR_LIMIT_M: f64 = crate::verdict::MAX_STATIC_ERROR_M;
 /// Mean coherence of the fitted lines below which the FRF is called noisy.
 pub const MIN_MEAN_COHERENCE: f64 = 0.9;
 /// RMS magnitude residual of the fit above which the model is called poor, dB

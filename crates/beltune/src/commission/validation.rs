@@ -14,7 +14,7 @@ use beltune_rt::trajectory::{Approach, ApproachConfig, Limits, State, Trajectory
 /// positioning limit (chapter 5, 100 um). A narrower band (it was 50 um)
 /// called a cart "not settled" that rests within the static limit it is
 /// judged by (issue 12); hunting beyond the limit still counts as unsettled.
-pub const SETTLING_BAND_M: f64 = super::acceptance::MAX_STATIC_ERROR_M;
+pub const SETTLING_BAND_M: f64 = crate::verdict::MAX_STATIC_ERROR_M;
 /// Window at the end of the record over which the static error is averaged, s.
 pub const STATIC_WINDOW_S: f64 = 0.1;
 
@@ -450,7 +450,7 @@ pub fn simulate_validation_move(
     };
     let mut axis = crate::sim::SimAxis::new(plant, config)?;
     let torque_max = info.torque_max_nm;
-    let feedback = super::commission::cascade_from_design(des, torque_max, 0.0)?;
+    let feedback = super::cascade_from_design(des, torque_max, 0.0)?;
     // The stop is planned and supervised with the deceleration this plant
     // really has (its torque limit on its own rigid inertia, as stage 2 does
     // on the axis), not with the design model's: a payload the design did not

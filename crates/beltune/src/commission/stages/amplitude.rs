@@ -4,9 +4,9 @@
 //! must be small against the excitation for the small-signal FRF to show the
 //! linear model), never beyond the maximum fraction of the torque limit.
 
-use super::super::commission::ExcitationConfig;
 use super::super::motion::move_to;
 use super::super::runner::Runner;
+use super::super::ExcitationConfig;
 use super::Stages;
 use crate::{Error, Result};
 use beltune_rt::control::CascadeConfig;

@@ -5,7 +5,7 @@
 //! `moves.csv`); the data files are optional (a folder without them shows the
 //! table only).
 
-use super::plots::{self, FrfLines, LoopData, FRF_CSV, LOOPS_CSV, MOVES_CSV};
+use super::plot_data::{self as plots, FrfLines, LoopData, FRF_CSV, LOOPS_CSV, MOVES_CSV};
 use crate::ident::FitModel;
 use crate::report::{BodeCurve, BodePlot, FrequencyMarker, MovePlot, Report, Table};
 use crate::{Error, Result};
@@ -192,7 +192,7 @@ pub fn parameter_changes(a: &Value, b: &Value) -> Table {
 }
 
 fn model_tf(json: &Value) -> Option<(crate::lti::Tf, f64)> {
-    let id: super::result::IdentifiedModel =
+    let id: crate::commission::result::IdentifiedModel =
         serde_json::from_value(json.get("identified")?.clone()).ok()?;
     Some((FitModel::WithBeltDamping.tf(&id.params()), id.dead_time_s))
 }
@@ -225,7 +225,7 @@ pub fn compare_report(a: &Path, b: &Path) -> Result<Report> {
     for (tag, f) in [("A", f_ra), ("B", f_rb)] {
         if let Some(f) = f {
             markers.push(FrequencyMarker {
-                label: format!("f_r {tag} {}", super::report_build::hz_text(f)),
+                label: format!("f_r {tag} {}", super::build::hz_text(f)),
                 freq_hz: f,
             });
         }
@@ -316,7 +316,7 @@ pub fn compare_report(a: &Path, b: &Path) -> Result<Report> {
         tables: vec![table],
         overlays,
         moves,
-        provenance: Some(crate::provenance::Provenance::of_this_process(None)),
+        provenance: Some(crate::record::provenance::Provenance::of_this_process(None)),
         ..Report::default()
     })
 }

@@ -5,9 +5,9 @@
 //! same record ([`crate::ident::nonlinear`], issue 12), which the design uses
 //! where it explains the record better than the FRF fit.
 
-use super::super::commission::{DataSheet, ExcitationConfig};
 use super::super::motion::move_to;
 use super::super::result::{IdentifiedModel, TargetStiffness};
+use super::super::{DataSheet, ExcitationConfig};
 use super::Stages;
 use crate::design::MAX_DEAD_TIME_S;
 use crate::ident::dead_time::{estimate_dead_time, DeadTime};
@@ -395,7 +395,7 @@ pub fn identification(
     // the quality of the FRF measurement and of its fit, whichever model is used
     identified.fit_rms_db = frf_fit.fit_rms_db;
     if let Some(nl) = nonlinear.as_ref().filter(|_| nonlinear_note.is_none()) {
-        identified.method = crate::design::model_file::IdentificationMethod::FrictionAware;
+        identified.method = crate::record::model::IdentificationMethod::FrictionAware;
         identified.motor_coulomb_nm = Some(nl.tau_c_motor_nm);
         identified.cart_coulomb_n = Some(nl.f_c_cart_n);
     }

@@ -3,11 +3,11 @@
 //! limits and the bootstrap controller (designed from the data sheet alone).
 
 use super::super::bootstrap::bootstrap_controller;
-use super::super::commission::{positioning_limits, CommissioningConfig, DataSheet};
 use super::super::safety::{
     SafetyLimits, SafetySupervisor, StopCapability, STOP_JERK_PER_DECELERATION,
 };
-use crate::plant::AxisInfo;
+use super::super::{positioning_limits, CommissioningConfig, DataSheet};
+use crate::axis::AxisInfo;
 use crate::Result;
 use beltune_rt::control::CascadeConfig;
 use beltune_rt::trajectory::Limits;

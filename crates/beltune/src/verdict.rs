@@ -1,11 +1,11 @@
 //! Whether a commissioning met its own limits (issue 12; the report's verdict
-//! box is [`super::verdict`]): a commissioning
+//! box is [`crate::report::verdict_old`]): a commissioning
 //! that ends with a controller but misses the thesis' accuracy, saturates the
 //! drive, never settles, or cannot guarantee its margins against the
 //! identification's uncertainty says so, in the library result
 //! ([`Verdict::meets_limits`]) and in the CLI's exit status 5.
 
-use super::result::MoveSummary;
+use crate::commission::result::MoveSummary;
 pub use crate::design::robust::{
     guaranteed_margins, margins_on, GuaranteedMargins, MarginsOn, UNCERTAINTY_SIGMAS,
 };

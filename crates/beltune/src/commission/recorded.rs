@@ -11,7 +11,7 @@ use crate::ident::{MotionFriction, RecordedIdentification};
 use crate::Result;
 use std::time::Instant;
 
-pub use crate::design::model_file::DEFAULT_DEAD_TIME_S;
+pub use crate::record::model::DEFAULT_DEAD_TIME_S;
 
 /// What a recorded commissioning produced.
 #[derive(Clone, Debug)]

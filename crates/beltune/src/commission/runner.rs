@@ -12,7 +12,7 @@
 
 use super::progress::Progress;
 use super::safety::{SafetyLimits, SafetySupervisor, Violation};
-use crate::plant::{Axis, AxisInfo, Measurement};
+use crate::axis::{Axis, AxisInfo, Measurement};
 use crate::{Error, Result};
 use beltune_rt::control::{CascadeConfig, CascadeController, MotionSample, Setpoint};
 use beltune_rt::filter::{velocity_filter, FirstOrder};
@@ -156,9 +156,9 @@ pub struct SafetyStopRecord {
 #[derive(Clone, Debug, PartialEq)]
 pub struct AxisFailureRecord {
     /// Why the exchange failed.
-    pub error: crate::plant::AxisError,
+    pub error: crate::axis::AxisError,
     /// Why the drive's quick stop failed too, if it did.
-    pub quick_stop: Option<crate::plant::AxisError>,
+    pub quick_stop: Option<crate::axis::AxisError>,
     /// The limits the supervisor enforced.
     pub limits: SafetyLimits,
     /// Busy time of the axis at the failed exchange, s.
@@ -746,11 +746,11 @@ fn stop_deceleration(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::axis::AxisError;
+    use crate::commission::bootstrap::bootstrap_controller;
+    use crate::commission::progress::NoProgress;
+    use crate::commission::safety::SafetyLimits;
     use crate::model::rigs;
-    use crate::plant::AxisError;
-    use crate::procedure::bootstrap::bootstrap_controller;
-    use crate::procedure::progress::NoProgress;
-    use crate::procedure::safety::SafetyLimits;
     use crate::sim::{SimAxis, SimConfig};
 
     /// Stop limits of the runner tests (window 0 .. 0.6 m).
@@ -952,7 +952,7 @@ mod tests {
     /// there is room.
     #[test]
     fn a_stop_near_the_edge_brakes_with_its_reserve_issue_12() {
-        use crate::procedure::safety::{StopCapability, STOP_EDGE_MARGIN_M};
+        use crate::commission::safety::{StopCapability, STOP_EDGE_MARGIN_M};
         let cap = StopCapability::from_axis(3.1, 2e-3, 0.0124, 0.3, 0.0).unwrap();
         let limits = SafetyLimits {
             travel_min_m: -0.01,

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-pub use crate::design::model_file::{FrictionResult, IdentifiedModel};
+pub use crate::record::model::{FrictionResult, IdentifiedModel};
 
 /// Result of one validation move.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]

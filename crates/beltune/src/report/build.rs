@@ -1,21 +1,21 @@
 //! The report of a commissioning (issue 16), built from the shared plot data
-//! of [`super::plots`]: verdict first, then parameters, validation, the
+//! of [`super::plot_data`]: verdict first, then parameters, validation, the
 //! measured FRF, the identification experiment, controller, open loops with
 //! margins, closed loops and sensitivities, before/after overlays, friction and
 //! the moves; the data files beside it; the provenance.
 
-use super::commission::Commissioning;
-use super::plots::{
+use super::plot_data::{
     csv_text, decimate, frf_csv, frf_display, frf_lines, loop_data, loops_csv, resonance_markers,
     with_gains, LoopData, EXCITATION_CSV, FRF_CSV, FRICTION_CSV, LOOPS_CSV, MOVES_CSV,
     TRACE_POINTS,
 };
-use super::recorded::RecordedCommissioning;
-use super::result::{IdentifiedModel, MoveSummary, Truth};
-use super::validation::{FeedforwardVariant, MoveResult, SETTLING_BAND_M};
-use super::verdict::{verdict, Verdict, VerdictInput};
+use super::verdict_old::{verdict, Verdict, VerdictInput};
+use crate::commission::recorded::RecordedCommissioning;
+use crate::commission::result::{IdentifiedModel, MoveSummary, Truth};
+use crate::commission::validation::{FeedforwardVariant, MoveResult, SETTLING_BAND_M};
+use crate::commission::Commissioning;
 use crate::design::ControllerDesign;
-use crate::provenance::Provenance;
+use crate::record::provenance::Provenance;
 use crate::report::{
     BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrictionPlot, MarginPoint, MovePlot,
     Panel, ParameterRow, Report,
@@ -195,7 +195,7 @@ pub fn loop_plots(des: &ControllerDesign, f_z_hz: f64, f_r_hz: f64) -> Result<Lo
 fn bootstrap_overlay(run: &Commissioning) -> Result<BodePlot> {
     let ds = &run.datasheet;
     let torque_max = ds.torque_max_nm;
-    let boot = super::bootstrap::bootstrap_controller(
+    let boot = crate::commission::bootstrap::bootstrap_controller(
         ds.rigid_inertia(),
         ds.i_t_m,
         run.design.input.ts_s,
@@ -208,8 +208,8 @@ fn bootstrap_overlay(run: &Commissioning) -> Result<BodePlot> {
         g.k_p_nm_s_per_rad,
         g.k_i_nm_per_rad,
     );
-    let grid = super::plots::loop_grid_hz(&run.design)?;
-    let b = super::plots::loop_data_on(&before, &grid)?;
+    let grid = super::plot_data::loop_grid_hz(&run.design)?;
+    let b = super::plot_data::loop_data_on(&before, &grid)?;
     let a = loop_data(&run.design)?;
     let mut before_curve = b.velocity_open_loop;
     before_curve.label = "before: bootstrap gains (data-sheet inertia, no prefilter)".into();
@@ -681,7 +681,7 @@ pub fn moves_csv(moves: &[MovePlot]) -> String {
         cols.push((&names[2 * i], errors[i]));
         cols.push((&names[2 * i + 1], &m.torque_nm[..n.min(m.torque_nm.len())]));
     }
-    super::plots::csv_text(&cols)
+    super::plot_data::csv_text(&cols)
 }
 
 /// The data files beside the report of a run: (file name, text).

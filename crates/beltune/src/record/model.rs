@@ -25,18 +25,15 @@
 //! With `units = "current"` every N m of a unit reads A (the input was a motor
 //! current and the torque constant is unknown): see [`crate::units`].
 
-use super::{DesignInput, FrictionParams, DEFAULT_TS_S, DEFAULT_T_R_S};
+use crate::design::{DesignInput, FrictionParams, DEFAULT_TS_S, DEFAULT_T_R_S};
 use crate::ident::{Frf, ModelUnits, TwoMassFit};
 use crate::model::TwoMassParams;
-use crate::provenance::Provenance;
+use crate::record::provenance::Provenance;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// Version of the record layout (`commissioning.json`, `controller.toml`, the
-/// `identify --json` model). Files without `schema_version` are version 0 and
-/// read with the old keys.
-pub const SCHEMA_VERSION: u32 = 1;
+use super::SCHEMA_VERSION;
 
 /// Dead time assumed when it was not measured (no actual-torque column), s
 /// (thesis (3.30): 10 samples of 100 us).
@@ -598,11 +595,11 @@ impl ModelFile {
     pub fn design(
         &self,
         ts_s: Option<f64>,
-        knobs: &super::DesignKnobs,
-        rule: super::robust::DesignRule,
-    ) -> Result<super::robust::RobustDesign> {
+        knobs: &crate::design::DesignKnobs,
+        rule: crate::design::robust::DesignRule,
+    ) -> Result<crate::design::robust::RobustDesign> {
         let input = self.design_input(ts_s)?;
-        super::robust::design_identified(
+        crate::design::robust::design_identified(
             &input,
             input.friction.map(|f| f.viscous_nm_s_per_rad),
             self.identified.m_c_sigma,

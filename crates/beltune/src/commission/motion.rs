@@ -143,7 +143,7 @@ pub fn track(
             FollowingError::Recorded => runner.step_unlimited(out.torque_nm, e)?,
         };
         // The exchange returns what the drive measured at the end of the
-        // cycle ([`crate::plant::Axis::exchange`]), i.e. at (k+1) T: the record
+        // cycle ([`crate::axis::Axis::exchange`]), i.e. at (k+1) T: the record
         // pairs it with the desired position of that instant. Pairing it with
         // the desired position at k T added up to v T to the tracking error
         // (1.36 mm at 1 ms for the Table A.8 move; issue 14).

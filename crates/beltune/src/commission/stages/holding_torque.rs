@@ -4,12 +4,12 @@
 //! friction at the two speeds separates them. (The thesis proposes an
 //! integrating position loop; its static torque is only known within the
 //! friction band, this is not.) The friction then fits the bootstrap
-//! controller to the axis ([`crate::procedure::bootstrap::bootstrap_with_friction`])
+//! controller to the axis ([`crate::commission::bootstrap::bootstrap_with_friction`])
 //! before the long move to the identification position.
 
-use super::super::commission::{positioning_limits, DataSheet};
 use super::super::motion::{move_to, track, TrackOptions};
 use super::super::safety::StopCapability;
+use super::super::{positioning_limits, DataSheet};
 use super::friction::constant_velocity_point;
 use super::Stages;
 use crate::{Error, Result};
@@ -159,7 +159,7 @@ fn holding_runs(
             let w = 0.5 * (slow.up_rad_s - slow.down_rad_s);
             if w > 0.0 {
                 let offset = ctrl.torque_offset_nm;
-                ctrl = crate::procedure::bootstrap::bootstrap_with_friction(
+                ctrl = crate::commission::bootstrap::bootstrap_with_friction(
                     ds.rigid_inertia(),
                     ds.i_t_m,
                     ts,
