@@ -122,8 +122,8 @@ fn commission_then_design_from_commissioning_json_and_export() {
         .output()
         .unwrap());
     let (r, c) = (
-        beltune::export::parse_values(&rust),
-        beltune::export::parse_values(&c),
+        beltune::record::export::parse_values(&rust),
+        beltune::record::export::parse_values(&c),
     );
     assert!(r.len() > 30 && r == c, "{r:?}\n{c:?}");
     std::fs::remove_dir_all(&dir).unwrap();

@@ -5,8 +5,8 @@
 //! the Rust `CascadeController`'s bit for bit (same code, same inputs: any
 //! difference is an ABI or export error).
 
-use beltune::export::{c_header, Lang};
 use beltune::record::controller::ControllerFile;
+use beltune::record::export::{c_header, Lang};
 use beltune_rt::control::{CascadeController, Setpoint};
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use std::path::{Path, PathBuf};
@@ -47,7 +47,10 @@ fn exported_c_header_runs_the_same_torques_as_rust() {
     let dir = std::env::temp_dir().join(format!("beltune-ffi-c-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("controller.h"), c_header(&file)).unwrap();
-    assert_eq!(beltune::export::export(&file, Lang::C), c_header(&file));
+    assert_eq!(
+        beltune::record::export::export(&file, Lang::C),
+        c_header(&file)
+    );
 
     // The Rust side: the same move, conversion and controller.
     let cfg = file.cascade_config().unwrap();

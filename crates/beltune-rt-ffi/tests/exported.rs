@@ -3,8 +3,8 @@
 //! tests/data/controller.rs is `beltune export --lang rust` of
 //! tests/data/controller.toml (regenerate with `BELTUNE_BLESS=1`).
 
-use beltune::export::{c_header, parse_values, rust_module, values, Value};
 use beltune::record::controller::ControllerFile;
+use beltune::record::export::{c_header, parse_values, rust_module, values, Value};
 use std::path::Path;
 
 #[allow(dead_code)]

@@ -1,149 +1,517 @@
-//! Whether a commissioning met its own limits (issue 12; the report's verdict
-//! box is [`crate::report::verdict_old`]): a commissioning
-//! that ends with a controller but misses the thesis' accuracy, saturates the
-//! drive, never settles, or cannot guarantee its margins against the
-//! identification's uncertainty says so, in the library result
-//! ([`Verdict::meets_limits`]) and in the CLI's exit status 5.
+//! The one verdict of a commissioning: is the delivered controller good
+//! enough to load into the drive? Computed once, here, from the validation
+//! move of the delivered controller (nonlinear feedforward), the drive's
+//! torque limit and the margins the design guarantees over the
+//! identification's uncertainty. Every output reads it from here:
+//! `commissioning.json` (`verdict`), the exit status of `beltune commission`
+//! (5 when a check fails), its terminal summary and `--json`, `report.html`,
+//! the tuning page and its saved sets.
+//!
+//! | check | passes when | default limit |
+//! | --- | --- | --- |
+//! | `max_tracking_error` | largest cart tracking error of the move `<` limit | 1 mm (thesis chapter 5) |
+//! | `static_error` | static cart error after the move `<` limit | 100 um (thesis chapter 5) |
+//! | `settling` | the error stays inside the settling band before the record ends | the record after the move (1 s) |
+//! | `saturation` | largest torque command of the move `<` the torque limit | the drive's torque limit |
+//! | `guaranteed_phase_margin` | velocity-loop phase margin over the identification's uncertainty `>=` limit | 30 deg |
+//!
+//! Warnings (coherence, fit residual, margins short of the requested ones, a
+//! thin gain margin) do not fail the verdict; they say what to look at.
+//! Without a validation move (recorded data) the verdict is "not
+//! validated": the design's own checks still apply, the move's cannot.
 
-use crate::commission::result::MoveSummary;
-pub use crate::design::robust::{
-    guaranteed_margins, margins_on, GuaranteedMargins, MarginsOn, UNCERTAINTY_SIGMAS,
-};
+use crate::commission::validation::MoveSummary;
+use crate::design::robust::GuaranteedMargins;
+use crate::design::ControllerDesign;
+use crate::record::model::IdentifiedModel;
+use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
-/// Thesis chapter 5: largest cart tracking error with nonlinear feedforward, m.
+/// Thesis chapter 5: largest cart tracking error of the validation move, m.
 pub const MAX_TRACKING_ERROR_M: f64 = 1e-3;
-/// Thesis chapter 5: static positioning error, m.
+/// Thesis chapter 5: static positioning error after the move, m.
 pub const MAX_STATIC_ERROR_M: f64 = 100e-6;
 /// Smallest velocity-loop phase margin the commissioning accepts over the
 /// identification's uncertainty, deg.
 pub const MIN_GUARANTEED_PHASE_MARGIN_DEG: f64 = 30.0;
-/// The outcome of a commissioning against its own limits.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Verdict {
-    /// Every limit met.
-    pub meets_limits: bool,
-    /// One sentence per limit missed (empty when all are met).
-    pub failures: Vec<String>,
-    /// What the commissioning cannot guarantee although the move met its
-    /// limits (a thin margin over the identification's uncertainty).
-    pub warnings: Vec<String>,
-    /// The margins the commissioning guarantees over the uncertainty.
-    pub guaranteed: GuaranteedMargins,
-    /// The validation used a slower move than Table A.8 (the axis cannot do it).
-    pub reduced_move: bool,
+/// Mean coherence of the fitted lines below which the FRF is called noisy.
+pub const MIN_MEAN_COHERENCE: f64 = 0.9;
+/// RMS magnitude residual of the fit above which the model is called poor, dB
+/// (the thesis fits reach about 1 dB).
+pub const MAX_FIT_RMS_DB: f64 = 3.0;
+/// Phase margin short of the requested one that earns a warning, deg.
+pub const MARGIN_SHORTFALL_DEG: f64 = 1.0;
+/// Velocity-loop gain margin below which a warning is given, dB.
+pub const MIN_GAIN_MARGIN_DB: f64 = 6.0;
+/// A torque command within this fraction of the limit counts as saturated.
+const SATURATION_TOLERANCE: f64 = 1e-6;
+
+/// The limits a commissioning is judged against (the thesis' by default).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Limits {
+    /// Largest cart tracking error of the validation move, m.
+    pub max_tracking_error_m: f64,
+    /// Largest static cart error after the move, m.
+    pub max_static_error_m: f64,
+    /// Smallest velocity-loop phase margin guaranteed over the
+    /// identification's uncertainty, deg.
+    pub min_guaranteed_phase_margin_deg: f64,
 }
 
-/// `x < limit`, false for NaN.
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_tracking_error_m: MAX_TRACKING_ERROR_M,
+            max_static_error_m: MAX_STATIC_ERROR_M,
+            min_guaranteed_phase_margin_deg: MIN_GUARANTEED_PHASE_MARGIN_DEG,
+        }
+    }
+}
+
+impl Limits {
+    /// Error unless the lengths are positive and finite and the margin lies in 0..90 deg.
+    pub fn validate(&self) -> Result<()> {
+        crate::error::require_positive("max tracking error [m]", self.max_tracking_error_m)?;
+        crate::error::require_positive("max static error [m]", self.max_static_error_m)?;
+        let pm = self.min_guaranteed_phase_margin_deg;
+        if !(pm.is_finite() && (0.0..90.0).contains(&pm)) {
+            return Err(Error::invalid(
+                "min guaranteed phase margin [deg]",
+                pm,
+                "must lie in 0 ..< 90 deg",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What a check judges.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CheckName {
+    /// Largest cart tracking error of the validation move.
+    MaxTrackingError,
+    /// Static cart error after the move.
+    StaticError,
+    /// The error settles inside the band before the record ends.
+    Settling,
+    /// The move stays below the torque limit.
+    Saturation,
+    /// Velocity-loop phase margin over the identification's uncertainty.
+    GuaranteedPhaseMargin,
+}
+
+/// One judged quantity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Check {
+    /// What is judged.
+    pub name: CheckName,
+    /// The measured value in [`Self::unit`] (`null`: not measured, e.g. a
+    /// cart that never settled).
+    pub value: Option<f64>,
+    /// The limit in [`Self::unit`].
+    pub limit: f64,
+    /// The SI unit of value and limit: `m`, `s`, `N m` or `deg`.
+    pub unit: String,
+    /// Whether the value must stay below the limit (`true`) or reach it (`false`).
+    pub below: bool,
+    /// Whether the check passed (a missing or non-finite value fails).
+    pub passed: bool,
+}
+
+/// Something to look at, with its reason.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Warning {
+    /// Short topic ("coherence", "fit residual", "margins").
+    pub topic: String,
+    /// Why it is a warning, in words a technician can act on.
+    pub reason: String,
+}
+
+/// What the move checks were judged on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ValidatedOn {
+    /// A validation move on the axis (simulated plant or real drive).
+    Axis,
+    /// A move simulated on a model (the tuning page's saved sets).
+    Simulation,
+    /// No move (recorded data).
+    #[default]
+    None,
+}
+
+/// The verdict: every check, the warnings and the next step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Verdict {
+    /// A move was judged and every check passed.
+    pub passed: bool,
+    /// What the move checks were judged on.
+    pub validated_on: ValidatedOn,
+    /// The checks, in the order of the module table.
+    pub checks: Vec<Check>,
+    /// Warnings with their reason.
+    pub warnings: Vec<Warning>,
+    /// What to do next, in words.
+    pub next_step: String,
+}
+
+/// The validation move a verdict judges.
+#[derive(Clone, Copy, Debug)]
+pub struct MoveInput<'a> {
+    /// The move with the delivered controller (nonlinear feedforward).
+    pub summary: &'a MoveSummary,
+    /// Time recorded after the trajectory ended, s: the error must settle within it.
+    pub record_after_move_s: f64,
+    /// The drive's torque limit, N m.
+    pub torque_max_nm: f64,
+    /// Whether it ran on the axis or on a model.
+    pub on: ValidatedOn,
+}
+
+/// What a verdict is judged on.
+#[derive(Clone, Copy, Debug)]
+pub struct VerdictInput<'a> {
+    /// The limits.
+    pub limits: &'a Limits,
+    /// The validation move (`None`: recorded data, no move).
+    pub validation: Option<MoveInput<'a>>,
+    /// The margins the design guarantees over the identification's uncertainty.
+    pub guaranteed: Option<&'a GuaranteedMargins>,
+    /// The delivered design (requested and achieved margins).
+    pub design: &'a ControllerDesign,
+    /// The identified model (coherence and fit residual), if known.
+    pub identified: Option<&'a IdentifiedModel>,
+    /// The controller file the next step names.
+    pub controller_file: &'a str,
+}
+
+/// `x < limit`; false for NaN.
 fn below(x: f64, limit: f64) -> bool {
     x.partial_cmp(&limit) == Some(std::cmp::Ordering::Less)
 }
 
-/// Judge a finished commissioning: the nonlinear-feedforward move against the
-/// thesis' limits, saturation against `torque_max_nm`, the guaranteed margins.
-pub fn judge(
-    nonlinear: &MoveSummary,
-    torque_max_nm: f64,
-    guaranteed: GuaranteedMargins,
-    reduced_move: bool,
-) -> Verdict {
-    let mut failures = Vec::new();
-    if !below(nonlinear.max_tracking_error_m, MAX_TRACKING_ERROR_M) {
-        failures.push(format!(
-            "max cart error {:.3} mm is not below {:.1} mm",
-            nonlinear.max_tracking_error_m * 1e3,
-            MAX_TRACKING_ERROR_M * 1e3
+/// `x >= limit`; false for NaN.
+fn at_least(x: f64, limit: f64) -> bool {
+    matches!(
+        x.partial_cmp(&limit),
+        Some(std::cmp::Ordering::Greater | std::cmp::Ordering::Equal)
+    )
+}
+
+fn check(name: CheckName, value: Option<f64>, limit: f64, unit: &str, is_below: bool) -> Check {
+    let passed = value.is_some_and(|v| {
+        if is_below {
+            below(v, limit)
+        } else {
+            at_least(v, limit)
+        }
+    });
+    Check {
+        name,
+        value: value.filter(|v| v.is_finite()),
+        limit,
+        unit: unit.into(),
+        below: is_below,
+        passed,
+    }
+}
+
+/// Judge a commissioning.
+pub fn judge(input: &VerdictInput) -> Verdict {
+    let l = input.limits;
+    let mut checks = Vec::new();
+    if let Some(m) = &input.validation {
+        let s = m.summary;
+        checks.push(check(
+            CheckName::MaxTrackingError,
+            Some(s.max_tracking_error_m),
+            l.max_tracking_error_m,
+            "m",
+            true,
+        ));
+        checks.push(check(
+            CheckName::StaticError,
+            Some(s.static_error_m),
+            l.max_static_error_m,
+            "m",
+            true,
+        ));
+        checks.push(check(
+            CheckName::Settling,
+            s.settling_time_s,
+            m.record_after_move_s,
+            "s",
+            true,
+        ));
+        let mut saturation = check(
+            CheckName::Saturation,
+            Some(s.max_torque_nm),
+            m.torque_max_nm,
+            "N m",
+            true,
+        );
+        saturation.passed = below(
+            s.max_torque_nm,
+            m.torque_max_nm * (1.0 - SATURATION_TOLERANCE),
+        );
+        checks.push(saturation);
+    }
+    if let Some(g) = input.guaranteed {
+        checks.push(check(
+            CheckName::GuaranteedPhaseMargin,
+            Some(g.velocity_phase_margin_deg),
+            l.min_guaranteed_phase_margin_deg,
+            "deg",
+            false,
         ));
     }
-    if !below(nonlinear.static_error_m, MAX_STATIC_ERROR_M) {
-        failures.push(format!(
-            "static error {:.1} um is not below {:.0} um",
-            nonlinear.static_error_m * 1e6,
-            MAX_STATIC_ERROR_M * 1e6
-        ));
-    }
-    if nonlinear.settling_time_s.is_none() {
-        failures.push("the cart did not settle within the record".into());
-    }
-    if nonlinear.max_torque_nm >= torque_max_nm * (1.0 - 1e-6) {
-        failures.push(format!(
-            "the move saturated the drive at its torque limit {torque_max_nm:.3} N m"
-        ));
-    }
-    let mut warnings = Vec::new();
-    if below(
-        guaranteed.velocity_phase_margin_deg,
-        MIN_GUARANTEED_PHASE_MARGIN_DEG,
-    ) || guaranteed.velocity_phase_margin_deg.is_nan()
-    {
-        warnings.push(format!(
-            "the velocity loop's phase margin over the identification's uncertainty is {:.1} deg, below {:.0} deg",
-            guaranteed.velocity_phase_margin_deg, MIN_GUARANTEED_PHASE_MARGIN_DEG
-        ));
-    }
+    let warnings = warnings(input);
+    let validated_on = input.validation.map_or(ValidatedOn::None, |m| m.on);
+    let all = checks.iter().all(|c| c.passed);
+    let passed = all && validated_on != ValidatedOn::None;
+    let file = input.controller_file;
+    let next_step = match (all, validated_on) {
+        (true, ValidatedOn::Axis) => format!("Load {file} into the drive."),
+        (true, ValidatedOn::Simulation) => format!(
+            "The move was simulated, not run: commission the axis with this design before \
+             loading {file} for production."
+        ),
+        (true, ValidatedOn::None) => format!(
+            "No validation move was run: load {file} into the drive at reduced torque limit and \
+             run a test move before production."
+        ),
+        (false, _) => format!(
+            "Do not load {file} for production: it misses its limits. Check the mechanics \
+             (belt tension, loose payload), then commission again, or open `beltune serve` on \
+             this folder and lower the dynamics."
+        ),
+    };
     Verdict {
-        meets_limits: failures.is_empty(),
-        failures,
+        passed,
+        validated_on,
+        checks,
         warnings,
-        guaranteed,
-        reduced_move,
+        next_step,
+    }
+}
+
+fn warnings(input: &VerdictInput) -> Vec<Warning> {
+    let mut out = Vec::new();
+    let mut warn = |topic: &str, reason: String| {
+        out.push(Warning {
+            topic: topic.into(),
+            reason,
+        })
+    };
+    if let Some(id) = input.identified {
+        let c = id.mean_coherence;
+        if c.is_finite() && !at_least(c, MIN_MEAN_COHERENCE) {
+            warn(
+                "coherence",
+                format!(
+                    "the measured frequency response is noisy (mean coherence {c:.2}, below \
+                     {MIN_MEAN_COHERENCE}): increase the excitation amplitude or the number of \
+                     averaged periods"
+                ),
+            );
+        }
+        let r = id.fit_rms_db;
+        if r.is_finite() && !at_least(MAX_FIT_RMS_DB, r) {
+            warn(
+                "fit residual",
+                format!(
+                    "the two-mass model fits the measurement poorly ({r:.2} dB rms, above \
+                     {MAX_FIT_RMS_DB} dB): the axis may have a second resonance or strong \
+                     friction; compare the curves below"
+                ),
+            );
+        }
+    }
+    let d = input.design;
+    for (loop_name, want, got) in [
+        (
+            "velocity",
+            d.knobs.pm_velocity_deg,
+            d.velocity_margins.phase_margin_deg,
+        ),
+        (
+            "position",
+            d.knobs.pm_position_deg,
+            d.position_margins.phase_margin_deg,
+        ),
+    ] {
+        if !at_least(got, want - MARGIN_SHORTFALL_DEG) {
+            warn(
+                "margins",
+                format!(
+                    "{loop_name} loop phase margin {got:.1} deg is short of the requested \
+                     {want:.1} deg"
+                ),
+            );
+        }
+    }
+    let gm = d.velocity_margins.gain_margin_db;
+    if !at_least(gm, MIN_GAIN_MARGIN_DB) {
+        warn(
+            "margins",
+            format!(
+                "velocity loop gain margin {gm:.1} dB is below {MIN_GAIN_MARGIN_DB} dB: a small \
+                 change of the load can make the loop oscillate"
+            ),
+        );
+    }
+    out
+}
+
+impl CheckName {
+    /// How a person reads it: "max cart error", "static error", ...
+    pub fn label(self) -> &'static str {
+        match self {
+            CheckName::MaxTrackingError => "max cart error",
+            CheckName::StaticError => "static error",
+            CheckName::Settling => "settling time",
+            CheckName::Saturation => "peak torque",
+            CheckName::GuaranteedPhaseMargin => "guaranteed phase margin",
+        }
+    }
+
+    /// What it is, in a sentence fragment for the report.
+    pub fn description(self) -> &'static str {
+        match self {
+            CheckName::MaxTrackingError => "max cart tracking error during the move",
+            CheckName::StaticError => "static error after the move",
+            CheckName::Settling => "time to settle within the static limit after the move",
+            CheckName::Saturation => "largest torque command of the move (torque limit)",
+            CheckName::GuaranteedPhaseMargin => {
+                "velocity-loop phase margin over the identification's uncertainty"
+            }
+        }
+    }
+}
+
+/// A value of a check in display units: (scale from SI, unit, decimals).
+fn display_unit(c: &Check) -> (f64, &'static str, usize) {
+    match c.unit.as_str() {
+        "m" if c.limit < 1e-3 => (1e6, "um", 1),
+        "m" => (1e3, "mm", 3),
+        "s" => (1.0, "s", 3),
+        "N m" => (1.0, "N m", 3),
+        _ => (1.0, "deg", 1),
+    }
+}
+
+/// A number without trailing zeros (`1`, `0.5`, `100`).
+fn tidy(x: f64) -> String {
+    let s = format!("{x:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.to_string()
+    }
+}
+
+impl Check {
+    /// The measured value in display units ("0.042", "3.0"; "none" when not measured).
+    pub fn value_text(&self) -> String {
+        let (scale, _, digits) = display_unit(self);
+        match self.value {
+            Some(v) => format!("{:.digits$}", v * scale),
+            None => "none".into(),
+        }
+    }
+
+    /// The limit in display units, without trailing zeros.
+    pub fn limit_text(&self) -> String {
+        tidy(self.limit * display_unit(self).0)
+    }
+
+    /// The display unit (`mm`, `um`, `s`, `N m`, `deg`).
+    pub fn display_unit(&self) -> &'static str {
+        display_unit(self).1
+    }
+
+    /// The relation the value must keep to the limit: `<` or `>=`.
+    pub fn relation(&self) -> &'static str {
+        if self.below {
+            "<"
+        } else {
+            ">="
+        }
+    }
+
+    /// `max cart error 0.042 mm < 1 mm`; a failed check shows the relation that
+    /// does not hold reversed (`1.200 mm >= 1 mm`, `12.0 deg < 30 deg`).
+    pub fn text(&self) -> String {
+        let unit = self.display_unit();
+        let op = match (self.passed, self.below) {
+            (true, b) => {
+                if b {
+                    "<"
+                } else {
+                    ">="
+                }
+            }
+            (false, true) => ">=",
+            (false, false) => "<",
+        };
+        match (self.name, self.value) {
+            (CheckName::Settling, None) => format!(
+                "the cart did not settle within the {} s recorded after the move",
+                self.limit_text()
+            ),
+            _ => format!(
+                "{} {} {unit} {op} {} {unit}",
+                self.name.label(),
+                self.value_text(),
+                self.limit_text()
+            ),
+        }
+    }
+}
+
+impl Verdict {
+    /// Every check passed (a verdict without a move may still have all its checks passed).
+    pub fn limits_met(&self) -> bool {
+        self.checks.iter().all(|c| c.passed)
+    }
+
+    /// `PASS`, `FAIL` or `NOT VALIDATED`.
+    pub fn word(&self) -> &'static str {
+        if !self.limits_met() {
+            "FAIL"
+        } else if self.passed {
+            "PASS"
+        } else {
+            "NOT VALIDATED"
+        }
+    }
+
+    /// `PASS: max cart error 0.042 mm < 1 mm, ...` with every check.
+    pub fn text(&self) -> String {
+        let checks: Vec<String> = self.checks.iter().map(Check::text).collect();
+        if checks.is_empty() {
+            self.word().to_string()
+        } else {
+            format!("{}: {}", self.word(), checks.join(", "))
+        }
+    }
+
+    /// The checks that failed, as text.
+    pub fn failures(&self) -> Vec<String> {
+        self.checks
+            .iter()
+            .filter(|c| !c.passed)
+            .map(Check::text)
+            .collect()
+    }
+
+    /// The check of `name`, if it was judged.
+    pub fn check(&self, name: CheckName) -> Option<&Check> {
+        self.checks.iter().find(|c| c.name == name)
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn good() -> MoveSummary {
-        MoveSummary {
-            max_tracking_error_m: 0.4e-3,
-            static_error_m: 20e-6,
-            settling_time_s: Some(0.1),
-            max_motor_error_m: 1e-3,
-            max_torque_nm: 1.5,
-        }
-    }
-
-    fn margins_ok() -> GuaranteedMargins {
-        GuaranteedMargins {
-            velocity_phase_margin_deg: 50.0,
-            velocity_gain_margin_db: 8.0,
-            position_phase_margin_deg: 70.0,
-            models: 18,
-        }
-    }
-
-    /// Issue 12 ("silent bad successes"): a saturated move, a hunting axis
-    /// that never settles, or a large error is a failed verdict, not a success.
-    #[test]
-    fn a_commissioning_that_misses_its_limits_says_so_issue_12() {
-        assert!(judge(&good(), 3.1, margins_ok(), false).meets_limits);
-        let saturated = MoveSummary {
-            max_torque_nm: 3.1,
-            ..good()
-        };
-        let v = judge(&saturated, 3.1, margins_ok(), false);
-        assert!(
-            !v.meets_limits && v.failures[0].contains("saturated"),
-            "{v:?}"
-        );
-        let hunting = MoveSummary {
-            settling_time_s: None,
-            static_error_m: 300e-6,
-            ..good()
-        };
-        let v = judge(&hunting, 3.1, margins_ok(), false);
-        assert_eq!(v.failures.len(), 2, "{v:?}");
-        let nan = MoveSummary {
-            max_tracking_error_m: f64::NAN,
-            ..good()
-        };
-        assert!(!judge(&nan, 3.1, margins_ok(), false).meets_limits);
-        let thin = GuaranteedMargins {
-            velocity_phase_margin_deg: 12.0,
-            ..margins_ok()
-        };
-        let v = judge(&good(), 3.1, thin, false);
-        assert!(v.meets_limits && v.warnings.len() == 1, "{v:?}");
-    }
-}
+mod tests;

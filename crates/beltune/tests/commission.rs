@@ -111,10 +111,10 @@ fn egc70_with_payload_identifies_within_2_percent_and_tracks_like_the_thesis() {
     assert!((run.design.velocity_margins.phase_margin_deg - k.pm_velocity_deg).abs() < 0.01);
     assert!((run.design.position_margins.phase_margin_deg - k.pm_position_deg).abs() < 0.01);
     assert!(
-        run.verdict.guaranteed.velocity_phase_margin_deg
+        run.guaranteed.velocity_phase_margin_deg
             >= beltune::design::robust::GUARANTEED_PHASE_MARGIN_DEG,
         "{:?}",
-        run.verdict.guaranteed
+        run.guaranteed
     );
 }
 

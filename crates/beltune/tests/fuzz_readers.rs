@@ -125,8 +125,8 @@ proptest! {
         if let Ok(cols) = read_csv_columns(&p, &["t", "u", "y"]) {
             check_columns(&cols);
             if cols.rows() > 0 {
-                let _ = beltune::ident::record::check_time(&cols, "t", 2);
-                let _ = beltune::ident::record::check_not_constant(&cols, "u");
+                let _ = beltune::ident::csv_columns::check_time(&cols, "t", 2);
+                let _ = beltune::ident::csv_columns::check_not_constant(&cols, "u");
             }
         }
     }

@@ -2,8 +2,8 @@
 //! a Rust module of `beltune_rt` constants or a C header for `beltune_rt.h`
 //! (crate beltune-rt-ffi), with the same values to the last digit.
 
-use beltune::export::{export, Lang};
 use beltune::record::controller::ControllerFile;
+use beltune::record::export::{export, Lang};
 use std::path::PathBuf;
 
 /// Target language.

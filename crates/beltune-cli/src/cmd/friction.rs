@@ -5,7 +5,7 @@
 use super::util::write_atomic;
 use anyhow::Context;
 use beltune::ident::{
-    identify_from_motion, read_csv_columns, record::check_time, MotionFrictionConfig,
+    csv_columns::check_time, identify_from_motion, read_csv_columns, MotionFrictionConfig,
 };
 use std::path::PathBuf;
 
@@ -61,7 +61,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ],
     )?;
     check_time(&cols, &args.time, 50)?;
-    beltune::ident::record::check_not_constant(&cols, &args.position)?;
+    beltune::ident::csv_columns::check_not_constant(&cols, &args.position)?;
     let r = identify_from_motion(
         cols.column(&args.time).expect("read"),
         cols.column(&args.position).expect("read"),

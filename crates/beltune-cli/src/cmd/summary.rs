@@ -7,15 +7,15 @@
 //!
 //! | key | meaning |
 //! | --- | --- |
-//! | `schema` | `"beltune-commission-summary/1"` |
-//! | `source` | the plant name or file, or the recorded CSV |
-//! | `status` | `"ok"` or `"limits_not_met"` |
+//! | `schema` | `"beltune-commission-summary/2"` |
+//! | `source` | the plant name or file, the drive, or the recorded CSV |
+//! | `status` | `"ok"`, `"not_validated"` (recorded data: no move) or `"limits_not_met"` |
 //! | `exit_code` | the status the command exits with (0 or 5) |
 //! | `identified` | `f_r_hz`, `f_z_hz`, `theta_e_kg_m2`, `m_c_kg`, `c_n_per_m`, `d_m_n_s_per_m`, `d_c_n_s_per_m`, `dead_time_s`, `fit_rms_db`, `mean_coherence` |
 //! | `truth` | simulated plants: `f_r_hz`, `f_z_hz`, `m_c_kg`, `c_n_per_m`; `null` for recorded data |
 //! | `controller` | `k_p_nm_s_per_rad`, `k_i_nm_per_rad`, `k_pp_per_s`, `velocity_crossover_hz`, `velocity_phase_margin_deg`, `position_crossover_hz`, `position_phase_margin_deg`, `gain_at_resonance_db` |
-//! | `validation` | `start_m`, `target_m`, `max_tracking_error_none_m`, `max_tracking_error_linear_m`, `max_tracking_error_nonlinear_m`, `static_error_nonlinear_m`, `settling_time_nonlinear_s` (or `null`); `null` for recorded data |
-//! | `verdict` | `passed`, `checks` (each `name`, `value_m`, `limit_m`, `passed`); `null` for recorded data |
+//! | `validation` | `start_m`, `target_m` (the move that ran), `max_tracking_error_none_m`, `max_tracking_error_linear_m`, `max_tracking_error_nonlinear_m`, `static_error_nonlinear_m`, `settling_time_nonlinear_s` (or `null`); `null` for recorded data |
+//! | `verdict` | the library's verdict, as in `commissioning.json`: `passed`, `validated_on`, `checks` (each `name`, `value`, `limit`, `unit`, `below`, `passed`), `warnings`, `next_step` |
 //! | `axis_busy_s` | time the axis was busy (`null` for recorded data) |
 //! | `computation_s`, `wall_time_s` | computing time, elapsed time of the command |
 //! | `files` | the files written |
@@ -24,16 +24,24 @@
 //! in the units of the record's input column (N m, or A for a current
 //! record); the text form then prints them without units.
 
-use super::verdict::Verdict;
+//!
+//! Everything here is read from the record the run wrote
+//! ([`CommissioningRecord`]), so the terminal, `--json`, `commissioning.json`
+//! and the report say the same.
+
 use crate::term;
-use beltune::commission::result::{IdentifiedModel, Truth, Validation};
-use beltune::design::ControllerDesign;
+use beltune::commission::validation::Validation;
+use beltune::design::DesignSummary;
+use beltune::record::commissioning::{AxisRecord, CommissioningRecord, ValidationMove};
+use beltune::record::model::IdentifiedModel;
+use beltune::sim::Truth;
+use beltune::verdict::Verdict;
 use serde::Serialize;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
 /// The schema name and version of the JSON summary.
-pub const SCHEMA: &str = "beltune-commission-summary/1";
+pub const SCHEMA: &str = "beltune-commission-summary/2";
 
 /// Columns of the label in front of a summary line.
 const LABEL_WIDTH: usize = 10;
@@ -132,10 +140,10 @@ pub struct Summary {
     /// The truth (simulated plants only).
     pub truth: Option<TruthSummary>,
     /// The controller.
-    pub controller: ControllerSummary,
+    pub controller: Option<ControllerSummary>,
     /// The validation (axis runs only).
     pub validation: Option<ValidationSummary>,
-    /// The verdict on the validation (axis runs only).
+    /// The verdict (the library's, as in `commissioning.json`).
     pub verdict: Option<Verdict>,
     /// Time the axis was busy, s.
     pub axis_busy_s: Option<f64>,
@@ -182,27 +190,27 @@ impl TruthSummary {
 }
 
 impl ControllerSummary {
-    /// From the design.
-    pub fn of(d: &ControllerDesign) -> Self {
+    /// From the design's summary.
+    pub fn of(d: &DesignSummary) -> Self {
         ControllerSummary {
             k_p_nm_s_per_rad: d.k_p,
             k_i_nm_per_rad: d.k_i,
             k_pp_per_s: d.k_pp,
-            velocity_crossover_hz: d.velocity_margins.crossover_rad_s / (2.0 * PI),
-            velocity_phase_margin_deg: d.velocity_margins.phase_margin_deg,
-            position_crossover_hz: d.position_margins.crossover_rad_s / (2.0 * PI),
-            position_phase_margin_deg: d.position_margins.phase_margin_deg,
+            velocity_crossover_hz: d.omega_c_velocity / (2.0 * PI),
+            velocity_phase_margin_deg: d.phase_margin_velocity_deg,
+            position_crossover_hz: d.omega_c_position / (2.0 * PI),
+            position_phase_margin_deg: d.phase_margin_position_deg,
             gain_at_resonance_db: d.gain_at_resonance_db,
         }
     }
 }
 
 impl ValidationSummary {
-    /// From the three moves from `start_m` to `target_m`.
-    pub fn of(v: &Validation, start_m: f64, target_m: f64) -> Self {
+    /// From the three moves of the move `m` that ran.
+    pub fn of(v: &Validation, m: &ValidationMove) -> Self {
         ValidationSummary {
-            start_m,
-            target_m,
+            start_m: m.start_m,
+            target_m: m.target_m,
             max_tracking_error_none_m: v.none.max_tracking_error_m,
             max_tracking_error_linear_m: v.linear.max_tracking_error_m,
             max_tracking_error_nonlinear_m: v.nonlinear.max_tracking_error_m,
@@ -213,6 +221,51 @@ impl ValidationSummary {
 }
 
 impl Summary {
+    /// The summary of the record a run wrote into `files`, with the elapsed
+    /// time of the command.
+    pub fn of(record: &CommissioningRecord, files: Vec<PathBuf>, wall_time_s: f64) -> Self {
+        let recorded = matches!(record.axis, Some(AxisRecord::Recorded { .. }));
+        let verdict = record.verdict.clone();
+        let (status, exit) = match &verdict {
+            Some(v) if !v.limits_met() => ("limits_not_met", crate::exit::ExitStatus::LimitsNotMet),
+            Some(v) if !v.passed => ("not_validated", crate::exit::ExitStatus::Success),
+            _ => ("ok", crate::exit::ExitStatus::Success),
+        };
+        let nan = f64::NAN;
+        Summary {
+            schema: SCHEMA,
+            source: record.plant.clone(),
+            status,
+            exit_code: exit.code(),
+            identified: IdentifiedSummary::of(&record.identified),
+            truth: record.truth.as_ref().map(TruthSummary::of),
+            controller: record.controller.as_ref().map(ControllerSummary::of),
+            validation: match (&record.validation, &record.validation_move) {
+                (Some(v), Some(m)) => Some(ValidationSummary::of(v, m)),
+                _ => None,
+            },
+            verdict,
+            axis_busy_s: if recorded {
+                None
+            } else {
+                record.experiment_time_s
+            },
+            computation_s: record.computation_time_s.unwrap_or(nan),
+            wall_time_s,
+            files,
+            record_units: recorded,
+        }
+    }
+
+    /// The exit status the summary reports.
+    pub fn exit_status(&self) -> crate::exit::ExitStatus {
+        if self.status == "limits_not_met" {
+            crate::exit::ExitStatus::LimitsNotMet
+        } else {
+            crate::exit::ExitStatus::Success
+        }
+    }
+
     /// The summary as pretty JSON.
     pub fn json(&self) -> anyhow::Result<String> {
         Ok(serde_json::to_string_pretty(self)?)
@@ -238,7 +291,6 @@ impl Summary {
     /// units of the record, printed without units.
     fn record_lines(&self, add: &mut impl FnMut(&str, String)) {
         let id = &self.identified;
-        let c = &self.controller;
         add(
             "identified",
             format!(
@@ -253,6 +305,7 @@ impl Summary {
                 id.mean_coherence
             ),
         );
+        let Some(c) = &self.controller else { return };
         add(
             "controller",
             format!(
@@ -289,7 +342,7 @@ impl Summary {
                 id.mean_coherence
             ),
         );
-        let c = &self.controller;
+        let Some(c) = &self.controller else { return };
         add(
             "controller",
             format!(

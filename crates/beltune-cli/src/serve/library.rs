@@ -1,15 +1,13 @@
-//! Where the tuning page's design model comes from: a commissioning folder
-//! (`commissioning.json` and `frf.csv`, written by `beltune commission`) or the
-//! built-in axis, commissioned once at start-up exactly as `beltune commission`
-//! does with its defaults (egc70, 11.2 kg, seed 1): the page then shows the
-//! model, the design and the numbers of the report. Plot data and the simulated
-//! validation move come from the library (`beltune::report::plot_data`,
-//! `beltune::commission::validation::simulate_validation_move`), the same code
-//! the report and the commissioning use.
+//! Where the tuning page's design model comes from: a result folder (read by
+//! the library's one folder reader, [`ResultFolder::read`]) or the built-in
+//! axis, commissioned once at start-up exactly as `beltune commission` does
+//! with its defaults (egc70, 11.2 kg, seed 1): the page then shows the model,
+//! the design and the numbers of the report. Plot data, the simulated
+//! validation move, the verdict and the saved set come from the library (the
+//! same code the report and the commissioning use).
 
 use anyhow::Context;
 use beltune::model::TwoMassParams;
-use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 use super::api::{
@@ -17,35 +15,32 @@ use super::api::{
     FrfOverlay, Gains, Knobs, LoopMargins, MoveData, PrefilterInfo, PrefilterKind,
 };
 use super::tuner::{ModelSummary, SavedFile, TuneError, Tuner};
-use beltune::commission::result::{FrictionResult, MoveSummary, TargetStiffness};
 use beltune::commission::validation::{
     simulate_validation_move, FeedforwardVariant, MoveResult, MoveSpec,
 };
-use beltune::commission::NoProgress;
-use beltune::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
-use beltune::design::robust::{design_identified, DesignRule};
+use beltune::commission::{commission, Commissioning, CommissioningConfig, DataSheet, NoProgress};
+use beltune::design::robust::{design_identified, DesignRule, RobustDesign};
 use beltune::design::{
-    ControllerDesign, DesignInput, DesignKnobs, Dynamics, FrictionParams, Prefilter,
+    ControllerDesign, DesignInput, DesignKnobs, Dynamics, Prefilter,
     PrefilterKind as DesignPrefilterKind,
 };
 use beltune::ident::FitModel;
-use beltune::ident::ModelUnits;
 use beltune::lti::StabilityMargins;
 use beltune::model::rigs::{self, LinearPlant, Plant};
-use beltune::record::folder::{self as outputs, AxisRecord};
+use beltune::record::commissioning::{AxisRecord, Origin};
+use beltune::record::model::FrictionResult;
 use beltune::record::provenance::Provenance;
-use beltune::report::build as report_build;
-use beltune::report::plot_data::{self as plots, FrfLines};
-use beltune::report::{
-    render_html, BodeCurve, ExcitationPlot, FrictionPlot, ParameterRow, Report, Table,
-};
-use beltune::sim::{SimAxis, SimConfig};
+use beltune::report::folder::{ResultFolder, ResultSet, TunedDesign};
+use beltune::report::plot_data;
+use beltune::report::BodeCurve;
+use beltune::sim::{SimAxis, SimConfig, Truth};
+use beltune::verdict::{judge, MoveInput, ValidatedOn, VerdictInput};
 use std::time::Instant;
 
 /// File read from `--commissioning DIR`.
-pub const COMMISSIONING_FILE: &str = "commissioning.json";
+pub const COMMISSIONING_FILE: &str = beltune::record::COMMISSIONING_FILE;
 /// Points of the loop plots (the library's grid, shared with the report).
-pub const PLOT_POINTS: usize = plots::LOOP_PLOT_POINTS;
+pub const PLOT_POINTS: usize = plot_data::LOOP_PLOT_POINTS;
 /// Seed of the built-in commissioning (the default of `beltune commission`).
 pub const BUILTIN_SEED: u64 = 1;
 /// Cart position at the start of the built-in commissioning (the default of
@@ -54,118 +49,50 @@ pub const BUILTIN_START_POSITION_M: f64 = 0.05;
 /// Seed of the page's simulated moves.
 pub const MOVE_SEED: u64 = 1;
 
-/// Friction identified from constant-velocity runs (thesis 3.6), as seen at the motor.
-#[derive(Debug, Clone, Copy, Deserialize)]
-pub struct FrictionTotals {
-    /// Viscous friction d_v, N m s/rad.
-    #[serde(alias = "viscous")]
-    pub viscous_nm_s_per_rad: f64,
-    /// Coulomb friction tau_c, N m.
-    #[serde(alias = "coulomb")]
-    pub coulomb_nm: f64,
-    /// Viscous-only fit (linear feedforward), N m s/rad; absent: `viscous_nm_s_per_rad`.
-    #[serde(default, alias = "linear_viscous")]
-    pub linear_viscous_nm_s_per_rad: Option<f64>,
-    /// Holding torque (tilted axis), N m; absent: 0.
-    #[serde(default)]
-    pub holding_torque_nm: Option<f64>,
-    /// The cart's Coulomb friction, N (setpoint's stretch lead); absent: 0.
-    #[serde(default)]
-    pub cart_coulomb_n: f64,
-    /// The cart's viscous friction, N s/m; absent: 0.
-    #[serde(default)]
-    pub cart_viscous_n_s_per_m: f64,
-}
-
-/// The validation summary of `commissioning.json` (nonlinear move only).
-#[derive(Debug, Clone, Deserialize)]
-pub struct ValidationFile {
-    /// The move with nonlinear feedforward.
-    pub nonlinear: MoveSummary,
-}
-
-/// The parts of `commissioning.json` the tuning page needs.
-#[derive(Debug, Clone, Deserialize)]
-pub struct CommissioningFile {
-    /// Identified model (the keys `beltune design` reads; extra keys are ignored).
-    pub identified: beltune::record::model::IdentifiedModel,
-    /// Identified friction (optional).
-    #[serde(default)]
-    pub friction: Option<FrictionTotals>,
-    /// The commissioning's validation (optional: recorded data has none).
-    #[serde(default)]
-    pub validation: Option<ValidationFile>,
-}
-
-/// The model the page designs for.
+/// The model the page designs for: a result (read from a folder, or made
+/// in-process for the built-in axis) and where it came from.
 #[derive(Debug, Clone)]
 pub struct DesignModel {
     /// Human-readable origin.
     pub source: String,
-    /// Linear two-mass model.
-    pub params: TwoMassParams,
-    /// Current-loop dead time, s.
-    pub dead_time_s: f64,
-    /// Friction for the feedforward, if known.
-    pub friction: Option<FrictionTotals>,
-    /// The measured FRF (`frf.csv`), if known.
-    pub frf: Option<FrfLines>,
-    /// The commissioning's own validation move (nonlinear feedforward), if known.
-    pub commissioned: Option<MoveSummary>,
-    /// `commissioning.json` as read (saved sets patch its controller).
-    pub json: Option<serde_json::Value>,
+    /// The result: its record (model, friction, validation, the simulated
+    /// plant it ran on) and data files (FRF, excitation, friction runs).
+    pub result: ResultFolder,
+    /// Whether the result was read from a folder (a saved report then says
+    /// which files the folder lacks).
+    pub from_folder: bool,
     /// The exact design input of an in-process commissioning (sampling time,
     /// velocity filter), if known.
     pub input: Option<DesignInput>,
-    /// Torque limit of the drive from the record, N m (`None`: egc70's).
-    pub torque_max_nm: Option<f64>,
-    /// Unit system of the record (current units stay current units in a saved set).
-    pub units: ModelUnits,
-    /// What the commissioning ran on (`commissioning.json` key `axis`; absent in older files).
-    pub axis: Option<AxisRecord>,
-    /// The identification experiment as the report plots it (`excitation.csv`), if known.
-    pub excitation: Option<ExcitationPlot>,
-    /// The friction runs (`friction.csv`), if known.
-    pub friction_runs: Option<FrictionPlot>,
-    /// One-sigma uncertainty of the identified `m_c`, kg (NaN: unknown, 5 %).
-    pub m_c_sigma: f64,
-    /// One-sigma uncertainty of the identified `c`, N/m (NaN: unknown, 5 %).
-    pub c_sigma: f64,
-    /// The belt stiffness at the validation target (`commissioning.json` key
-    /// `target_stiffness`), which the static stretch of a saved controller
-    /// uses as the commissioning's did; `None`: the model's `c`.
-    pub target_stiffness: Option<TargetStiffness>,
 }
 
-/// Read `dir/commissioning.json` (and `dir/frf.csv` when present); every
-/// failure names the file.
+impl DesignModel {
+    /// The identified two-mass parameters.
+    pub fn params(&self) -> TwoMassParams {
+        self.result.record.identified.params()
+    }
+
+    /// The identified dead time, s.
+    pub fn dead_time_s(&self) -> f64 {
+        self.result.record.identified.dead_time_s
+    }
+
+    /// The identified friction, if any.
+    pub fn friction(&self) -> Option<&FrictionResult> {
+        self.result.record.friction.as_ref()
+    }
+}
+
+/// Read a result folder (`dir/commissioning.json`, the data files beside it)
+/// with the library's folder reader; a model the page cannot design for (no
+/// positive dead time, negative friction) is refused naming the file.
 pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
     let path = dir.join(COMMISSIONING_FILE);
-    let text = beltune::io::read_to_string_capped(&path, beltune::io::MAX_TEXT_BYTES)?;
-    let file = beltune::record::model::ModelFile::parse(&text, &path.display().to_string())
-        .with_context(|| format!("parsing {}", path.display()))?;
-    let json: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    let commissioned = json
-        .get("validation")
-        .and_then(|v| v.get("nonlinear"))
-        .and_then(|n| serde_json::from_value::<MoveSummary>(n.clone()).ok());
-    let id = file.identified;
-    let params = id.params();
-    params
-        .validate()
-        .with_context(|| format!("{}: identified model", path.display()))?;
+    let result = ResultFolder::read(dir)?;
+    let id = &result.record.identified;
     beltune::error::require_positive("dead_time_s [s]", id.dead_time_s)
         .with_context(|| format!("{}: identified model", path.display()))?;
-    let friction = file.friction.map(|f| FrictionTotals {
-        viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
-        coulomb_nm: f.coulomb_nm,
-        linear_viscous_nm_s_per_rad: Some(f.linear_viscous_nm_s_per_rad),
-        holding_torque_nm: Some(f.holding_torque_nm),
-        cart_coulomb_n: f.cart_coulomb_n,
-        cart_viscous_n_s_per_m: f.cart_viscous_n_s_per_m,
-    });
-    if let Some(f) = friction {
+    if let Some(f) = &result.record.friction {
         beltune::error::require_non_negative(
             "friction.viscous [N m s/rad]",
             f.viscous_nm_s_per_rad,
@@ -173,72 +100,11 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
         .and_then(|_| beltune::error::require_non_negative("friction.coulomb [N m]", f.coulomb_nm))
         .with_context(|| format!("{}: friction", path.display()))?;
     }
-    let frf_path = dir.join(plots::FRF_CSV);
-    let frf = if frf_path.exists() {
-        Some(
-            plots::read_frf_csv(&frf_path)
-                .with_context(|| format!("reading {}", frf_path.display()))?,
-        )
-    } else {
-        None
-    };
-    let axis = match json.get("axis") {
-        None | Some(serde_json::Value::Null) => None,
-        Some(a) => Some(
-            serde_json::from_value::<AxisRecord>(a.clone())
-                .map_err(|e| anyhow::anyhow!("{}: `axis`: {e}", path.display()))?,
-        ),
-    };
-    let target_stiffness = match json.get("target_stiffness") {
-        None | Some(serde_json::Value::Null) => None,
-        Some(t) => Some(
-            serde_json::from_value::<TargetStiffness>(t.clone())
-                .map_err(|e| anyhow::anyhow!("{}: `target_stiffness`: {e}", path.display()))?,
-        ),
-    };
-    if let Some(t) = &target_stiffness {
-        beltune::error::require_positive("target_stiffness.c_n_per_m [N/m]", t.c_n_per_m)
-            .with_context(|| format!("{}: target_stiffness", path.display()))?;
-    }
-    if let Some(AxisRecord::Simulated { plant, .. }) = &axis {
-        plant
-            .validate()
-            .with_context(|| format!("{}: the simulated plant of `axis`", path.display()))?;
-    }
-    let ex_path = dir.join(plots::EXCITATION_CSV);
-    let excitation = if ex_path.exists() {
-        Some(
-            report_build::read_excitation_csv(&ex_path)
-                .with_context(|| format!("reading {}", ex_path.display()))?,
-        )
-    } else {
-        None
-    };
-    let fr_path = dir.join(plots::FRICTION_CSV);
-    let friction_runs = match (&friction, fr_path.exists()) {
-        (Some(f), true) => Some(
-            report_build::read_friction_csv(&fr_path, f.viscous_nm_s_per_rad, f.coulomb_nm)
-                .with_context(|| format!("reading {}", fr_path.display()))?,
-        ),
-        _ => None,
-    };
     Ok(DesignModel {
         source: format!("commissioning {}", dir.display()),
-        params,
-        dead_time_s: id.dead_time_s,
-        friction,
-        frf,
-        commissioned,
-        json: Some(json),
+        result,
+        from_folder: true,
         input: None,
-        m_c_sigma: id.m_c_sigma,
-        c_sigma: id.c_sigma,
-        torque_max_nm: id.torque_max_nm,
-        units: id.units,
-        axis,
-        excitation,
-        friction_runs,
-        target_stiffness,
     })
 }
 
@@ -291,17 +157,15 @@ impl LibraryTuner {
     /// Tuner for an identified model (commissioning folder). The payload slider
     /// adds mass to the identified `m_c` (default 0 kg).
     pub fn new(model: DesignModel) -> anyhow::Result<Self> {
+        let record = &model.result.record;
         let mut input = model
             .input
-            .unwrap_or_else(|| DesignInput::new(model.params, model.dead_time_s));
-        input.friction = model.friction.map(|f| FrictionParams {
-            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
-            coulomb_nm: f.coulomb_nm,
-        });
+            .unwrap_or_else(|| DesignInput::new(model.params(), model.dead_time_s()));
+        input.friction = model.friction().map(FrictionResult::params);
         input
             .validate()
             .with_context(|| format!("design input from {}", model.source))?;
-        let (move_plant, nominal_payload_kg) = match &model.axis {
+        let (move_plant, nominal_payload_kg) = match &record.axis {
             Some(AxisRecord::Simulated {
                 name,
                 payload_kg,
@@ -313,32 +177,14 @@ impl LibraryTuner {
             ),
             _ => (MovePlant::Identified, 0.0),
         };
-        let torque_max_nm = match (&move_plant, model.torque_max_nm) {
+        let torque_max_nm = match (&move_plant, record.identified.torque_max_nm) {
             (_, Some(t)) => t,
             (MovePlant::Simulated(_, p), None) => p.info().torque_max_nm,
             (MovePlant::Identified, None) => rigs::builtin("egc70", None)?.info().torque_max_nm,
         };
-        let f = model.friction.unwrap_or(FrictionTotals {
-            viscous_nm_s_per_rad: 0.0,
-            coulomb_nm: 0.0,
-            linear_viscous_nm_s_per_rad: None,
-            holding_torque_nm: None,
-            cart_coulomb_n: 0.0,
-            cart_viscous_n_s_per_m: 0.0,
-        });
-        let friction = FrictionResult {
-            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
-            coulomb_nm: f.coulomb_nm,
-            linear_viscous_nm_s_per_rad: f
-                .linear_viscous_nm_s_per_rad
-                .unwrap_or(f.viscous_nm_s_per_rad),
-            relative_residual: 0.0,
-            holding_torque_nm: f.holding_torque_nm.unwrap_or(0.0),
-            cart_coulomb_n: f.cart_coulomb_n,
-            cart_viscous_n_s_per_m: f.cart_viscous_n_s_per_m,
-        };
+        let friction = model.friction().cloned().unwrap_or_default();
         Ok(LibraryTuner {
-            sigmas: (model.m_c_sigma, model.c_sigma),
+            sigmas: (record.identified.m_c_sigma, record.identified.c_sigma),
             model,
             input,
             friction,
@@ -362,52 +208,31 @@ impl LibraryTuner {
         run: &Commissioning,
         name: &str,
     ) -> anyhow::Result<Self> {
-        let fit = &run.fit;
-        let lines = plots::frf_lines(&run.frf, &fit.model.tf(&fit.params), run.dead_time.seconds)?;
-        let axis = AxisRecord::simulated(name, plant, BUILTIN_START_POSITION_M, BUILTIN_SEED);
-        let json = serde_json::to_value(outputs::commissioning_json(
-            run,
-            name,
-            None,
-            axis.clone(),
-            Provenance::of_this_process(Some(BUILTIN_SEED)),
-        ))
-        .context("commissioning.json of the built-in run")?;
-        let report = report_build::build_report(run, name, None, None, None)
-            .context("report of the built-in run")?;
+        let origin = Origin {
+            name: name.to_string(),
+            axis: AxisRecord::simulated(name, plant, BUILTIN_START_POSITION_M, BUILTIN_SEED),
+            truth: Some(Truth::of_plant(plant, run.identification_position_m)?),
+            provenance: Provenance::of_this_process(Some(BUILTIN_SEED)),
+        };
+        let set = ResultSet::of_run(run, &origin).context("the result of the built-in run")?;
         let model = DesignModel {
             source: format!(
                 "built-in {name} commissioned at start-up ({} kg payload, seed {BUILTIN_SEED})",
                 rigs::EGC70_DEFAULT_PAYLOAD_KG
             ),
+            result: ResultFolder {
+                dir: PathBuf::new(),
+                record: set.record,
+                data: set.data,
+            },
+            from_folder: false,
             // the identified model: the design rule derives its design model
             // from it (design::robust::design_model), as the commissioning did;
             // `run.design.input.model` is that derived model already
-            params: run.fit.params,
-            dead_time_s: run.design.input.dead_time_s,
-            friction: Some(FrictionTotals {
-                viscous_nm_s_per_rad: run.friction.viscous_nm_s_per_rad,
-                coulomb_nm: run.friction.coulomb_nm,
-                linear_viscous_nm_s_per_rad: Some(run.friction.linear_viscous_nm_s_per_rad),
-                holding_torque_nm: Some(run.friction.holding_torque_nm),
-                cart_coulomb_n: run.friction.cart_coulomb_n,
-                cart_viscous_n_s_per_m: run.friction.cart_viscous_n_s_per_m,
-            }),
-            frf: Some(lines),
-            commissioned: Some(run.validation.nonlinear.clone()),
-            json: Some(json),
-            m_c_sigma: run.identified.m_c_sigma,
-            c_sigma: run.identified.c_sigma,
             input: Some(DesignInput {
                 model: run.fit.params,
                 ..run.design.input
             }),
-            torque_max_nm: Some(plant.info().torque_max_nm),
-            units: ModelUnits::Torque,
-            axis: Some(axis),
-            excitation: report.excitation,
-            friction_runs: report.friction,
-            target_stiffness: Some(run.target_stiffness),
         };
         LibraryTuner::new(model)
     }
@@ -444,6 +269,12 @@ impl LibraryTuner {
     /// start-up), so all are [`TuneError::Infeasible`] with the library's
     /// message.
     pub fn design(&self, knobs: &Knobs) -> Result<ControllerDesign, TuneError> {
+        self.robust_design(knobs).map(|r| r.design)
+    }
+
+    /// [`Self::design`] with the margins it guarantees over the
+    /// identification's uncertainty.
+    pub fn robust_design(&self, knobs: &Knobs) -> Result<RobustDesign, TuneError> {
         let k = self.design_knobs(knobs)?;
         // the page always sends its prefilter: the default one is no expert knob
         let explicit = knobs
@@ -467,7 +298,6 @@ impl LibraryTuner {
             &k,
             rule,
         )
-        .map(|r| r.design)
         .map_err(|e| TuneError::Infeasible(e.to_string()))
     }
 
@@ -489,19 +319,19 @@ impl LibraryTuner {
             },
             MovePlant::Identified => {
                 let drive = rigs::builtin("egc70", None)?.info();
-                let mut two_mass = self.model.params;
+                let mut two_mass = self.model.params();
                 two_mass.m_c += payload_kg;
                 // docs/thesis-map.md: the FRF fit's d_m, d_c contain Coulomb friction seen as
                 // small-signal damping; over a 0.5 m move the axis sees the friction of
                 // Section 3.6. So the linear move plant takes its viscous friction
                 // (translational equivalent on the motor side) and no cart damping.
-                if let Some(f) = self.model.friction {
+                if let Some(f) = self.model.friction() {
                     two_mass.d_m = f.viscous_nm_s_per_rad / (two_mass.i_t * two_mass.i_t);
                     two_mass.d_c = 0.0;
                 }
                 Ok(Plant::Linear(LinearPlant {
                     two_mass,
-                    dead_time_s: self.model.dead_time_s,
+                    dead_time_s: self.model.dead_time_s(),
                     torque_max_nm: drive.torque_max_nm,
                     motor_rad_per_count: drive.motor_rad_per_count,
                     ts_s: self.input.ts_s,
@@ -553,7 +383,7 @@ impl LibraryTuner {
             &plant,
             d,
             &friction,
-            self.model.target_stiffness.as_ref(),
+            self.model.result.record.target_stiffness.as_ref(),
             variant,
             &MoveSpec::default(),
             MOVE_SEED,
@@ -588,9 +418,9 @@ impl LibraryTuner {
     }
 
     fn frf_overlay(&self) -> Option<FrfOverlay> {
-        let lines = self.model.frf.as_ref()?;
-        let tf = FitModel::WithBeltDamping.tf(&self.model.params);
-        let p = plots::frf_display(lines, &tf, self.model.dead_time_s, vec![]).ok()?;
+        let lines = self.model.result.data.frf.as_ref()?;
+        let tf = FitModel::WithBeltDamping.tf(&self.model.params());
+        let p = plot_data::frf_display(lines, &tf, self.model.dead_time_s(), vec![]).ok()?;
         Some(FrfOverlay {
             freq_hz: p.measured.freq_hz,
             magnitude_db: p.measured.magnitude_db,
@@ -643,14 +473,15 @@ impl Tuner for LibraryTuner {
     fn model(&self) -> ModelSummary {
         ModelSummary {
             source: self.model.source.clone(),
-            f_r_hz: self.model.params.f_r_hz(),
-            f_z_hz: self.model.params.f_z_hz(),
+            f_r_hz: self.model.params().f_r_hz(),
+            f_z_hz: self.model.params().f_z_hz(),
             nominal_payload_kg: self.nominal_payload_kg,
             measured_frf: self.frf_overlay(),
             commissioned: self
                 .model
-                .commissioned
-                .as_ref()
+                .result
+                .record
+                .delivered_move()
                 .map(|m| CommissionedNumbers {
                     max_error_m: m.max_tracking_error_m,
                     static_error_m: m.static_error_m,
@@ -682,7 +513,7 @@ impl Tuner for LibraryTuner {
         let started = Instant::now();
         let d = self.design(knobs)?;
         let loops =
-            plots::loop_data(&d).map_err(|e| TuneError::Internal(format!("plot data: {e}")))?;
+            plot_data::loop_data(&d).map_err(|e| TuneError::Internal(format!("plot data: {e}")))?;
         let prefilter = match d.prefilter {
             Prefilter::Butterworth { omega_bw_rad_s } => PrefilterInfo {
                 kind: PrefilterKind::Butterworth,
@@ -753,289 +584,72 @@ impl Tuner for LibraryTuner {
     }
 
     fn save_set(&self, knobs: &Knobs) -> Result<Vec<SavedFile>, TuneError> {
-        let d = self.design(knobs)?;
-        let toml = self.controller_toml_of(&d)?;
+        let set = self.tuned_set(knobs)?;
+        let files = set
+            .files()
+            .map_err(|e| TuneError::Internal(format!("saved set: {e}")))?;
+        Ok(files
+            .into_iter()
+            .map(|(name, bytes)| SavedFile { name, bytes })
+            .collect())
+    }
+}
+
+impl LibraryTuner {
+    /// The result set Save writes for `knobs`: the loaded result with the new
+    /// design, its verdict judged on the simulated move.
+    pub fn tuned_set(&self, knobs: &Knobs) -> Result<ResultSet, TuneError> {
+        let robust = self.robust_design(knobs)?;
+        let d = &robust.design;
         let payload_kg = self.payload_kg(knobs);
-        let sim = self.validation_move(&d, payload_kg);
+        let sim = self.validation_move(d, payload_kg);
         let sim_error = sim
             .as_ref()
             .err()
             .map(|e| self.move_error_text(e, payload_kg));
         let sim = sim.ok();
-        let report = self
-            .tuned_report(&d, sim.as_ref(), sim_error.as_deref(), payload_kg)
-            .map_err(|e| TuneError::Internal(format!("report: {e}")))?;
-        let html = render_html(&report).map_err(|e| TuneError::Internal(e.to_string()))?;
-        let json = self.tuned_json(&d, sim.as_ref());
-        let json = serde_json::to_string_pretty(&json)
-            .map_err(|e| TuneError::Internal(format!("commissioning.json: {e}")))?;
-        let mut files = vec![
-            SavedFile {
-                name: super::CONTROLLER_FILE.into(),
-                bytes: toml.into_bytes(),
-            },
-            SavedFile {
-                name: COMMISSIONING_FILE.into(),
-                bytes: json.into_bytes(),
-            },
-            SavedFile {
-                name: "report.html".into(),
-                bytes: html.into_bytes(),
-            },
-        ];
-        if let Some(lines) = &self.model.frf {
-            files.push(SavedFile {
-                name: plots::FRF_CSV.into(),
-                bytes: plots::frf_csv(lines).into_bytes(),
-            });
-        }
-        let loops = plots::loop_data(&d).map_err(|e| TuneError::Internal(e.to_string()))?;
-        files.push(SavedFile {
-            name: plots::LOOPS_CSV.into(),
-            bytes: plots::loops_csv(&loops).into_bytes(),
+        let verdict = judge(&VerdictInput {
+            limits: &beltune::verdict::Limits::default(),
+            validation: sim.as_ref().map(|m| MoveInput {
+                summary: &m.summary,
+                record_after_move_s: MoveSpec::default().settle_s,
+                torque_max_nm: self.torque_max_nm,
+                on: ValidatedOn::Simulation,
+            }),
+            guaranteed: Some(&robust.guaranteed),
+            design: d,
+            identified: Some(&self.model.result.record.identified),
+            controller_file: beltune::record::CONTROLLER_FILE,
         });
-        // the loaded folder's experiment data, so that the saved set is complete on its own
-        if let Some(e) = &self.model.excitation {
-            files.push(SavedFile {
-                name: plots::EXCITATION_CSV.into(),
-                bytes: report_build::excitation_csv(e).into_bytes(),
-            });
-        }
-        if let Some(f) = &self.model.friction_runs {
-            files.push(SavedFile {
-                name: plots::FRICTION_CSV.into(),
-                bytes: report_build::friction_csv(f).into_bytes(),
-            });
-        }
-        if !report.moves.is_empty() {
-            files.push(SavedFile {
-                name: plots::MOVES_CSV.into(),
-                bytes: report_build::moves_csv(&report.moves).into_bytes(),
-            });
-        }
-        Ok(files)
+        ResultSet::of_tuned(&TunedDesign {
+            base: &self.model.result,
+            from_folder: self.model.from_folder,
+            source: self.model.source.clone(),
+            design: d,
+            guaranteed: Some(robust.guaranteed),
+            verdict,
+            sim: sim.as_ref(),
+            sim_error,
+            move_label: self.move_label(),
+            payload_kg,
+            friction: &self.friction,
+            target_stiffness: self.model.result.record.target_stiffness.as_ref(),
+            torque_max_nm: self.torque_max_nm,
+        })
+        .map_err(|e| TuneError::Internal(format!("saved set: {e}")))
     }
-}
 
-impl LibraryTuner {
     fn controller_toml_of(&self, d: &ControllerDesign) -> Result<String, TuneError> {
-        let body = outputs::controller_toml(
+        beltune::record::controller::ControllerFile::from_design(
             d,
             &self.friction,
-            self.model.target_stiffness.as_ref(),
+            self.model.result.record.target_stiffness.as_ref(),
             self.torque_max_nm,
-            self.model.units,
+            self.model.result.record.identified.units,
             Provenance::of_this_process(None),
         )
-        .map_err(|e| TuneError::Internal(e.to_string()))?;
-
-        let k = &d.knobs;
-        let hz = |w: f64| w / (2.0 * std::f64::consts::PI);
-        Ok(format!(
-            "# beltune controller, saved by `beltune serve` (same layout as `beltune commission`)\n\
-             # model: {}\n\
-             # knobs: prefilter {:?}, velocity PM {} deg, position PM {} deg, \
-             A_sup {} dB, filter attenuation {} dB\n\
-             # achieved: velocity PM {:.2} deg at {:.3} Hz, position PM {:.2} deg at {:.3} Hz\n\n{body}",
-            self.model.source,
-            k.prefilter,
-            k.pm_velocity_deg,
-            k.pm_position_deg,
-            k.resonance_suppression_db,
-            k.attenuation_db(),
-            d.velocity_margins.phase_margin_deg,
-            hz(d.velocity_margins.crossover_rad_s),
-            d.position_margins.phase_margin_deg,
-            hz(d.position_margins.crossover_rad_s),
-        ))
-    }
-
-    /// `commissioning.json` of a saved set: the loaded one with the new
-    /// controller; its measured validation belonged to the old controller and
-    /// is replaced by `null`; the simulated move and the knobs are recorded.
-    fn tuned_json(&self, d: &ControllerDesign, sim: Option<&MoveResult>) -> serde_json::Value {
-        let mut v = self
-            .model
-            .json
-            .clone()
-            .unwrap_or_else(|| serde_json::json!({}));
-        if let Some(obj) = v.as_object_mut() {
-            obj.insert(
-                "controller".into(),
-                serde_json::to_value(d.summary()).unwrap_or_default(),
-            );
-            obj.insert("validation".into(), serde_json::Value::Null);
-            obj.insert(
-                "tuning".into(),
-                serde_json::json!({
-                    "saved_by": "beltune serve",
-                    "model_source": self.model.source,
-                    "knobs": {
-                        "prefilter": format!("{:?}", d.knobs.prefilter).to_lowercase(),
-                        "pm_velocity_deg": d.knobs.pm_velocity_deg,
-                        "pm_position_deg": d.knobs.pm_position_deg,
-                        "resonance_suppression_db": d.knobs.resonance_suppression_db,
-                        "filter_attenuation_db": d.knobs.attenuation_db(),
-                    },
-                    "simulated_validation": sim.map(|m| serde_json::to_value(&m.summary).unwrap_or_default()),
-                    "provenance": serde_json::to_value(Provenance::of_this_process(None)).unwrap_or_default(),
-                }),
-            );
-        }
-        // a record in current units keeps the current spelling of every key
-        // (the loaded keys already have it; the new sections get it here)
-        if self.model.units == ModelUnits::Current {
-            beltune::units::relabel_keys(&mut v, &beltune::units::current_key);
-        }
-        v
-    }
-
-    /// The report of a saved set: the measured FRF (when known), the loops of
-    /// the new design, its simulated move and a verdict judged on that move.
-    fn tuned_report(
-        &self,
-        d: &ControllerDesign,
-        sim: Option<&MoveResult>,
-        sim_error: Option<&str>,
-        payload_kg: f64,
-    ) -> beltune::Result<Report> {
-        let p = &self.model.params;
-        let (f_z, f_r) = (p.f_z_hz(), p.f_r_hz());
-        let loops = report_build::loop_plots(d, f_z, f_r)?;
-        let tf = FitModel::WithBeltDamping.tf(p);
-        let frf = match &self.model.frf {
-            Some(lines) => Some(plots::frf_display(
-                lines,
-                &tf,
-                self.model.dead_time_s,
-                plots::resonance_markers(f_z, f_r),
-            )?),
-            None => None,
-        };
-        let id = self.model.json.as_ref().and_then(|j| j.get("identified"));
-        let number = |k: &str| id.and_then(|i| i.get(k)).and_then(|v| v.as_f64());
-        let label = self.move_label();
-        let mut input = report_build::verdict_input(None, d, sim.map(|m| &m.summary));
-        input.mean_coherence = number("mean_coherence");
-        input.fit_rms_db = number("fit_rms_db");
-        let verdict = beltune::report::verdict_old::verdict(&input);
-        let row = |name: &str, unit: &str, v: f64, digits: usize| ParameterRow {
-            name: name.into(),
-            unit: unit.into(),
-            before: None,
-            after: format!("{v:.digits$}"),
-            truth: None,
-            value: Some(v),
-        };
-        let hz = |w: f64| w / (2.0 * std::f64::consts::PI);
-        let l = beltune::units::labels(self.model.units);
-        let stiffness = match self.model.units {
-            ModelUnits::Torque => row("belt stiffness c", "kN/m", p.c / 1e3, 1),
-            ModelUnits::Current => row("belt stiffness c", l.stiffness, p.c, 1),
-        };
-        let parameters = vec![
-            row("resonance f_r", "Hz", f_r, 2),
-            row("antiresonance f_z", "Hz", f_z, 2),
-            row("moving mass m_c", l.mass, p.m_c, 2),
-            stiffness,
-            row("K_P", l.torque_per_velocity, d.k_p, 4),
-            row("K_I", l.torque_per_angle, d.k_i, 3),
-            row("K_PP", "1/s", d.k_pp, 3),
-            row(
-                "velocity crossover f_c",
-                "Hz",
-                hz(d.velocity_margins.crossover_rad_s),
-                2,
-            ),
-            row(
-                "velocity phase margin",
-                "deg",
-                d.velocity_margins.phase_margin_deg,
-                2,
-            ),
-            row(
-                "position crossover f_c",
-                "Hz",
-                hz(d.position_margins.crossover_rad_s),
-                3,
-            ),
-            row(
-                "position phase margin",
-                "deg",
-                d.position_margins.phase_margin_deg,
-                2,
-            ),
-        ];
-        let moves = sim
-            .map(|m| vec![report_build::move_plot(m, &label)])
-            .unwrap_or_default();
-        let validation_rows = sim
-            .map(|m| vec![report_build::validation_row(&label, &m.summary)])
-            .unwrap_or_default();
-        // The sections of the commissioning's report that need the experiment's
-        // data: shown from the loaded folder, or said why they are absent.
-        let mut absent = Vec::new();
-        let folder_file = |name: &str| match &self.model.json {
-            Some(_) => format!("the loaded folder has no {name}"),
-            None => format!("no {name} is known"),
-        };
-        if self.model.excitation.is_none() {
-            absent.push(vec![
-                "identification experiment".to_string(),
-                format!(
-                    "{} (written by `beltune commission` on an axis; a record from a CSV file has no excitation trace of its own)",
-                    folder_file(plots::EXCITATION_CSV)
-                ),
-            ]);
-        }
-        if self.model.friction_runs.is_none() {
-            absent.push(vec![
-                "friction".to_string(),
-                format!(
-                    "{} (the constant-velocity runs of `beltune commission` on an axis, or `--friction-csv`)",
-                    folder_file(plots::FRICTION_CSV)
-                ),
-            ]);
-        }
-        if sim.is_none() {
-            absent.push(vec![
-                "validation move".to_string(),
-                sim_error.map_or_else(
-                    || format!("the simulated move with {payload_kg} kg payload did not complete"),
-                    str::to_string,
-                ),
-            ]);
-        }
-        let mut tables = vec![report_build::drive_form_table(d, self.model.units)];
-        if !absent.is_empty() {
-            tables.push(Table {
-                title: "Sections not in this report".into(),
-                header: vec!["section".into(), "why".into()],
-                rows: absent,
-            });
-        }
-        Ok(Report {
-            title: format!("beltune tuning report: {}", self.model.source),
-            summary: format!(
-                "Saved by the tuning page. The design model is the one of {}; the verdict is judged on a \
-                 simulated validation move with {payload_kg} kg payload ({label}), not on the axis. \
-                 Run `beltune commission` again to validate on the axis.",
-                self.model.source
-            ),
-            frf,
-            controller: Some(loops.controller),
-            open_loops: loops.open_loops,
-            closed_loops: loops.closed_loops,
-            moves,
-            parameters,
-            validation_rows,
-            verdict: Some(verdict),
-            provenance: Some(Provenance::of_this_process(None)),
-            excitation: self.model.excitation.clone(),
-            friction: self.model.friction_runs.clone(),
-            tables,
-            ..Report::default()
-        })
+        .and_then(|f| f.to_toml())
+        .map_err(|e| TuneError::Internal(e.to_string()))
     }
 }
 
@@ -1176,10 +790,10 @@ mod tests {
             "friction": {"viscous": 0.00253, "coulomb": 0.125}, "design": {"k_p": 1}}"#;
         std::fs::write(dir.join(COMMISSIONING_FILE), json).unwrap();
         let m = load_commissioning(&dir).unwrap();
-        assert_eq!(m.params.m_c, 13.44);
-        assert_eq!(m.params.d, 0.0);
-        assert_eq!(m.dead_time_s, 0.001);
-        assert_eq!(m.friction.unwrap().coulomb_nm, 0.125);
+        assert_eq!(m.params().m_c, 13.44);
+        assert_eq!(m.params().d, 0.0);
+        assert_eq!(m.dead_time_s(), 0.001);
+        assert_eq!(m.friction().unwrap().coulomb_nm, 0.125);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

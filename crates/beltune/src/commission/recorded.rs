@@ -4,14 +4,14 @@
 //! the design. The stages that need the axis (positioning, holding torque,
 //! amplitude search, friction runs, validation moves) are skipped and say so.
 
-use super::result::{FrictionResult, IdentifiedModel};
-use crate::design::robust::{design_identified, DesignRule};
-use crate::design::{ControllerDesign, DesignInput, DesignKnobs, FrictionParams};
+use super::CommissioningConfig;
+use crate::design::robust::{design_identified, GuaranteedMargins};
+use crate::design::{ControllerDesign, DesignInput};
 use crate::ident::{MotionFriction, RecordedIdentification};
-use crate::Result;
+use crate::record::model::{FrictionResult, IdentifiedModel, DEFAULT_DEAD_TIME_S};
+use crate::verdict::Verdict;
+use crate::{Error, Result};
 use std::time::Instant;
-
-pub use crate::record::model::DEFAULT_DEAD_TIME_S;
 
 /// What a recorded commissioning produced.
 #[derive(Clone, Debug)]
@@ -24,6 +24,10 @@ pub struct RecordedCommissioning {
     pub friction: Option<FrictionResult>,
     /// The design.
     pub design: ControllerDesign,
+    /// Its margins over the identification's uncertainty.
+    pub guaranteed: GuaranteedMargins,
+    /// The verdict: not validated (no move), its design checks.
+    pub verdict: Verdict,
     /// Duration of the excitation record, s.
     pub record_time_s: f64,
     /// Computation time, s.
@@ -33,14 +37,16 @@ pub struct RecordedCommissioning {
 }
 
 /// Design from a recorded identification and, optionally, a friction
-/// regression on a recorded motion of the motor angle (rad) under a torque (N m).
+/// regression on a recorded motion of the motor angle (rad) under a torque
+/// (N m), for a drive with the torque limit `torque_max_nm` (in the record's
+/// units), with the knobs, design rule, `T_R` and limits of `cfg`.
 pub fn commission_recorded(
     identification: RecordedIdentification,
     motion_friction: Option<MotionFriction>,
-    knobs: &DesignKnobs,
-    rule: DesignRule,
-    t_r_s: f64,
+    torque_max_nm: f64,
+    cfg: &CommissioningConfig,
 ) -> Result<RecordedCommissioning> {
+    crate::error::require_positive("torque limit", torque_max_nm)?;
     let t0 = Instant::now();
     let fit = &identification.fit;
     let p = fit.params;
@@ -57,6 +63,7 @@ pub fn commission_recorded(
             ),
         ),
     };
+    let t_r_s = cfg.t_r_s;
     let friction = motion_friction.map(|m| FrictionResult {
         viscous_nm_s_per_rad: m.viscous.max(0.0),
         coulomb_nm: m.coulomb.max(0.0),
@@ -71,24 +78,39 @@ pub fn commission_recorded(
         dead_time_s,
         t_r_s,
         ts_s: identification.ts_s,
-        friction: friction.as_ref().map(|f| FrictionParams {
-            viscous_nm_s_per_rad: f.viscous_nm_s_per_rad,
-            coulomb_nm: f.coulomb_nm,
-        }),
+        friction: friction.as_ref().map(FrictionResult::params),
     };
-    let des = design_identified(
+    if let Some(f) = &friction {
+        for (name, v) in [
+            ("Coulomb friction", f.coulomb_nm),
+            ("holding torque", f.holding_torque_nm),
+        ] {
+            if !(v.is_finite() && v.abs() <= torque_max_nm) {
+                return Err(Error::invalid(
+                    name,
+                    v,
+                    format!(
+                        "the friction record's fitted {name} exceeds the torque limit \
+                         {torque_max_nm}; check the friction record's units"
+                    ),
+                ));
+            }
+        }
+    }
+    let robust = design_identified(
         &input,
         friction.as_ref().map(|f| f.viscous_nm_s_per_rad),
         fit.m_c_sigma(),
         fit.c_sigma(),
-        knobs,
-        rule,
-    )?
-    .design;
+        &cfg.knobs,
+        cfg.design_rule,
+    )?;
+    let des = robust.design;
     let mut identified = IdentifiedModel::from_fit(fit, &identification.frf, dead_time_s, f64::NAN);
     identified.dead_time_measured = identification.dead_time.is_some();
     identified.ts_s = Some(identification.ts_s);
     identified.t_r_s = t_r_s;
+    identified.torque_max_nm = Some(torque_max_nm);
     let mean_coherence = identified.mean_coherence;
     let skipped = "skipped (recorded data, no axis)";
     let mut log = vec![
@@ -114,12 +136,23 @@ pub fn commission_recorded(
         None => format!("friction: {skipped}: no motion record given"),
     });
     log.push(format!("validation moves: {skipped}"));
+    let verdict = crate::verdict::judge(&crate::verdict::VerdictInput {
+        limits: &cfg.limits,
+        validation: None,
+        guaranteed: Some(&robust.guaranteed),
+        design: &des,
+        identified: Some(&identified),
+        controller_file: crate::record::CONTROLLER_FILE,
+    });
+    log.push(format!("verdict: {}", verdict.text()));
     let record_time_s = identification.rows as f64 * identification.ts_s;
     Ok(RecordedCommissioning {
         identification,
         identified,
         friction,
         design: des,
+        guaranteed: robust.guaranteed,
+        verdict,
         record_time_s,
         computation_time_s: t0.elapsed().as_secs_f64(),
         log,

@@ -1,206 +1,91 @@
-//! What a commissioning run produces (`commissioning.json`), as named structs.
+//! What a commissioning run produced: the in-memory result of the stages, from
+//! which the record (`crate::record`) and the report (`crate::report`) are made.
 
-use serde::{Deserialize, Serialize};
+use super::stages::validation_moves::PlannedMove;
+use super::stiffness::TargetStiffness;
+use super::validation::{MoveResult, Validation};
+use super::DataSheet;
+use crate::design::robust::GuaranteedMargins;
+use crate::design::ControllerDesign;
+use crate::ident::dead_time::DeadTime;
+use crate::ident::etfe::Frf;
+use crate::ident::fit::TwoMassFit;
+use crate::ident::friction::{ConstantVelocityRun, FrictionFit};
+use crate::record::model::{FrictionResult, IdentifiedModel};
+use crate::verdict::Verdict;
 
-pub use crate::record::model::{FrictionResult, IdentifiedModel};
-
-/// Result of one validation move.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct MoveSummary {
-    /// Largest cart tracking error `|xi_d - xi|` during and after the move, m
-    /// (motor-side `|xi_d - i_t phi_m|` when the axis has no cart encoder).
-    pub max_tracking_error_m: f64,
-    /// Mean `|xi_d - xi|` over the last 100 ms of the record, m.
-    pub static_error_m: f64,
-    /// Time from the end of the trajectory until the error stays within the
-    /// settling band, s; `None` (JSON `null`) if it never settles within the record.
-    pub settling_time_s: Option<f64>,
-    /// Largest motor-side error `|xi_d - i_t phi_m|`, m.
-    pub max_motor_error_m: f64,
-    /// Largest torque command magnitude, N m.
-    pub max_torque_nm: f64,
+/// The identification experiment as recorded (stage 5): the PRBS torque
+/// command and the motor-side position, with the limits it ran under.
+#[derive(Clone, Debug, Default)]
+pub struct ExcitationTrace {
+    /// Time since the axis was taken, s.
+    pub time_s: Vec<f64>,
+    /// Torque command (holding torque plus PRBS), N m.
+    pub torque_command_nm: Vec<f64>,
+    /// Motor-side position `i_t phi_m`, m.
+    pub position_m: Vec<f64>,
+    /// Torque limit of the commissioning, N m.
+    pub torque_max_nm: f64,
+    /// Allowed travel, m.
+    pub travel_min_m: f64,
+    /// Allowed travel, m.
+    pub travel_max_m: f64,
 }
 
-/// The validation with the three feedforward variants of chapter 5.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct Validation {
-    /// Without feedforward.
-    pub none: MoveSummary,
-    /// Linear feedforward (inertia and a viscous-only friction fit).
-    pub linear: MoveSummary,
-    /// Nonlinear feedforward (inertia, viscous and Coulomb).
-    pub nonlinear: MoveSummary,
-}
-
-/// The true values of a simulated plant at the identification position.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct Truth {
-    /// Resonance frequency, Hz.
-    pub f_r_hz: f64,
-    /// Antiresonance frequency, Hz.
-    pub f_z_hz: f64,
-    /// Motor-side inertia, kg m^2.
-    pub theta_e: f64,
-    /// Moving mass, kg.
-    pub m_c: f64,
-    /// Belt stiffness, N/m.
-    pub c: f64,
-    /// Dead time, s.
-    pub dead_time_s: f64,
-    /// Viscous friction at the motor, N m s/rad.
-    #[serde(alias = "viscous")]
-    pub viscous_nm_s_per_rad: f64,
-    /// Coulomb friction at the motor, N m.
-    #[serde(alias = "coulomb")]
-    pub coulomb_nm: f64,
-}
-
-/// The belt stiffness where the validation move ends, and how it changes
-/// along the stroke (issue 12): the static belt stretch the motor setpoint
-/// leads by (`tau_hold / (i_t c)`) is that of the stiffness where the cart
-/// rests, and the replacement stiffness (2.26) changes along the stroke (by
-/// a factor two over a 0.5 m move on a soft belt). Its compliance `1 / c`
-/// is exactly quadratic in the cart position for (2.26)
-/// ([`beltune_rt::control::BeltProfile`]); with the stiffness measured at
-/// three positions the quadratic is known, with two its slope.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TargetStiffness {
-    /// Cart position the stiffness holds for, m.
-    pub position_m: f64,
-    /// Replacement belt stiffness `c` there, N/m.
-    pub c_n_per_m: f64,
-    /// Antiresonance `f_z` measured there, Hz.
-    pub f_z_hz: f64,
-    /// Whether it was measured by its own experiment at `position_m`;
-    /// `false`: the identification position is close enough and its fit's
-    /// `c` is used.
-    pub measured: bool,
-    /// Slope of the compliance `1 / c` along the stroke at `position_m`,
-    /// 1/N (0: one stiffness for the whole stroke, as in older files).
-    #[serde(default)]
-    pub compliance_slope_per_n: f64,
-    /// Half the compliance's second derivative, 1/(N m) (0: at most linear).
-    #[serde(default)]
-    pub compliance_curvature_per_n_m: f64,
-}
-
-/// Cart speed over which the setpoint's lead for the cart's Coulomb
-/// friction ramps in and out (quadratically), m/s
-/// ([`beltune_rt::control::BeltProfile::coulomb_velocity_m_s`]). The lead
-/// `K F_c` retreats at `2 K F_c |a| / v_c^2` times the speed at the end of a
-/// move; with the Table A.8 jerk (40 m/s^3, `|a| <= sqrt(2 j v)`) and a
-/// 0.15 mm lead that stays below the speed, so the motor setpoint does not
-/// reverse. A wider ramp left slow moves' carts short: inside it the belt
-/// carries less than the kinetic friction (issue 12: 0.05 m/s left a heavy
-/// cart on a slow reduced move 0.25 mm short; 0.02 m/s passed the 15
-/// plants that missed 100 um with the wider or a linear ramp but one).
-pub const CART_COULOMB_VELOCITY_M_S: f64 = 0.02;
-
-impl TargetStiffness {
-    /// One stiffness for the whole stroke.
-    pub fn constant(position_m: f64, c_n_per_m: f64, f_z_hz: f64, measured: bool) -> Self {
-        TargetStiffness {
-            position_m,
-            c_n_per_m,
-            f_z_hz,
-            measured,
-            compliance_slope_per_n: 0.0,
-            compliance_curvature_per_n_m: 0.0,
-        }
-    }
-
-    /// The compliance alone as the setpoint conversion's belt model
-    /// (positions as this record's; no mass, force or friction).
-    fn compliance(&self) -> beltune_rt::control::BeltProfile<f64> {
-        beltune_rt::control::BeltProfile {
-            reference_m: self.position_m,
-            compliance_m_per_n: 1.0 / self.c_n_per_m,
-            compliance_slope_per_n: self.compliance_slope_per_n,
-            compliance_curvature_per_n_m: self.compliance_curvature_per_n_m,
-            ..Default::default()
-        }
-    }
-
-    /// The belt compliance `1 / c` at cart position `xi_m`, m/N.
-    pub fn compliance_at(&self, xi_m: f64) -> f64 {
-        self.compliance().compliance_at(xi_m)
-    }
-
-    /// The belt stiffness at cart position `xi_m`, N/m.
-    pub fn stiffness_at(&self, xi_m: f64) -> f64 {
-        1.0 / self.compliance_at(xi_m)
-    }
-
-    /// The setpoint conversion's belt model for the moving mass `m_c_kg`
-    /// and the force the belt carries at rest `static_force_n` (the
-    /// holding torque over `i_t`), with positions measured from
-    /// `origin_m` (the cart position at motor angle 0), and the cart's
-    /// friction of `friction` (its stretch is led too, the Coulomb share
-    /// ramped in over [`CART_COULOMB_VELOCITY_M_S`]).
-    pub fn belt_profile(
-        &self,
-        m_c_kg: f64,
-        static_force_n: f64,
-        origin_m: f64,
-        friction: &FrictionResult,
-    ) -> beltune_rt::control::BeltProfile<f64> {
-        beltune_rt::control::BeltProfile {
-            m_c_kg,
-            reference_m: self.position_m - origin_m,
-            static_force_n,
-            cart_viscous_n_s_per_m: friction.cart_viscous_n_s_per_m,
-            cart_coulomb_n: friction.cart_coulomb_n,
-            coulomb_velocity_m_s: CART_COULOMB_VELOCITY_M_S,
-            ..self.compliance()
-        }
-    }
-
-    /// The compliance through this point and the stiffness measured at
-    /// `others` (cart position m, stiffness N/m; at most two, each at least
-    /// `min_distance_m` from the others): linear through two points,
-    /// quadratic through three. `None` when the result is not a belt over
-    /// `window_m`: a compliance that is not positive, or that is not
-    /// concave (a quadratic (2.26) opens downward) somewhere in the window.
-    pub fn through(
-        &self,
-        others: &[(f64, f64)],
-        window_m: (f64, f64),
-        min_distance_m: f64,
-    ) -> Option<TargetStiffness> {
-        let mut pts = vec![(self.position_m, 1.0 / self.c_n_per_m)];
-        for &(x, c) in others {
-            if !(x.is_finite() && c.is_finite() && c > 0.0) {
-                continue;
-            }
-            if pts.iter().all(|p| (p.0 - x).abs() >= min_distance_m) {
-                pts.push((x, 1.0 / c));
-            }
-        }
-        let r = self.position_m;
-        let (slope, curvature) = match pts.len() {
-            1 => (0.0, 0.0),
-            2 => ((pts[1].1 - pts[0].1) / (pts[1].0 - pts[0].0), 0.0),
-            _ => {
-                // Newton's divided differences about the reference
-                let (x0, y0) = pts[0];
-                let (x1, y1) = pts[1];
-                let (x2, y2) = pts[2];
-                let d01 = (y1 - y0) / (x1 - x0);
-                let d12 = (y2 - y1) / (x2 - x1);
-                let k2 = (d12 - d01) / (x2 - x0);
-                // slope at r = x0: d01 + k2 (x0 - x1)
-                (d01 + k2 * (r - x1), k2)
-            }
-        };
-        let out = TargetStiffness {
-            compliance_slope_per_n: slope,
-            compliance_curvature_per_n_m: curvature,
-            ..*self
-        };
-        let (lo, hi) = window_m;
-        let positive = [lo, hi, 0.5 * (lo + hi)]
-            .iter()
-            .all(|&x| out.compliance_at(x).is_finite() && out.compliance_at(x) > 0.0);
-        (positive && curvature <= 0.0 && slope.is_finite()).then_some(out)
-    }
+/// Everything a commissioning run produced.
+#[derive(Clone, Debug)]
+pub struct Commissioning {
+    /// The data sheet used.
+    pub datasheet: DataSheet,
+    /// Where the model was measured: the mean motor-side position over the
+    /// compared periods of the excitation, m.
+    pub identification_position_m: f64,
+    /// Holding torque, N m.
+    pub holding_torque_nm: f64,
+    /// The belt stiffness where the validation move ends (stage 5b), which
+    /// the static belt stretch uses.
+    pub target_stiffness: TargetStiffness,
+    /// PRBS amplitude `A_PRBS` used (values +-A/2), N m.
+    pub excitation_amplitude_nm: f64,
+    /// FRF from the torque command to the motor angle.
+    pub frf: Frf,
+    /// The identified model the design uses: the friction-aware fit of the
+    /// nonlinear model (2.30) where it explains the record better
+    /// ([`crate::ident::FitModel::Nonlinear`]), else the FRF fit.
+    pub fit: TwoMassFit,
+    /// The thesis' fit of the FRF's magnitude (3.5).
+    pub frf_fit: TwoMassFit,
+    /// The friction-aware fit (issue 12), `None` where it failed.
+    pub nonlinear: Option<crate::ident::NonlinearFit>,
+    /// The dead time.
+    pub dead_time: DeadTime,
+    /// The model summary.
+    pub identified: IdentifiedModel,
+    /// The controller design.
+    pub design: ControllerDesign,
+    /// Friction points (motor velocity rad/s, torque N m).
+    pub friction_points: Vec<ConstantVelocityRun>,
+    /// Friction fit.
+    pub friction_fit: FrictionFit,
+    /// Friction summary.
+    pub friction: FrictionResult,
+    /// The three validation moves: none, linear, nonlinear.
+    pub moves: [MoveResult; 3],
+    /// Summaries of the moves.
+    pub validation: Validation,
+    /// The validation move run (Table A.8's or the fastest the axis can do).
+    pub validation_move: PlannedMove,
+    /// The margins the delivered controller keeps over the identification's
+    /// uncertainty ([`crate::design::robust::guaranteed_margins`]).
+    pub guaranteed: GuaranteedMargins,
+    /// The one verdict on the delivered controller ([`crate::verdict`]).
+    pub verdict: Verdict,
+    /// The open-loop excitation of stage 5 and the axis' response.
+    pub excitation: ExcitationTrace,
+    /// Time the axis was busy, s.
+    pub experiment_time_s: f64,
+    /// Wall-clock time spent computing (FFT, fit, design), s.
+    pub computation_time_s: f64,
+    /// One log line per stage.
+    pub log: Vec<String>,
 }

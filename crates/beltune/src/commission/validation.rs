@@ -4,11 +4,39 @@
 //! the motor-side error.
 
 use super::motion::{move_to, track, TrackOptions, TrackRecord};
-use super::result::MoveSummary;
 use super::runner::Runner;
 use crate::{Error, Result};
 use beltune_rt::control::CascadeConfig;
 use beltune_rt::trajectory::{Approach, ApproachConfig, Limits, State, Trajectory};
+use serde::{Deserialize, Serialize};
+
+/// Result of one validation move.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MoveSummary {
+    /// Largest cart tracking error `|xi_d - xi|` during and after the move, m
+    /// (motor-side `|xi_d - i_t phi_m|` when the axis has no cart encoder).
+    pub max_tracking_error_m: f64,
+    /// Mean `|xi_d - xi|` over the last 100 ms of the record, m.
+    pub static_error_m: f64,
+    /// Time from the end of the trajectory until the error stays within the
+    /// settling band, s; `None` (JSON `null`) if it never settles within the record.
+    pub settling_time_s: Option<f64>,
+    /// Largest motor-side error `|xi_d - i_t phi_m|`, m.
+    pub max_motor_error_m: f64,
+    /// Largest torque command magnitude, N m.
+    pub max_torque_nm: f64,
+}
+
+/// The validation with the three feedforward variants of chapter 5.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Validation {
+    /// Without feedforward.
+    pub none: MoveSummary,
+    /// Linear feedforward (inertia and a viscous-only friction fit).
+    pub linear: MoveSummary,
+    /// Nonlinear feedforward (inertia, viscous and Coulomb).
+    pub nonlinear: MoveSummary,
+}
 
 /// Band within which the error counts as settled, m: the thesis' static
 /// positioning limit (chapter 5, 100 um). A narrower band (it was 50 um)
@@ -310,7 +338,7 @@ pub const COULOMB_BREAKAWAY_CART_M: f64 = 20e-6;
 /// (8 static-error failures of the 1000-plant study; none beyond it).
 pub fn coulomb_breakaway_rad(
     i_t_m_per_rad: f64,
-    friction: &super::result::FrictionResult,
+    friction: &crate::record::model::FrictionResult,
     c_n_per_m: f64,
 ) -> f64 {
     let lead = friction.cart_coulomb_n.max(0.0) / c_n_per_m;
@@ -360,7 +388,7 @@ pub fn validation_controller(
     feedback: &CascadeConfig<f64>,
     m_e_kg_m2: f64,
     i_t_m_per_rad: f64,
-    friction: &super::result::FrictionResult,
+    friction: &crate::record::model::FrictionResult,
     c_n_per_m: f64,
     variant: FeedforwardVariant,
 ) -> CascadeConfig<f64> {
@@ -402,8 +430,8 @@ pub fn validation_track_options(
     p: &crate::model::TwoMassParams,
     preview_samples: usize,
     holding_nm: f64,
-    belt: &super::result::TargetStiffness,
-    friction: &super::result::FrictionResult,
+    belt: &crate::commission::stiffness::TargetStiffness,
+    friction: &crate::record::model::FrictionResult,
     origin_m: f64,
 ) -> TrackOptions {
     TrackOptions {
@@ -434,8 +462,8 @@ pub const SIM_STOP_DECELERATION_M_S2: f64 = 20.0;
 pub fn simulate_validation_move(
     plant: &crate::model::rigs::Plant,
     des: &crate::design::ControllerDesign,
-    friction: &super::result::FrictionResult,
-    belt: Option<&super::result::TargetStiffness>,
+    friction: &crate::record::model::FrictionResult,
+    belt: Option<&crate::commission::stiffness::TargetStiffness>,
     variant: FeedforwardVariant,
     spec: &MoveSpec,
     seed: u64,
@@ -495,7 +523,12 @@ pub fn simulate_validation_move(
     )?;
     let model = des.input.model;
     let belt = belt.copied().unwrap_or_else(|| {
-        super::result::TargetStiffness::constant(spec.target_m, model.c, model.f_z_hz(), false)
+        crate::commission::stiffness::TargetStiffness::constant(
+            spec.target_m,
+            model.c,
+            model.f_z_hz(),
+            false,
+        )
     });
     let controller = validation_controller(
         &feedback,

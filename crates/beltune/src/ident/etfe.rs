@@ -325,13 +325,13 @@ fn validate_config(cfg: &EtfeConfig) -> Result<()> {
             "a period needs at least 4 samples",
         ));
     }
-    if cfg.period_samples > crate::ident::record::MAX_CSV_ROWS {
+    if cfg.period_samples > crate::ident::csv_columns::MAX_CSV_ROWS {
         return Err(Error::invalid(
             "period_samples",
             cfg.period_samples as f64,
             format!(
                 "a period of more than {} samples is beyond the longest record",
-                crate::ident::record::MAX_CSV_ROWS
+                crate::ident::csv_columns::MAX_CSV_ROWS
             ),
         ));
     }

@@ -104,7 +104,7 @@ impl Default for FitConfig {
 
 /// One-sigma uncertainties of the fitted parameters, same units as the
 /// parameters (0 for a parameter that was not fitted).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ParamUncertainty {
     /// sigma of `theta_e`.
     pub theta_e: f64,

@@ -10,16 +10,16 @@
 //! - [`nonlinear`]: the nonlinear two-mass model (2.30) with its Coulomb friction, from the excitation (issue 12)
 //! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24)
 //! - [`dead_time`]: current-loop dead time (3.25)-(3.30)
-//! - [`record`]: CSV records with validation
+//! - [`csv_columns`]: the columns of a recorded CSV file, validated
 //! - [`recorded`]: the whole identification from a CSV record (CLI `identify`, `commission --csv`)
 
+pub mod csv_columns;
 pub mod dead_time;
 pub mod etfe;
 pub mod features;
 pub mod fit;
 pub mod friction;
 pub mod nonlinear;
-pub mod record;
 pub mod recorded;
 pub mod strategy;
 
@@ -30,6 +30,7 @@ mod tests_sim;
 #[cfg(test)]
 pub(crate) mod testutil;
 
+pub use csv_columns::{read_csv_columns, CsvColumns, Sampling};
 pub use dead_time::{estimate_dead_time, DeadTime};
 pub use etfe::{etfe, log_spaced_subset, EtfeConfig, Frf, LineStatus};
 pub use features::{frf_features, FrfFeatures};
@@ -40,6 +41,5 @@ pub use friction::{
     THESIS_VELOCITY_SEQUENCE_M_S,
 };
 pub use nonlinear::{fit_nonlinear, NonlinearConfig, NonlinearFit};
-pub use record::{read_csv_columns, CsvColumns, Sampling};
 pub use recorded::{detect_period, identify_recorded, RecordedExcitation, RecordedIdentification};
 pub use strategy::{direct_closed_loop, indirect_closed_loop, open_loop};

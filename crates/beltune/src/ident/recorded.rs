@@ -4,10 +4,10 @@
 //! actual-torque column, the current-loop dead time (3.27). Used by
 //! `beltune identify` and by `beltune commission --csv`.
 
+use super::csv_columns::{check_not_constant, check_uniform_time, read_csv_columns};
 use super::dead_time::{estimate_dead_time, DeadTime};
 use super::etfe::{etfe, EtfeConfig, Frf};
 use super::fit::{fit_two_mass, FitConfig, TwoMassFit};
-use super::record::{check_not_constant, check_uniform_time, read_csv_columns};
 use crate::{Error, Result};
 use std::path::Path;
 

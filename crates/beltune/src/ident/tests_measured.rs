@@ -18,7 +18,7 @@ fn data_path() -> PathBuf {
 
 fn measured_frf(input: &str, band_hz: Option<(f64, f64)>) -> Frf {
     let cols = read_csv_columns(&data_path(), &["t_s", input, "theta_motor_rad"]).unwrap();
-    let s = record::check_uniform_time(&cols, "t_s", 5000, 0.01).unwrap();
+    let s = csv_columns::check_uniform_time(&cols, "t_s", 5000, 0.01).unwrap();
     assert!((s.ts_s - 1.0 / 2500.0).abs() < 1e-9);
     let cfg = EtfeConfig {
         ts_s: s.ts_s,

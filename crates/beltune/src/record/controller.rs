@@ -11,9 +11,10 @@
 //! [`crate::units`]).
 
 use super::SCHEMA_VERSION;
-use crate::commission::result::{FrictionResult, TargetStiffness};
+use crate::commission::stiffness::TargetStiffness;
 use crate::design::{ControllerDesign, DriveForm, Prefilter};
 use crate::ident::ModelUnits;
+use crate::record::model::FrictionResult;
 use crate::record::provenance::Provenance;
 use crate::units::{current_key, relabel_keys, torque_key};
 use crate::{Error, Result};
@@ -205,7 +206,7 @@ pub struct SetpointSection {
 }
 
 fn default_coulomb_velocity() -> f64 {
-    crate::commission::result::CART_COULOMB_VELOCITY_M_S
+    crate::commission::stiffness::CART_COULOMB_VELOCITY_M_S
 }
 
 fn default_final_approach_speed() -> f64 {
@@ -329,7 +330,7 @@ impl ControllerFile {
                 static_force_n: Some(static_force_n),
                 cart_viscous_n_s_per_m: friction.cart_viscous_n_s_per_m,
                 cart_coulomb_n: friction.cart_coulomb_n,
-                coulomb_velocity_m_s: crate::commission::result::CART_COULOMB_VELOCITY_M_S,
+                coulomb_velocity_m_s: crate::commission::stiffness::CART_COULOMB_VELOCITY_M_S,
                 final_approach_distance_m: crate::commission::validation::final_approach_for_band(
                     friction.cart_coulomb_n / c_setpoint,
                 )
@@ -593,7 +594,7 @@ mod tests {
                     // the cart's friction the friction-aware model found
                     cart_viscous_n_s_per_m: 9.2,
                     cart_coulomb_n: 6.4,
-                    coulomb_velocity_m_s: crate::commission::result::CART_COULOMB_VELOCITY_M_S,
+                    coulomb_velocity_m_s: crate::commission::stiffness::CART_COULOMB_VELOCITY_M_S,
                 }),
             )
             .unwrap();

@@ -1,198 +1,439 @@
-//! The report of a commissioning (issue 16), built from the shared plot data
-//! of [`super::plot_data`]: verdict first, then parameters, validation, the
+//! The report of a result (verdict first, then parameters, validation, the
 //! measured FRF, the identification experiment, controller, open loops with
 //! margins, closed loops and sensitivities, before/after overlays, friction and
-//! the moves; the data files beside it; the provenance.
+//! the moves; the data files beside it; the provenance), built by one
+//! function, [`build_report`], from the record of the result and the data
+//! files: for a run on an axis, a commissioning from a recording and a design
+//! saved by the tuning page alike.
 
+use super::bode::{hz, hz_text, loop_plots};
+use super::data_files::DataFiles;
 use super::plot_data::{
-    csv_text, decimate, frf_csv, frf_display, frf_lines, loop_data, loops_csv, resonance_markers,
-    with_gains, LoopData, EXCITATION_CSV, FRF_CSV, FRICTION_CSV, LOOPS_CSV, MOVES_CSV,
-    TRACE_POINTS,
+    decimate, frf_display, loop_data, resonance_markers, with_gains, TRACE_POINTS,
 };
-use super::verdict_old::{verdict, Verdict, VerdictInput};
-use crate::commission::recorded::RecordedCommissioning;
-use crate::commission::result::{IdentifiedModel, MoveSummary, Truth};
-use crate::commission::validation::{FeedforwardVariant, MoveResult, SETTLING_BAND_M};
+use crate::commission::validation::{MoveResult, MoveSummary, SETTLING_BAND_M};
 use crate::commission::Commissioning;
 use crate::design::ControllerDesign;
-use crate::record::provenance::Provenance;
+use crate::ident::ModelUnits;
+use crate::lti::Tf;
+use crate::model::TwoMassParams;
+use crate::record::commissioning::CommissioningRecord;
 use crate::report::{
-    BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrictionPlot, MarginPoint, MovePlot,
-    Panel, ParameterRow, Report,
+    BodePlot, ExcitationPlot, FrequencyMarker, MovePlot, ParameterRow, Report, Table,
 };
 use crate::Result;
-use std::f64::consts::PI;
 
-/// The controller file the verdict's next step names.
-pub const CONTROLLER_FILE: &str = "controller.toml";
+/// What the result is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ReportKind {
+    /// A run on an axis (a simulated plant or a real drive).
+    Axis,
+    /// A commissioning from a recording: no validation move.
+    Recorded,
+    /// A design saved by the tuning page, judged on a simulated move.
+    Tuned {
+        /// Where the design model came from.
+        source: String,
+        /// Payload of the simulated move, kg.
+        payload_kg: f64,
+        /// What the simulated move ran on.
+        move_label: String,
+    },
+}
 
-fn hz(w_rad_s: f64) -> f64 {
-    w_rad_s / (2.0 * PI)
+/// Everything a report is built from.
+pub struct ReportInputs<'a> {
+    /// What the result is.
+    pub kind: ReportKind,
+    /// The record (`commissioning.json`): model, friction, verdict, log, provenance.
+    pub record: &'a CommissioningRecord,
+    /// The delivered design (loops, gains, drive settings).
+    pub design: &'a ControllerDesign,
+    /// The fitted model's transfer function torque -> motor angle (without dead time).
+    pub model_tf: &'a Tf,
+    /// The data files: measured FRF, moves, excitation, friction runs.
+    pub data: &'a DataFiles,
+    /// The validation moves' numbers, one table row each: (label, summary).
+    pub move_rows: &'a [(String, MoveSummary)],
+    /// The data-sheet model (the "before" column), if known.
+    pub datasheet_model: Option<&'a TwoMassParams>,
+    /// Before/after overlays.
+    pub overlays: Vec<BodePlot>,
+    /// Sections the report cannot show, with the reason: (section, why).
+    pub absent: Vec<(String, String)>,
 }
 
 fn fmt(x: f64, digits: usize) -> String {
     format!("{x:.digits$}")
 }
 
-/// `y(x)` interpolated linearly in `log10 x`.
-fn at(c: &BodeCurve, f: f64, phase: bool) -> f64 {
-    let y = if phase { &c.phase_deg } else { &c.magnitude_db };
-    match c.freq_hz.iter().position(|v| *v >= f) {
-        None => y.last().copied().unwrap_or(f64::NAN),
-        Some(0) => y.first().copied().unwrap_or(f64::NAN),
-        Some(i) => {
-            let (a, b) = (c.freq_hz[i - 1].log10(), c.freq_hz[i].log10());
-            let t = (f.log10() - a) / (b - a);
-            y[i - 1] + t * (y[i] - y[i - 1])
-        }
+/// `x` with `sig` significant digits (fixed point where readable).
+fn sig(x: f64, sig: usize) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let e = x.abs().log10().floor() as i32;
+    if (-3..5).contains(&e) {
+        let d = (sig as i32 - 1 - e).max(0) as usize;
+        format!("{x:.d$}")
+    } else {
+        format!("{x:.*e}", sig - 1)
     }
 }
 
-/// The -180 deg line (plus whole turns) that the phase margin at `f_c` refers to.
-fn minus_180_near(c: &BodeCurve, f_c_hz: f64, pm_deg: f64) -> f64 {
-    let reference = at(c, f_c_hz, true) - pm_deg;
-    -180.0 + 360.0 * ((reference + 180.0) / 360.0).round()
-}
-
-/// An open-loop Bode plot with 0 dB / -180 deg lines, the crossover marker and
-/// the phase- and gain-margin points.
-fn open_loop_plot(
-    title: String,
-    curve: &BodeCurve,
-    m: &crate::lti::StabilityMargins,
-    extra_markers: Vec<FrequencyMarker>,
-) -> BodePlot {
-    let f_c = hz(m.crossover_rad_s);
-    let line = minus_180_near(curve, f_c, m.phase_margin_deg);
-    let mut points = vec![MarginPoint {
-        label: format!("PM {:.1} deg", m.phase_margin_deg),
-        freq_hz: f_c,
-        value: line + m.phase_margin_deg,
-        panel: Panel::Phase,
-    }];
-    if m.gain_margin_db.is_finite() && m.phase_crossover_rad_s.is_finite() {
-        points.push(MarginPoint {
-            label: format!("GM {:.1} dB", m.gain_margin_db),
-            freq_hz: hz(m.phase_crossover_rad_s),
-            value: -m.gain_margin_db,
-            panel: Panel::Magnitude,
+/// Build the report of a result.
+pub fn build_report(inp: &ReportInputs) -> Result<Report> {
+    let rec = inp.record;
+    let id = &rec.identified;
+    let des = inp.design;
+    let frf = match &inp.data.frf {
+        Some(lines) => Some(frf_display(
+            lines,
+            inp.model_tf,
+            id.dead_time_s,
+            resonance_markers(id.f_z_hz, id.f_r_hz),
+        )?),
+        None => None,
+    };
+    let loops = loop_plots(des, id.f_z_hz, id.f_r_hz)?;
+    let mut friction = inp.data.friction.clone();
+    if let (Some(plot), Some(f)) = (&mut friction, &rec.friction) {
+        plot.viscous_nm_s_per_rad = f.viscous_nm_s_per_rad;
+        plot.coulomb_nm = f.coulomb_nm;
+    }
+    let mut tables = vec![drive_form_table(des, id.units)];
+    if !inp.absent.is_empty() {
+        tables.push(Table {
+            title: "Sections not in this report".into(),
+            header: vec!["section".into(), "why".into()],
+            rows: inp
+                .absent
+                .iter()
+                .map(|(a, b)| vec![a.clone(), b.clone()])
+                .collect(),
         });
     }
-    let mut markers = vec![FrequencyMarker {
-        label: format!("f_c {}", hz_text(f_c)),
-        freq_hz: f_c,
-    }];
-    markers.extend(extra_markers);
-    BodePlot {
-        title,
-        curves: vec![curve.clone()],
-        markers,
-        magnitude_lines_db: vec![0.0],
-        phase_lines_deg: vec![line],
-        points,
-        magnitude_only: false,
+    Ok(Report {
+        title: match &inp.kind {
+            ReportKind::Tuned { source, .. } => format!("beltune tuning report: {source}"),
+            _ => format!("beltune commissioning report: {}", rec.plant),
+        },
+        summary: summary(inp),
+        log: rec.log.clone(),
+        frf,
+        controller: Some(loops.controller),
+        open_loops: loops.open_loops,
+        closed_loops: loops.closed_loops,
+        overlays: inp.overlays.clone(),
+        friction,
+        moves: inp.data.moves.clone(),
+        parameters: parameter_rows(rec, des, inp.datasheet_model),
+        validation_rows: inp
+            .move_rows
+            .iter()
+            .map(|(label, s)| validation_row(label, s))
+            .collect(),
+        verdict: rec.verdict.clone(),
+        provenance: rec.provenance.clone(),
+        excitation: inp.data.excitation.clone(),
+        data_files: inp.data.notes(),
+        tables,
+    })
+}
+
+/// The paragraph under the verdict.
+fn summary(inp: &ReportInputs) -> String {
+    let rec = inp.record;
+    let id = &rec.identified;
+    let des = inp.design;
+    let l = crate::units::labels(id.units);
+    match &inp.kind {
+        ReportKind::Axis => {
+            let nl = rec.delivered_move().cloned().unwrap_or_default();
+            let target_mm = rec.validation_move.map_or(f64::NAN, |m| m.target_m * 1e3);
+            format!(
+                "{}: resonance {:.1} Hz, antiresonance {:.1} Hz, fit {:.2} dB rms. Controller: K_P {:.4} N m s/rad, \
+                 K_I {:.3} N m/rad, K_PP {:.2} 1/s. With nonlinear feedforward the validation move to {:.0} mm tracks within \
+                 {:.3} mm and ends {:.1} um from the target. The axis was busy for {:.1} s; computing took {:.2} s.",
+                rec.plant,
+                id.f_r_hz,
+                id.f_z_hz,
+                id.fit_rms_db,
+                des.k_p,
+                des.k_i,
+                des.k_pp,
+                target_mm,
+                nl.max_tracking_error_m * 1e3,
+                nl.static_error_m * 1e6,
+                rec.experiment_time_s.unwrap_or(f64::NAN),
+                rec.computation_time_s.unwrap_or(f64::NAN)
+            )
+        }
+        ReportKind::Recorded => format!(
+            "From recorded data ({}, {:.1} s): resonance {:.2} Hz, antiresonance {:.2} Hz, fit {:.2} dB rms. \
+             Controller: K_P {} {}, K_I {} {}, K_PP {:.3} 1/s. No validation move: the stages that need the axis were skipped.",
+            rec.plant,
+            rec.experiment_time_s.unwrap_or(f64::NAN),
+            id.f_r_hz,
+            id.f_z_hz,
+            id.fit_rms_db,
+            sig(des.k_p, 5),
+            l.torque_per_velocity,
+            sig(des.k_i, 5),
+            l.torque_per_angle,
+            des.k_pp
+        ),
+        ReportKind::Tuned {
+            source,
+            payload_kg,
+            move_label,
+        } => format!(
+            "Saved by the tuning page. The design model is the one of {source}; the verdict is judged on a \
+             simulated validation move with {payload_kg} kg payload ({move_label}), not on the axis. \
+             Run `beltune commission` again to validate on the axis."
+        ),
     }
 }
 
-/// "7.63 Hz", "0.52 Hz", "111 Hz".
-pub fn hz_text(f: f64) -> String {
-    if f >= 100.0 {
-        format!("{f:.0} Hz")
-    } else if f >= 1.0 {
-        format!("{f:.1} Hz")
+/// One row of the parameter table, formatted with `digits` decimals (SI
+/// display units) or 5 significant digits (current units).
+struct Rows {
+    units: ModelUnits,
+    rows: Vec<ParameterRow>,
+}
+
+impl Rows {
+    /// A row: `value` in the display unit `unit`; `before`, `truth` in the same unit.
+    fn add(
+        &mut self,
+        name: &str,
+        unit: &str,
+        value: f64,
+        before: Option<f64>,
+        truth: Option<f64>,
+        digits: usize,
+    ) {
+        let text = |v: f64| match self.units {
+            ModelUnits::Torque => fmt(v, digits),
+            ModelUnits::Current => sig(v, 5),
+        };
+        self.rows.push(ParameterRow {
+            name: name.into(),
+            unit: unit.into(),
+            before: before.map(text),
+            after: text(value),
+            truth: truth.map(text),
+            value: Some(value),
+        });
+    }
+}
+
+/// The parameter table: the model (with the data-sheet model and the
+/// simulator's truth beside it where known), friction, the belt stiffness at
+/// the validation target, the torque limit, the controller. SI values in
+/// readable units (kg mm^2, kN/m, ms); a record in current units in its own
+/// units, unscaled.
+pub fn parameter_rows(
+    rec: &CommissioningRecord,
+    des: &ControllerDesign,
+    datasheet: Option<&TwoMassParams>,
+) -> Vec<ParameterRow> {
+    let id = &rec.identified;
+    let si = id.units == ModelUnits::Torque;
+    let l = crate::units::labels(id.units);
+    // (scale, unit) of the model quantities: SI display units or the record's
+    let (inertia, mass, stiffness, damping) = if si {
+        (
+            (1e6, "kg mm^2"),
+            (1.0, "kg"),
+            (1e-3, "kN/m"),
+            (1.0, "N s/m"),
+        )
     } else {
-        format!("{f:.2} Hz")
+        (
+            (1.0, l.inertia),
+            (1.0, l.mass),
+            (1.0, l.stiffness),
+            (1.0, l.damping),
+        )
+    };
+    let truth = rec.truth.as_ref();
+    let mut r = Rows {
+        units: id.units,
+        rows: Vec::new(),
+    };
+    let b = |f: &dyn Fn(&TwoMassParams) -> f64| datasheet.map(f);
+    r.add(
+        "resonance f_r",
+        "Hz",
+        id.f_r_hz,
+        b(&|p| p.f_r_hz()),
+        truth.map(|t| t.f_r_hz),
+        2,
+    );
+    r.add(
+        "antiresonance f_z",
+        "Hz",
+        id.f_z_hz,
+        b(&|p| p.f_z_hz()),
+        truth.map(|t| t.f_z_hz),
+        2,
+    );
+    r.add(
+        "motor inertia Theta_e",
+        inertia.1,
+        id.theta_e * inertia.0,
+        b(&|p| p.theta_e * inertia.0),
+        truth.map(|t| t.theta_e * inertia.0),
+        2,
+    );
+    r.add(
+        "moving mass m_c",
+        mass.1,
+        id.m_c * mass.0,
+        b(&|p| p.m_c * mass.0),
+        truth.map(|t| t.m_c * mass.0),
+        2,
+    );
+    r.add(
+        "belt stiffness c",
+        stiffness.1,
+        id.c * stiffness.0,
+        b(&|p| p.c * stiffness.0),
+        truth.map(|t| t.c * stiffness.0),
+        1,
+    );
+    r.add(
+        "motor damping d_m",
+        damping.1,
+        id.d_m * damping.0,
+        None,
+        None,
+        2,
+    );
+    r.add(
+        "cart damping d_c",
+        damping.1,
+        id.d_c * damping.0,
+        None,
+        None,
+        2,
+    );
+    r.add(
+        if id.dead_time_measured {
+            "dead time t_T"
+        } else {
+            "dead time t_T (assumed, not measured)"
+        },
+        "ms",
+        id.dead_time_s * 1e3,
+        None,
+        truth.map(|t| t.dead_time_s * 1e3),
+        2,
+    );
+    if let Some(f) = &rec.friction {
+        let (viscous_scale, viscous_unit) = if si {
+            (1e3, "mN m s/rad")
+        } else {
+            (1.0, l.torque_per_velocity)
+        };
+        r.add(
+            "viscous friction d_v",
+            viscous_unit,
+            f.viscous_nm_s_per_rad * viscous_scale,
+            None,
+            truth.map(|t| t.viscous_nm_s_per_rad * viscous_scale),
+            3,
+        );
+        r.add(
+            "Coulomb friction tau_c",
+            l.torque,
+            f.coulomb_nm,
+            None,
+            truth.map(|t| t.coulomb_nm),
+            4,
+        );
+        r.add(
+            "holding torque",
+            l.torque,
+            f.holding_torque_nm,
+            None,
+            None,
+            4,
+        );
     }
-}
-
-/// Controller, open loops, closed loops and sensitivities of a design, from
-/// [`loop_data`] (the same numbers the tuning page shows).
-pub struct LoopPlots {
-    /// The loop data the plots are drawn from.
-    pub data: LoopData,
-    /// `G_pre G_PI`.
-    pub controller: BodePlot,
-    /// Velocity and position open loops.
-    pub open_loops: Vec<BodePlot>,
-    /// Closed loops and sensitivities (magnitude).
-    pub closed_loops: Vec<BodePlot>,
-}
-
-/// The loop plots of `des` with resonance markers at `f_z_hz`, `f_r_hz`.
-pub fn loop_plots(des: &ControllerDesign, f_z_hz: f64, f_r_hz: f64) -> Result<LoopPlots> {
-    let data = loop_data(des)?;
+    if let Some(t) = &rec.target_stiffness {
+        r.add(
+            &format!(
+                "belt stiffness c at the validation target ({:.0} mm{})",
+                t.position_m * 1e3,
+                if t.measured {
+                    ", measured there"
+                } else {
+                    ", identification position"
+                }
+            ),
+            stiffness.1,
+            t.c_n_per_m * stiffness.0,
+            None,
+            None,
+            1,
+        );
+    }
+    if let Some(t) = id.torque_max_nm {
+        r.add("torque limit", l.torque, t, None, None, 3);
+    }
     let vm = &des.velocity_margins;
     let pm = &des.position_margins;
-    let f_r = FrequencyMarker {
-        label: format!("f_r {}", hz_text(f_r_hz)),
-        freq_hz: f_r_hz,
-    };
-    let controller = BodePlot {
-        title: "Controller G_pre G_PI (velocity error -> torque)".into(),
-        curves: vec![data.controller.clone()],
-        markers: resonance_markers(f_z_hz, f_r_hz),
-        ..BodePlot::default()
-    };
-    let open_loops = vec![
-        open_loop_plot(
-            format!(
-                "Velocity open loop: crossover {}, phase margin {:.1} deg, gain margin {:.1} dB, {:.1} dB at f_r",
-                hz_text(hz(vm.crossover_rad_s)),
-                vm.phase_margin_deg,
-                vm.gain_margin_db,
-                des.gain_at_resonance_db
-            ),
-            &data.velocity_open_loop,
-            vm,
-            vec![f_r.clone()],
-        ),
-        open_loop_plot(
-            format!(
-                "Position open loop: crossover {}, phase margin {:.1} deg",
-                hz_text(hz(pm.crossover_rad_s)),
-                pm.phase_margin_deg
-            ),
-            &data.position_open_loop,
-            pm,
-            vec![],
-        ),
-    ];
-    let closed_loops = vec![
-        BodePlot {
-            title: "Closed loops (reference -> output), magnitude".into(),
-            curves: vec![
-                data.velocity_closed_loop.clone(),
-                data.position_closed_loop.clone(),
-            ],
-            markers: vec![f_r.clone()],
-            magnitude_lines_db: vec![0.0, -3.0],
-            magnitude_only: true,
-            ..BodePlot::default()
-        },
-        BodePlot {
-            title: "Sensitivity 1/(1+L) (disturbance -> error), magnitude; 6 dB is the usual limit"
-                .into(),
-            curves: vec![
-                data.velocity_sensitivity.clone(),
-                data.position_sensitivity.clone(),
-            ],
-            markers: vec![f_r],
-            magnitude_lines_db: vec![0.0, 6.0],
-            magnitude_only: true,
-            ..BodePlot::default()
-        },
-    ];
-    Ok(LoopPlots {
-        data,
-        controller,
-        open_loops,
-        closed_loops,
-    })
+    r.add("K_P", l.torque_per_velocity, des.k_p, None, None, 4);
+    r.add("K_I", l.torque_per_angle, des.k_i, None, None, 3);
+    r.add("K_PP", "1/s", des.k_pp, None, None, 3);
+    r.add(
+        "velocity crossover f_c",
+        "Hz",
+        hz(vm.crossover_rad_s),
+        None,
+        None,
+        2,
+    );
+    r.add(
+        "velocity phase margin",
+        "deg",
+        vm.phase_margin_deg,
+        None,
+        None,
+        2,
+    );
+    r.add(
+        "position crossover f_c",
+        "Hz",
+        hz(pm.crossover_rad_s),
+        None,
+        None,
+        3,
+    );
+    r.add(
+        "position phase margin",
+        "deg",
+        pm.phase_margin_deg,
+        None,
+        None,
+        2,
+    );
+    r.add(
+        "gain at resonance",
+        "dB",
+        des.gain_at_resonance_db,
+        None,
+        None,
+        2,
+    );
+    r.rows
 }
 
 /// The bootstrap controller (before) against the designed one (after), both
 /// on the identified model: velocity open loops.
-fn bootstrap_overlay(run: &Commissioning) -> Result<BodePlot> {
+pub fn bootstrap_overlay(run: &Commissioning) -> Result<BodePlot> {
     let ds = &run.datasheet;
     let torque_max = ds.torque_max_nm;
     let boot = crate::commission::bootstrap::bootstrap_controller(
@@ -227,90 +468,6 @@ fn bootstrap_overlay(run: &Commissioning) -> Result<BodePlot> {
         phase_lines_deg: vec![-180.0],
         ..BodePlot::default()
     })
-}
-
-fn row(
-    name: &str,
-    unit: &str,
-    before: Option<f64>,
-    after: f64,
-    truth: Option<f64>,
-    d: usize,
-) -> ParameterRow {
-    ParameterRow {
-        name: name.into(),
-        unit: unit.into(),
-        before: before.map(|b| fmt(b, d)),
-        after: fmt(after, d),
-        truth: truth.map(|t| fmt(t, d)),
-        value: Some(after),
-    }
-}
-
-/// Rows of the model and the controller (before/truth columns empty).
-fn model_and_controller_rows(id: &IdentifiedModel, des: &ControllerDesign) -> Vec<ParameterRow> {
-    let vm = &des.velocity_margins;
-    let pm = &des.position_margins;
-    vec![
-        row("resonance f_r", "Hz", None, id.f_r_hz, None, 2),
-        row("antiresonance f_z", "Hz", None, id.f_z_hz, None, 2),
-        row(
-            "motor inertia Theta_e",
-            "kg mm^2",
-            None,
-            id.theta_e * 1e6,
-            None,
-            2,
-        ),
-        row("moving mass m_c", "kg", None, id.m_c, None, 2),
-        row("belt stiffness c", "kN/m", None, id.c / 1e3, None, 1),
-        row("motor damping d_m", "N s/m", None, id.d_m, None, 2),
-        row("cart damping d_c", "N s/m", None, id.d_c, None, 2),
-        row("dead time t_T", "ms", None, id.dead_time_s * 1e3, None, 2),
-        row("K_P", "N m s/rad", None, des.k_p, None, 4),
-        row("K_I", "N m/rad", None, des.k_i, None, 3),
-        row("K_PP", "1/s", None, des.k_pp, None, 3),
-        row(
-            "velocity crossover f_c",
-            "Hz",
-            None,
-            hz(vm.crossover_rad_s),
-            None,
-            2,
-        ),
-        row(
-            "velocity phase margin",
-            "deg",
-            None,
-            vm.phase_margin_deg,
-            None,
-            2,
-        ),
-        row(
-            "position crossover f_c",
-            "Hz",
-            None,
-            hz(pm.crossover_rad_s),
-            None,
-            3,
-        ),
-        row(
-            "position phase margin",
-            "deg",
-            None,
-            pm.phase_margin_deg,
-            None,
-            2,
-        ),
-        row(
-            "gain at resonance",
-            "dB",
-            None,
-            des.gain_at_resonance_db,
-            None,
-            2,
-        ),
-    ]
 }
 
 /// The controller as a drive menu shows it ([`crate::design::DriveForm`]):
@@ -360,39 +517,6 @@ pub fn drive_form_table(
     }
 }
 
-/// The verdict input of a design with an optional validation summary.
-pub fn verdict_input(
-    id: Option<&IdentifiedModel>,
-    des: &ControllerDesign,
-    nonlinear: Option<&MoveSummary>,
-) -> VerdictInput {
-    VerdictInput {
-        max_tracking_error_m: nonlinear.map(|m| m.max_tracking_error_m),
-        static_error_m: nonlinear.map(|m| m.static_error_m),
-        mean_coherence: id.map(|i| i.mean_coherence),
-        fit_rms_db: id.map(|i| i.fit_rms_db),
-        velocity_phase_margin_deg: (
-            des.knobs.pm_velocity_deg,
-            des.velocity_margins.phase_margin_deg,
-        ),
-        position_phase_margin_deg: (
-            des.knobs.pm_position_deg,
-            des.position_margins.phase_margin_deg,
-        ),
-        velocity_gain_margin_db: des.velocity_margins.gain_margin_db,
-        controller_file: CONTROLLER_FILE.into(),
-    }
-}
-
-/// The verdict of a commissioning (judged on the move with nonlinear feedforward).
-pub fn verdict_of(run: &Commissioning) -> Verdict {
-    verdict(&verdict_input(
-        Some(&run.identified),
-        &run.design,
-        Some(&run.validation.nonlinear),
-    ))
-}
-
 /// A move as plotted (decimated to [`TRACE_POINTS`]).
 pub fn move_plot(m: &MoveResult, label: &str) -> MovePlot {
     MovePlot {
@@ -427,7 +551,7 @@ pub fn validation_row(label: &str, s: &MoveSummary) -> [String; 4] {
 
 /// Min/max envelope of `y` in at most `n / 2` buckets (a PRBS stays a band,
 /// not an alias), with the matching times.
-fn envelope(t: &[f64], y: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
+pub fn envelope(t: &[f64], y: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
     let len = t.len().min(y.len());
     let buckets = (n / 2).max(1);
     let step = len.div_ceil(buckets).max(1);
@@ -454,140 +578,13 @@ fn envelope(t: &[f64], y: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
     (to, yo)
 }
 
-/// The report for a run. `before` is the data-sheet model (if any), `truth`
-/// the simulation truth, `provenance` the run's stamp.
-pub fn build_report(
-    run: &Commissioning,
-    plant: &str,
-    before: Option<&crate::model::TwoMassParams>,
-    truth: Option<&Truth>,
-    provenance: Option<&Provenance>,
-) -> Result<Report> {
-    let fit = &run.fit;
-    let des = &run.design;
-    let tf = fit.model.tf(&fit.params);
-    let lines = frf_lines(&run.frf, &tf, run.dead_time.seconds)?;
-    let frf_plot = frf_display(
-        &lines,
-        &tf,
-        run.dead_time.seconds,
-        resonance_markers(fit.f_z_hz, fit.f_r_hz),
-    )?;
-    let loops = loop_plots(des, fit.f_z_hz, fit.f_r_hz)?;
-    let friction = FrictionPlot {
-        velocity_rad_s: run
-            .friction_points
-            .iter()
-            .map(|p| p.velocity_rad_s)
-            .collect(),
-        torque_nm: run
-            .friction_points
-            .iter()
-            .map(|p| p.mean_torque_nm)
-            .collect(),
-        viscous_nm_s_per_rad: run.friction.viscous_nm_s_per_rad,
-        coulomb_nm: run.friction.coulomb_nm,
-    };
-    let variants = FeedforwardVariant::ALL;
-    let moves = run
-        .moves
-        .iter()
-        .zip(variants)
-        .map(|(m, v)| move_plot(m, v.label()))
-        .collect();
-    let validation_rows = run
-        .moves
-        .iter()
-        .zip(variants)
-        .map(|(m, v)| validation_row(v.label(), &m.summary))
-        .collect();
-    let id = &run.identified;
-    let mut parameters = model_and_controller_rows(id, des);
-    // before / truth columns of the model rows
-    let columns: [(Option<f64>, Option<f64>); 5] = [
-        (before.map(|b| b.f_r_hz()), truth.map(|t| t.f_r_hz)),
-        (before.map(|b| b.f_z_hz()), truth.map(|t| t.f_z_hz)),
-        (
-            before.map(|b| b.theta_e * 1e6),
-            truth.map(|t| t.theta_e * 1e6),
-        ),
-        (before.map(|b| b.m_c), truth.map(|t| t.m_c)),
-        (before.map(|b| b.c / 1e3), truth.map(|t| t.c / 1e3)),
-    ];
-    for (r, (b, t)) in parameters.iter_mut().zip(columns) {
-        let d = if r.unit == "kN/m" { 1 } else { 2 };
-        r.before = b.map(|v| fmt(v, d));
-        r.truth = t.map(|v| fmt(v, d));
-    }
-    parameters[7].truth = truth.map(|t| fmt(t.dead_time_s * 1e3, 2));
-    let f = &run.friction;
-    parameters.splice(
-        8..8,
-        [
-            row(
-                "viscous friction d_v",
-                "mN m s/rad",
-                None,
-                f.viscous_nm_s_per_rad * 1e3,
-                truth.map(|t| t.viscous_nm_s_per_rad * 1e3),
-                3,
-            ),
-            row(
-                "Coulomb friction tau_c",
-                "N m",
-                None,
-                f.coulomb_nm,
-                truth.map(|t| t.coulomb_nm),
-                4,
-            ),
-            row(
-                "holding torque",
-                "N m",
-                None,
-                run.holding_torque_nm,
-                None,
-                4,
-            ),
-            // issue 12: the static belt stretch the setpoint leads by uses it
-            row(
-                &format!(
-                    "belt stiffness c at the validation target ({:.0} mm{})",
-                    run.target_stiffness.position_m * 1e3,
-                    if run.target_stiffness.measured {
-                        ", measured there"
-                    } else {
-                        ", identification position"
-                    }
-                ),
-                "kN/m",
-                None,
-                run.target_stiffness.c_n_per_m / 1e3,
-                None,
-                1,
-            ),
-        ],
-    );
-    let nl = &run.validation.nonlinear;
-    let summary = format!(
-        "{plant}: resonance {:.1} Hz, antiresonance {:.1} Hz, fit {:.2} dB rms. Controller: K_P {:.4} N m s/rad, \
-         K_I {:.3} N m/rad, K_PP {:.2} 1/s. With nonlinear feedforward the validation move to {:.0} mm tracks within \
-         {:.3} mm and ends {:.1} um from the target. The axis was busy for {:.1} s; computing took {:.2} s.",
-        id.f_r_hz,
-        id.f_z_hz,
-        id.fit_rms_db,
-        des.k_p,
-        des.k_i,
-        des.k_pp,
-        run.moves[2].record.desired_m.last().copied().unwrap_or(0.0) * 1e3,
-        nl.max_tracking_error_m * 1e3,
-        nl.static_error_m * 1e6,
-        run.experiment_time_s,
-        run.computation_time_s
-    );
+/// The identification experiment of a run as the report plots it (min/max
+/// envelopes of torque and position, with the limits it ran under).
+pub fn excitation_plot(run: &Commissioning) -> ExcitationPlot {
     let ex = &run.excitation;
     let (t_tau, tau) = envelope(&ex.time_s, &ex.torque_command_nm, 2 * TRACE_POINTS);
     let (t_pos, pos) = envelope(&ex.time_s, &ex.position_m, 2 * TRACE_POINTS);
-    let excitation = ExcitationPlot {
+    ExcitationPlot {
         time_s: t_tau,
         torque_nm: tau,
         position_time_s: t_pos,
@@ -595,272 +592,12 @@ pub fn build_report(
         torque_limit_nm: ex.torque_max_nm,
         travel_min_m: ex.travel_min_m,
         travel_max_m: ex.travel_max_m,
-    };
-    Ok(Report {
-        title: format!("beltune commissioning report: {plant}"),
-        summary,
-        log: run.log.clone(),
-        frf: Some(frf_plot),
-        controller: Some(loops.controller),
-        open_loops: loops.open_loops,
-        closed_loops: loops.closed_loops,
-        overlays: vec![bootstrap_overlay(run)?],
-        friction: Some(friction),
-        moves,
-        parameters,
-        validation_rows,
-        verdict: Some(verdict_of(run)),
-        provenance: provenance.cloned(),
-        excitation: Some(excitation),
-        data_files: data_file_notes(true),
-        tables: vec![drive_form_table(des, crate::ident::ModelUnits::Torque)],
-    })
-}
-
-fn data_file_notes(with_moves: bool) -> Vec<(String, String)> {
-    let mut v = vec![
-        (
-            FRF_CSV.to_string(),
-            "every measured line of the FRF (the plot shows it decimated) with the fitted model"
-                .to_string(),
-        ),
-        (
-            LOOPS_CSV.to_string(),
-            "the open and closed loops, sensitivities and controller on the plot grid".to_string(),
-        ),
-    ];
-    if with_moves {
-        v.push((
-            MOVES_CSV.to_string(),
-            "the validation moves (desired position, errors, torque) as plotted".to_string(),
-        ));
-        v.push((
-            EXCITATION_CSV.to_string(),
-            "the identification experiment (torque, position) as plotted, with its limits"
-                .to_string(),
-        ));
-        v.push((
-            FRICTION_CSV.to_string(),
-            "the constant-velocity friction runs (velocity, mean torque)".to_string(),
-        ));
     }
-    v
 }
 
-/// `moves.csv`: the three validation moves as plotted.
-pub fn moves_csv(moves: &[MovePlot]) -> String {
-    let Some(first) = moves.first() else {
-        return String::new();
-    };
-    let n = moves.iter().map(|m| m.time_s.len()).min().unwrap_or(0);
-    let names: Vec<String> = moves
-        .iter()
-        .flat_map(|m| {
-            let key = m.label.replace(' ', "_");
-            [format!("error_{key}_m"), format!("torque_{key}_nm")]
-        })
-        .collect();
-    let errors: Vec<&[f64]> = moves
-        .iter()
-        .map(|m| {
-            if m.cart_error_m.len() >= n {
-                &m.cart_error_m[..n]
-            } else {
-                &m.motor_error_m[..n.min(m.motor_error_m.len())]
-            }
-        })
-        .collect();
-    let mut cols: Vec<(&str, &[f64])> = vec![
-        ("time_s", &first.time_s[..n]),
-        (
-            "desired_m",
-            &first.desired_m[..n.min(first.desired_m.len())],
-        ),
-    ];
-    for (i, m) in moves.iter().enumerate() {
-        cols.push((&names[2 * i], errors[i]));
-        cols.push((&names[2 * i + 1], &m.torque_nm[..n.min(m.torque_nm.len())]));
-    }
-    super::plot_data::csv_text(&cols)
-}
-
-/// The data files beside the report of a run: (file name, text).
-pub fn data_files(run: &Commissioning, report: &Report) -> Result<Vec<(String, String)>> {
-    let fit = &run.fit;
-    let tf = fit.model.tf(&fit.params);
-    let lines = frf_lines(&run.frf, &tf, run.dead_time.seconds)?;
-    let mut files = vec![
-        (FRF_CSV.into(), frf_csv(&lines)),
-        (LOOPS_CSV.into(), loops_csv(&loop_data(&run.design)?)),
-        (MOVES_CSV.into(), moves_csv(&report.moves)),
-    ];
-    if let Some(e) = &report.excitation {
-        files.push((EXCITATION_CSV.into(), excitation_csv(e)));
-    }
-    if let Some(f) = &report.friction {
-        files.push((FRICTION_CSV.into(), friction_csv(f)));
-    }
-    Ok(files)
-}
-
-/// Columns of `excitation.csv`: the trace as plotted (envelope), and the
-/// torque limit and travel window drawn with it (the same on every row).
-const EXCITATION_COLUMNS: [&str; 6] = [
-    "time_s",
-    "torque_nm",
-    "position_m",
-    "torque_limit_nm",
-    "travel_min_m",
-    "travel_max_m",
-];
-
-/// `excitation.csv`: the identification experiment as the report plots it.
-pub fn excitation_csv(e: &ExcitationPlot) -> String {
-    let n = e.time_s.len();
-    let same = |v: f64| vec![v; n];
-    // the torque and position envelopes share their time base (same samples, same buckets)
-    let position: Vec<f64> = if e.position_time_s == e.time_s {
-        e.position_m.clone()
-    } else {
-        e.time_s
-            .iter()
-            .map(|t| {
-                let k = e.position_time_s.partition_point(|x| x < t);
-                e.position_m
-                    .get(k.min(e.position_m.len().saturating_sub(1)))
-                    .copied()
-                    .unwrap_or(f64::NAN)
-            })
-            .collect()
-    };
-    csv_text(&[
-        (EXCITATION_COLUMNS[0], &e.time_s),
-        (EXCITATION_COLUMNS[1], &e.torque_nm),
-        (EXCITATION_COLUMNS[2], &position),
-        (EXCITATION_COLUMNS[3], &same(e.torque_limit_nm)),
-        (EXCITATION_COLUMNS[4], &same(e.travel_min_m)),
-        (EXCITATION_COLUMNS[5], &same(e.travel_max_m)),
-    ])
-}
-
-/// Read `excitation.csv` back.
-pub fn read_excitation_csv(path: &std::path::Path) -> Result<ExcitationPlot> {
-    let cols = crate::ident::read_csv_columns(path, &EXCITATION_COLUMNS)?;
-    let col = |n: &str| -> Vec<f64> { cols.column(n).map(|c| c.to_vec()).unwrap_or_default() };
-    let first = |n: &str| col(n).first().copied().unwrap_or(f64::NAN);
-    let time_s = col("time_s");
-    Ok(ExcitationPlot {
-        position_time_s: time_s.clone(),
-        time_s,
-        torque_nm: col("torque_nm"),
-        position_m: col("position_m"),
-        torque_limit_nm: first("torque_limit_nm"),
-        travel_min_m: first("travel_min_m"),
-        travel_max_m: first("travel_max_m"),
-    })
-}
-
-/// `friction.csv`: each constant-velocity run of the friction stage.
-pub fn friction_csv(f: &FrictionPlot) -> String {
-    csv_text(&[
-        ("velocity_rad_s", &f.velocity_rad_s),
-        ("mean_torque_nm", &f.torque_nm),
-    ])
-}
-
-/// Read `friction.csv` back; the fitted curve is `viscous_nm_s_per_rad`,
-/// `coulomb_nm` (from `commissioning.json`).
-pub fn read_friction_csv(
-    path: &std::path::Path,
-    viscous_nm_s_per_rad: f64,
-    coulomb_nm: f64,
-) -> Result<FrictionPlot> {
-    let names = ["velocity_rad_s", "mean_torque_nm"];
-    let cols = crate::ident::read_csv_columns(path, &names)?;
-    let col = |n: &str| -> Vec<f64> { cols.column(n).map(|c| c.to_vec()).unwrap_or_default() };
-    Ok(FrictionPlot {
-        velocity_rad_s: col("velocity_rad_s"),
-        torque_nm: col("mean_torque_nm"),
-        viscous_nm_s_per_rad,
-        coulomb_nm,
-    })
-}
-
-/// The report of a commissioning from recorded data (`source` names the record).
-pub fn recorded_report(
-    run: &RecordedCommissioning,
-    source: &str,
-    provenance: Option<&Provenance>,
-) -> Result<Report> {
-    let fit = &run.identification.fit;
-    let id = &run.identified;
-    let tf = fit.model.tf(&fit.params);
-    let lines = frf_lines(&run.identification.frf, &tf, id.dead_time_s)?;
-    let frf = frf_display(
-        &lines,
-        &tf,
-        id.dead_time_s,
-        resonance_markers(fit.f_z_hz, fit.f_r_hz),
-    )?;
-    let loops = loop_plots(&run.design, fit.f_z_hz, fit.f_r_hz)?;
-    let mut parameters = model_and_controller_rows(id, &run.design);
-    if let Some(f) = &run.friction {
-        parameters.extend([
-            row(
-                "viscous friction d_v",
-                "(torque unit) s/rad",
-                None,
-                f.viscous_nm_s_per_rad,
-                None,
-                5,
-            ),
-            row(
-                "Coulomb friction tau_c",
-                "(torque unit)",
-                None,
-                f.coulomb_nm,
-                None,
-                5,
-            ),
-            row(
-                "constant offset",
-                "(torque unit)",
-                None,
-                f.holding_torque_nm,
-                None,
-                5,
-            ),
-        ]);
-    }
-    Ok(Report {
-        title: format!("beltune commissioning report: {source}"),
-        summary: format!(
-            "From recorded data ({source}, {:.1} s): resonance {:.2} Hz, antiresonance {:.2} Hz, fit {:.2} dB rms. \
-             Controller: K_P {:.4e}, K_I {:.4e}, K_PP {:.3}. No validation move: the stages that need the axis were skipped.",
-            run.record_time_s, id.f_r_hz, id.f_z_hz, id.fit_rms_db, run.design.k_p, run.design.k_i, run.design.k_pp
-        ),
-        log: run.log.clone(),
-        frf: Some(frf),
-        controller: Some(loops.controller),
-        open_loops: loops.open_loops,
-        closed_loops: loops.closed_loops,
-        verdict: Some(verdict(&verdict_input(Some(id), &run.design, None))),
-        provenance: provenance.cloned(),
-        data_files: data_file_notes(false),
-        // (no drive table: a record in current units has other gain units)
-        ..Report::default()
-    })
-}
-
-/// The data files beside the report of a recorded commissioning.
-pub fn recorded_data_files(run: &RecordedCommissioning) -> Result<Vec<(String, String)>> {
-    let fit = &run.identification.fit;
-    let tf = fit.model.tf(&fit.params);
-    let lines = frf_lines(&run.identification.frf, &tf, run.identified.dead_time_s)?;
-    Ok(vec![
-        (FRF_CSV.into(), frf_csv(&lines)),
-        (LOOPS_CSV.into(), loops_csv(&loop_data(&run.design)?)),
-    ])
+/// The moves of a run as plotted, with their labels.
+pub fn move_plots(moves: &[(String, &MoveResult)]) -> Vec<MovePlot> {
+    moves.iter().map(|(l, m)| move_plot(m, l)).collect()
 }
 
 #[cfg(test)]

@@ -1,97 +1,16 @@
-//! `beltune compare A B` (issue 16): two commissioning folders side by side:
-//! both measured FRFs and fits, the loops and the validation moves overlaid,
-//! and the change of every parameter in percent. Reads only the files a
-//! commissioning writes (`commissioning.json`, `frf.csv`, `loops.csv`,
-//! `moves.csv`); the data files are optional (a folder without them shows the
-//! table only).
+//! `beltune compare A B`: two result folders side by side: both measured
+//! FRFs and fits, the loops and the validation moves overlaid, and the change
+//! of every parameter in percent. Reads the folders with the one folder
+//! reader ([`ResultFolder::read`]); the data files are optional (a folder
+//! without them shows the table only).
 
-use super::plot_data::{self as plots, FrfLines, LoopData, FRF_CSV, LOOPS_CSV, MOVES_CSV};
+use super::folder::ResultFolder;
+use super::plot_data;
 use crate::ident::FitModel;
+use crate::record::commissioning::CommissioningRecord;
 use crate::report::{BodeCurve, BodePlot, FrequencyMarker, MovePlot, Report, Table};
-use crate::{Error, Result};
-use serde_json::Value;
-use std::path::{Path, PathBuf};
-
-/// One commissioning folder as read.
-#[derive(Clone, Debug)]
-pub struct Commissioned {
-    /// The folder.
-    pub dir: PathBuf,
-    /// `commissioning.json`.
-    pub json: Value,
-    /// `frf.csv`, if present.
-    pub frf: Option<FrfLines>,
-    /// `loops.csv`, if present.
-    pub loops: Option<LoopData>,
-    /// `moves.csv`: time and the error of the move with nonlinear feedforward, if present.
-    pub nonlinear_move: Option<MovePlot>,
-}
-
-/// Read a commissioning folder (typed errors naming the file).
-pub fn read_commissioning(dir: &Path) -> Result<Commissioned> {
-    let path = dir.join("commissioning.json");
-    let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
-        path: path.clone(),
-        source,
-    })?;
-    let json: Value = serde_json::from_str(&text).map_err(|e| Error::Parse {
-        path: path.display().to_string(),
-        message: format!("not valid JSON: {e}"),
-    })?;
-    if json.get("identified").and_then(|v| v.as_object()).is_none() {
-        return Err(Error::Parse {
-            path: path.display().to_string(),
-            message: "no `identified` model: not a commissioning written by `beltune commission`"
-                .into(),
-        });
-    }
-    let frf = dir
-        .join(FRF_CSV)
-        .exists()
-        .then(|| plots::read_frf_csv(&dir.join(FRF_CSV)))
-        .transpose()?;
-    let loops = dir
-        .join(LOOPS_CSV)
-        .exists()
-        .then(|| plots::read_loops_csv(&dir.join(LOOPS_CSV)))
-        .transpose()?;
-    let moves_path = dir.join(MOVES_CSV);
-    let nonlinear_move = if moves_path.exists() {
-        let names = [
-            "time_s",
-            "desired_m",
-            "error_nonlinear_feedforward_m",
-            "torque_nonlinear_feedforward_nm",
-        ];
-        let cols = crate::ident::read_csv_columns(&moves_path, &names)?;
-        let col = |n: &str| cols.column(n).map(|c| c.to_vec()).unwrap_or_default();
-        Some(MovePlot {
-            label: String::new(),
-            time_s: col("time_s"),
-            desired_m: col("desired_m"),
-            cart_error_m: col("error_nonlinear_feedforward_m"),
-            motor_error_m: Vec::new(),
-            torque_nm: col("torque_nonlinear_feedforward_nm"),
-        })
-    } else {
-        None
-    };
-    Ok(Commissioned {
-        dir: dir.to_path_buf(),
-        json,
-        frf,
-        loops,
-        nonlinear_move,
-    })
-}
-
-fn number(v: &Value, path: &[&str]) -> Option<f64> {
-    let mut cur = v;
-    for k in path {
-        cur = cur.get(k)?;
-    }
-    cur.as_f64().filter(|x| x.is_finite())
-}
+use crate::Result;
+use std::path::Path;
 
 /// Change from `a` to `b` in percent of `a` (`None` when `a` is 0 or missing).
 pub fn change_percent(a: Option<f64>, b: Option<f64>) -> Option<f64> {
@@ -101,78 +20,107 @@ pub fn change_percent(a: Option<f64>, b: Option<f64>) -> Option<f64> {
     }
 }
 
-/// The rows of the parameter table: (name, unit, JSON path, scale to unit).
-const ROWS: [(&str, &str, &[&str], f64); 20] = [
-    ("resonance f_r", "Hz", &["identified", "f_r_hz"], 1.0),
-    ("antiresonance f_z", "Hz", &["identified", "f_z_hz"], 1.0),
+/// A quantity of a record, in SI units (`None` where the record lacks it).
+type Quantity = fn(&CommissioningRecord) -> Option<f64>;
+
+/// The rows of the parameter table: (name, unit, quantity, scale to unit).
+const ROWS: [(&str, &str, Quantity, f64); 20] = [
+    ("resonance f_r", "Hz", |r| Some(r.identified.f_r_hz), 1.0),
+    (
+        "antiresonance f_z",
+        "Hz",
+        |r| Some(r.identified.f_z_hz),
+        1.0,
+    ),
     (
         "motor inertia Theta_e",
         "kg mm^2",
-        &["identified", "theta_e"],
+        |r| Some(r.identified.theta_e),
         1e6,
     ),
-    ("moving mass m_c", "kg", &["identified", "m_c"], 1.0),
-    ("belt stiffness c", "kN/m", &["identified", "c"], 1e-3),
-    ("motor damping d_m", "N s/m", &["identified", "d_m"], 1.0),
-    ("cart damping d_c", "N s/m", &["identified", "d_c"], 1.0),
-    ("dead time t_T", "ms", &["identified", "dead_time_s"], 1e3),
-    ("fit residual", "dB rms", &["identified", "fit_rms_db"], 1.0),
-    ("mean coherence", "", &["identified", "mean_coherence"], 1.0),
+    ("moving mass m_c", "kg", |r| Some(r.identified.m_c), 1.0),
+    ("belt stiffness c", "kN/m", |r| Some(r.identified.c), 1e-3),
+    (
+        "motor damping d_m",
+        "N s/m",
+        |r| Some(r.identified.d_m),
+        1.0,
+    ),
+    ("cart damping d_c", "N s/m", |r| Some(r.identified.d_c), 1.0),
+    (
+        "dead time t_T",
+        "ms",
+        |r| Some(r.identified.dead_time_s),
+        1e3,
+    ),
+    (
+        "fit residual",
+        "dB rms",
+        |r| Some(r.identified.fit_rms_db),
+        1.0,
+    ),
+    (
+        "mean coherence",
+        "",
+        |r| Some(r.identified.mean_coherence),
+        1.0,
+    ),
     (
         "viscous friction d_v",
         "mN m s/rad",
-        &["friction", "viscous_nm_s_per_rad"],
+        |r| r.friction.as_ref().map(|f| f.viscous_nm_s_per_rad),
         1e3,
     ),
     (
         "Coulomb friction tau_c",
         "N m",
-        &["friction", "coulomb_nm"],
+        |r| r.friction.as_ref().map(|f| f.coulomb_nm),
         1.0,
     ),
-    ("K_P", "N m s/rad", &["controller", "k_p"], 1.0),
-    ("K_I", "N m/rad", &["controller", "k_i"], 1.0),
-    ("K_PP", "1/s", &["controller", "k_pp"], 1.0),
+    ("K_P", "N m s/rad", |r| r.controller.map(|c| c.k_p), 1.0),
+    ("K_I", "N m/rad", |r| r.controller.map(|c| c.k_i), 1.0),
+    ("K_PP", "1/s", |r| r.controller.map(|c| c.k_pp), 1.0),
     (
         "velocity crossover f_c",
         "Hz",
-        &["controller", "omega_c_velocity"],
+        |r| r.controller.map(|c| c.omega_c_velocity),
         1.0 / (2.0 * std::f64::consts::PI),
     ),
     (
         "velocity phase margin",
         "deg",
-        &["controller", "phase_margin_velocity_deg"],
+        |r| r.controller.map(|c| c.phase_margin_velocity_deg),
         1.0,
     ),
     (
         "position phase margin",
         "deg",
-        &["controller", "phase_margin_position_deg"],
+        |r| r.controller.map(|c| c.phase_margin_position_deg),
         1.0,
     ),
     (
         "max tracking error (nonlinear feedforward)",
         "mm",
-        &["validation", "nonlinear", "max_tracking_error_m"],
+        |r| r.delivered_move().map(|m| m.max_tracking_error_m),
         1e3,
     ),
     (
         "static error (nonlinear feedforward)",
         "um",
-        &["validation", "nonlinear", "static_error_m"],
+        |r| r.delivered_move().map(|m| m.static_error_m),
         1e6,
     ),
 ];
 
 /// The parameter-change table of two commissionings.
-pub fn parameter_changes(a: &Value, b: &Value) -> Table {
+pub fn parameter_changes(a: &CommissioningRecord, b: &CommissioningRecord) -> Table {
     let cell = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.4}"));
     let rows = ROWS
         .iter()
-        .map(|(name, unit, path, scale)| {
-            let va = number(a, path).map(|v| v * scale);
-            let vb = number(b, path).map(|v| v * scale);
+        .map(|(name, unit, quantity, scale)| {
+            let finite = |x: Option<f64>| x.filter(|v| v.is_finite()).map(|v| v * scale);
+            let va = finite(quantity(a));
+            let vb = finite(quantity(b));
             vec![
                 name.to_string(),
                 unit.to_string(),
@@ -191,12 +139,6 @@ pub fn parameter_changes(a: &Value, b: &Value) -> Table {
     }
 }
 
-fn model_tf(json: &Value) -> Option<(crate::lti::Tf, f64)> {
-    let id: crate::commission::result::IdentifiedModel =
-        serde_json::from_value(json.get("identified")?.clone()).ok()?;
-    Some((FitModel::WithBeltDamping.tf(&id.params()), id.dead_time_s))
-}
-
 fn labelled(mut c: BodeCurve, label: String, dots: bool, dashed: bool) -> BodeCurve {
     c.label = label;
     c.dots = dots;
@@ -206,26 +148,26 @@ fn labelled(mut c: BodeCurve, label: String, dots: bool, dashed: bool) -> BodeCu
 
 /// The comparison report of folders `a` and `b`.
 pub fn compare_report(a: &Path, b: &Path) -> Result<Report> {
-    let ca = read_commissioning(a)?;
-    let cb = read_commissioning(b)?;
-    let name = |c: &Commissioned, tag: &str| {
-        let plant = c
-            .json
-            .get("plant")
-            .and_then(|p| p.as_str())
-            .unwrap_or("axis");
+    let ca = ResultFolder::read(a)?;
+    let cb = ResultFolder::read(b)?;
+    let name = |c: &ResultFolder, tag: &str| {
+        let plant = if c.record.plant.is_empty() {
+            "axis"
+        } else {
+            c.record.plant.as_str()
+        };
         format!("{tag}: {} ({plant})", c.dir.display())
     };
     let (na, nb) = (name(&ca, "A"), name(&cb, "B"));
-    let table = parameter_changes(&ca.json, &cb.json);
-    let f_r = |c: &Commissioned| number(&c.json, &["identified", "f_r_hz"]);
+    let table = parameter_changes(&ca.record, &cb.record);
+    let f_r = |c: &ResultFolder| Some(c.record.identified.f_r_hz).filter(|f| f.is_finite());
     let f_ra = f_r(&ca);
     let f_rb = f_r(&cb);
     let mut markers = Vec::new();
     for (tag, f) in [("A", f_ra), ("B", f_rb)] {
         if let Some(f) = f {
             markers.push(FrequencyMarker {
-                label: format!("f_r {tag} {}", super::build::hz_text(f)),
+                label: format!("f_r {tag} {}", super::bode::hz_text(f)),
                 freq_hz: f,
             });
         }
@@ -233,8 +175,10 @@ pub fn compare_report(a: &Path, b: &Path) -> Result<Report> {
     // both FRFs with their fits
     let mut frf_curves = Vec::new();
     for (tag, c) in [("A", &ca), ("B", &cb)] {
-        if let (Some(lines), Some((tf, dt))) = (&c.frf, model_tf(&c.json)) {
-            let p = plots::frf_display(lines, &tf, dt, vec![])?;
+        if let Some(lines) = &c.data.frf {
+            let id = &c.record.identified;
+            let tf = FitModel::WithBeltDamping.tf(&id.params());
+            let p = plot_data::frf_display(lines, &tf, id.dead_time_s, vec![])?;
             let used = |v: &[f64]| -> Vec<f64> {
                 v.iter()
                     .zip(&p.usable)
@@ -266,7 +210,7 @@ pub fn compare_report(a: &Path, b: &Path) -> Result<Report> {
             ..BodePlot::default()
         });
     }
-    if let (Some(la), Some(lb)) = (&ca.loops, &cb.loops) {
+    if let (Some(la), Some(lb)) = (&ca.data.loops, &cb.data.loops) {
         overlays.push(BodePlot {
             title: "Velocity open loops, A and B".into(),
             curves: vec![
@@ -291,9 +235,16 @@ pub fn compare_report(a: &Path, b: &Path) -> Result<Report> {
     }
     let mut moves = Vec::new();
     for (tag, c) in [("A", &ca), ("B", &cb)] {
-        if let Some(m) = &c.nonlinear_move {
+        // the delivered controller's move: nonlinear feedforward, or the only one
+        let delivered = c
+            .data
+            .moves
+            .iter()
+            .find(|m| m.label == "nonlinear feedforward")
+            .or(c.data.moves.last());
+        if let Some(m) = delivered {
             moves.push(MovePlot {
-                label: format!("{tag}: nonlinear feedforward"),
+                label: format!("{tag}: {}", m.label),
                 // the motor-side panel needs data: the judged error again
                 motor_error_m: m.cart_error_m.clone(),
                 ..m.clone()
@@ -305,8 +256,8 @@ pub fn compare_report(a: &Path, b: &Path) -> Result<Report> {
             "{na} against {nb}. The resonance moved from {x:.2} Hz to {y:.2} Hz ({:+.1} %); \
              the antiresonance from {:.2} Hz to {:.2} Hz.",
             (y - x) / x * 100.0,
-            number(&ca.json, &["identified", "f_z_hz"]).unwrap_or(f64::NAN),
-            number(&cb.json, &["identified", "f_z_hz"]).unwrap_or(f64::NAN),
+            ca.record.identified.f_z_hz,
+            cb.record.identified.f_z_hz,
         ),
         _ => format!("{na} against {nb}."),
     };
@@ -330,11 +281,17 @@ mod tests {
         assert_eq!(change_percent(Some(100.0), Some(90.0)), Some(-10.0));
         assert_eq!(change_percent(Some(0.0), Some(1.0)), None);
         assert_eq!(change_percent(None, Some(1.0)), None);
-        let a = serde_json::json!({"identified": {"f_r_hz": 100.0}});
-        let b = serde_json::json!({"identified": {"f_r_hz": 125.0}});
-        let t = parameter_changes(&a, &b);
-        assert_eq!(t.rows[0][4], "+25.00 %");
-        assert_eq!(t.rows[1][4], "-", "missing value");
+        let record = |m_c: f64| {
+            let p = crate::model::TwoMassParams::thesis_table_a4();
+            let text = serde_json::json!({"identified": {
+                "theta_e": p.theta_e, "m_c": m_c, "c": p.c, "d_m": p.d_m, "d_c": p.d_c, "i_t": p.i_t
+            }})
+            .to_string();
+            CommissioningRecord::parse(&text, "test").unwrap()
+        };
+        let t = parameter_changes(&record(10.0), &record(12.5));
+        assert_eq!(t.rows[3][4], "+25.00 %", "{:?}", t.rows[3]);
+        assert_eq!(t.rows[12][4], "-", "missing controller");
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! What the report shows, as plain data (filled by the commissioning procedure).
+//! What the report shows, as plain data (filled by [`super::build`]).
 
 use serde::Serialize;
 
@@ -179,7 +179,7 @@ pub struct Report {
     /// Validation summary table rows: (variant, max error, static error, settling time) as text.
     pub validation_rows: Vec<[String; 4]>,
     /// Pass/fail per limit, warnings and the next step (shown first).
-    pub verdict: Option<crate::report::verdict_old::Verdict>,
+    pub verdict: Option<crate::verdict::Verdict>,
     /// Version, date, command line and seed of the run.
     pub provenance: Option<crate::record::provenance::Provenance>,
     /// Closed loops and sensitivities (magnitude).

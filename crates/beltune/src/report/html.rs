@@ -42,10 +42,10 @@ pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; overflow-x: auto; 
 <body>
 <h1>{{ title }}</h1>
 {% if verdict %}<section id="verdict" class="verdict {{ 'pass' if verdict.passed else 'fail' }}">
-<h2>Verdict: <span id="verdict-result" class="{{ 'pass' if verdict.passed else 'fail' }}">{{ 'PASS' if verdict.passed else ('NOT VALIDATED' if not verdict.checks else 'FAIL') }}</span></h2>
-{% if verdict.checks %}<table id="verdict-checks">
-<tr><th>limit</th><th>measured</th><th>limit</th><th>result</th></tr>
-{% for c in checks %}<tr><td>{{ c.name }}</td><td class="value" data-value="{{ c.value }}">{{ c.value_text }} {{ c.unit }}</td><td>&lt; {{ c.limit }} {{ c.unit }}</td><td class="{{ 'pass' if c.passed else 'fail' }}">{{ 'pass' if c.passed else 'FAIL' }}</td></tr>
+<h2>Verdict: <span id="verdict-result" class="{{ 'pass' if verdict.passed else 'fail' }}">{{ verdict_word }}</span></h2>
+{% if checks %}<table id="verdict-checks">
+<tr><th>check</th><th>measured</th><th>limit</th><th>result</th></tr>
+{% for c in checks %}<tr data-check="{{ c.name }}"><td>{{ c.description }}</td><td class="value" data-value="{{ c.value }}" data-unit="{{ c.unit }}">{{ c.value_text }} {{ c.display_unit }}</td><td>{{ c.relation }} {{ c.limit_text }} {{ c.display_unit }}</td><td class="{{ 'pass' if c.passed else 'fail' }}">{{ 'pass' if c.passed else 'FAIL' }}</td></tr>
 {% endfor %}</table>{% endif %}
 {% if verdict.warnings %}<ul id="verdict-warnings">{% for w in verdict.warnings %}<li class="warn"><b>{{ w.topic }}:</b> {{ w.reason }}</li>{% endfor %}</ul>{% else %}<p>No warnings (coherence, fit residual and margins are fine).</p>{% endif %}
 <p class="next" id="next-step">Next step: {{ verdict.next_step }}</p>
@@ -154,10 +154,13 @@ pub fn render_html(report: &Report) -> Result<String> {
         .flat_map(|v| v.checks.iter())
         .map(|c| {
             context! {
-                name => &c.name,
+                name => Value::from(Serde(&c.name)),
+                description => c.name.description(),
                 value => c.value,
-                value_text => format!("{:.3}", c.value),
-                limit => c.limit,
+                value_text => c.value_text(),
+                limit_text => c.limit_text(),
+                relation => c.relation(),
+                display_unit => c.display_unit(),
                 unit => &c.unit,
                 passed => c.passed,
             }
@@ -166,6 +169,7 @@ pub fn render_html(report: &Report) -> Result<String> {
     tmpl.render(context! {
         title => &report.title,
         checks => checks,
+        verdict_word => report.verdict.as_ref().map(|v| v.word()).unwrap_or_default(),
         summary => &report.summary,
         verdict => Value::from(Serde(&report.verdict)),
         parameters => Value::from(Serde(&report.parameters)),
@@ -210,17 +214,31 @@ mod tests {
             ..Default::default()
         };
         let mut r = r;
-        r.verdict = Some(crate::report::verdict_old::verdict(
-            &crate::report::verdict_old::VerdictInput {
-                max_tracking_error_m: Some(2e-3),
-                static_error_m: Some(20e-6),
-                velocity_phase_margin_deg: (60.0, 60.0),
-                position_phase_margin_deg: (80.0, 80.0),
-                velocity_gain_margin_db: 12.0,
-                controller_file: "controller.toml".into(),
-                ..Default::default()
-            },
-        ));
+        let design = crate::design::design(
+            &crate::design::DesignInput::new(crate::model::TwoMassParams::thesis_table_a4(), 1e-3),
+            &crate::design::DesignKnobs::default(),
+        )
+        .unwrap();
+        let moved = crate::commission::validation::MoveSummary {
+            max_tracking_error_m: 2e-3,
+            static_error_m: 20e-6,
+            settling_time_s: Some(0.1),
+            max_motor_error_m: 2e-3,
+            max_torque_nm: 1.0,
+        };
+        r.verdict = Some(crate::verdict::judge(&crate::verdict::VerdictInput {
+            limits: &crate::verdict::Limits::default(),
+            validation: Some(crate::verdict::MoveInput {
+                summary: &moved,
+                record_after_move_s: 1.0,
+                torque_max_nm: 3.1,
+                on: crate::verdict::ValidatedOn::Axis,
+            }),
+            guaranteed: None,
+            design: &design,
+            identified: None,
+            controller_file: "controller.toml",
+        }));
         r.provenance = Some(crate::record::provenance::Provenance::now(
             vec!["beltune".into(), "commission".into()],
             Some(3),

@@ -1,14 +1,29 @@
-//! The commissioning report: plain data in ([`data`]), SVG plots ([`plot`]),
-//! one self-contained HTML page ([`html`]). Computation happens elsewhere;
-//! this module only draws what it is given.
+//! What a person reads, and the data behind it: the report of a result and
+//! the comparison of two.
+//!
+//! | file | what |
+//! | --- | --- |
+//! | [`plot_data`] | the loops of a design and the measured FRF as plot data (also the tuning page's) |
+//! | [`data_files`] | the CSV files beside the report: one writer and one reader each |
+//! | [`bode`] | the Bode plots of a design: open loops with margins, closed loops, sensitivities |
+//! | [`build`] | the report of a result, from its record and data files |
+//! | [`folder`] | a result folder: read one, write one as a set |
+//! | [`compare`] | two result folders side by side |
+//! | [`data`] | what the page shows, as plain data |
+//! | [`plot`], [`html`] | drawing: SVG plots, one self-contained HTML page |
+//!
+//! Computation of results happens upstream (`commission`, `verdict`); this
+//! module only arranges and draws what it is given.
 
+pub mod bode;
 pub mod build;
 pub mod compare;
 pub mod data;
+pub mod data_files;
+pub mod folder;
 pub mod html;
 pub mod plot;
 pub mod plot_data;
-pub mod verdict_old;
 
 pub use data::{
     BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrfPlot, FrictionPlot, MarginPoint,

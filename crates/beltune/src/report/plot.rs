@@ -896,7 +896,7 @@ pub fn moves_svg(moves: &[MovePlot], torque_limit_nm: Option<f64>) -> Result<Str
             .map(|(i, m)| (m.label.clone(), &m.time_s[..], f(m), color(i), false))
             .collect()
     };
-    let limit = crate::report::verdict_old::DYNAMIC_ERROR_LIMIT_M;
+    let limit = crate::verdict::MAX_TRACKING_ERROR_M;
     let error_limits = vec![
         (limit, "limit +1 mm".to_string()),
         (-limit, "limit -1 mm".to_string()),

@@ -1,17 +1,16 @@
 //! The plot data of a commissioning, computed once here and used by the
-//! report, the tuning page (`beltune serve`) and `beltune compare` (issue 16):
-//! the loops of a design on one frequency grid, the measured FRF with its phase
-//! unwrapped against the fitted model and decimated for display, and the data
-//! files written beside the report (`frf.csv`, `loops.csv`, `moves.csv`).
+//! report, the tuning page (`beltune serve`) and `beltune compare`: the loops
+//! of a design on one frequency grid, the measured FRF with its phase
+//! unwrapped against the fitted model and decimated for display. The data
+//! files that hold them are [`super::data_files`].
 
 use crate::design::ControllerDesign;
 use crate::ident::Frf;
 use crate::lti::freq::unwrap_near as unwrap_near_deg;
 use crate::lti::{bode, feedback, log_grid, BodePoint, Tf, C64};
 use crate::report::{BodeCurve, FrequencyMarker, FrfPlot};
-use crate::{Error, Result};
+use crate::Result;
 use std::f64::consts::PI;
-use std::path::Path;
 
 /// Points of the loop plots (log-spaced): enough to draw the resonance; the
 /// margins come from the design's own fine grid, not from these points.
@@ -30,17 +29,6 @@ pub const FRF_DISPLAY_POINTS: usize = 250;
 pub const FRF_MODEL_POINTS: usize = 400;
 /// Largest number of samples of a time trace drawn.
 pub const TRACE_POINTS: usize = 1500;
-
-/// File name of the full measured FRF beside the report.
-pub const FRF_CSV: &str = "frf.csv";
-/// File name of the loop frequency responses beside the report.
-pub const LOOPS_CSV: &str = "loops.csv";
-/// File name of the validation moves beside the report.
-pub const MOVES_CSV: &str = "moves.csv";
-/// File name of the identification experiment's trace (as plotted) beside the report.
-pub const EXCITATION_CSV: &str = "excitation.csv";
-/// File name of the friction runs (velocity, mean torque) beside the report.
-pub const FRICTION_CSV: &str = "friction.csv";
 
 /// The loops of a design on one frequency grid (Hz).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -345,82 +333,8 @@ pub fn decimate(x: &[f64], n: usize) -> Vec<f64> {
     x.iter().step_by(step).copied().collect()
 }
 
-/// A CSV table: header row, then one row per sample, `{:?}` (shortest
-/// round-trip) numbers.
-pub fn csv_text(columns: &[(&str, &[f64])]) -> String {
-    let rows = columns.iter().map(|c| c.1.len()).min().unwrap_or(0);
-    let mut out = columns.iter().map(|c| c.0).collect::<Vec<_>>().join(",");
-    out.push('\n');
-    for r in 0..rows {
-        let row: Vec<String> = columns.iter().map(|c| format!("{:?}", c.1[r])).collect();
-        out.push_str(&row.join(","));
-        out.push('\n');
-    }
-    out
-}
-
-/// `frf.csv`: every measured line with the fitted model at its frequency.
-pub fn frf_csv(lines: &FrfLines) -> String {
-    let used: Vec<f64> = lines
-        .used_by_fit
-        .iter()
-        .map(|u| if *u { 1.0 } else { 0.0 })
-        .collect();
-    csv_text(&[
-        ("freq_hz", &lines.freq_hz),
-        ("magnitude_db", &lines.magnitude_db),
-        ("phase_deg", &lines.phase_deg),
-        ("coherence", &lines.coherence),
-        ("used_by_fit", &used),
-        ("model_magnitude_db", &lines.model_magnitude_db),
-        ("model_phase_deg", &lines.model_phase_deg),
-    ])
-}
-
-/// Read `frf.csv` back.
-pub fn read_frf_csv(path: &Path) -> Result<FrfLines> {
-    let names = [
-        "freq_hz",
-        "magnitude_db",
-        "phase_deg",
-        "coherence",
-        "used_by_fit",
-        "model_magnitude_db",
-        "model_phase_deg",
-    ];
-    let cols = crate::ident::read_csv_columns(path, &names)?;
-    let col = |n: &str| -> Result<Vec<f64>> {
-        cols.column(n)
-            .map(|c| c.to_vec())
-            .ok_or_else(|| Error::Csv {
-                path: path.display().to_string(),
-                message: format!("missing column `{n}`"),
-            })
-    };
-    Ok(FrfLines {
-        freq_hz: col("freq_hz")?,
-        magnitude_db: col("magnitude_db")?,
-        phase_deg: col("phase_deg")?,
-        coherence: col("coherence")?,
-        used_by_fit: col("used_by_fit")?.iter().map(|u| *u > 0.5).collect(),
-        model_magnitude_db: col("model_magnitude_db")?,
-        model_phase_deg: col("model_phase_deg")?,
-    })
-}
-
-/// Column names of `loops.csv` after `freq_hz`: `<curve>_db`, `<curve>_deg`.
-pub const LOOP_CURVES: [&str; 7] = [
-    "velocity_open_loop",
-    "velocity_closed_loop",
-    "velocity_sensitivity",
-    "position_open_loop",
-    "position_closed_loop",
-    "position_sensitivity",
-    "controller",
-];
-
 impl LoopData {
-    /// The curves in the order of [`LOOP_CURVES`].
+    /// The curves in the order of [`super::data_files::LOOP_CURVES`].
     pub fn curves(&self) -> [&BodeCurve; 7] {
         [
             &self.velocity_open_loop,
@@ -433,7 +347,8 @@ impl LoopData {
         ]
     }
 
-    fn curves_mut(&mut self) -> [&mut BodeCurve; 7] {
+    /// The curves, mutable, in the same order.
+    pub fn curves_mut(&mut self) -> [&mut BodeCurve; 7] {
         [
             &mut self.velocity_open_loop,
             &mut self.velocity_closed_loop,
@@ -444,47 +359,6 @@ impl LoopData {
             &mut self.controller,
         ]
     }
-}
-
-/// `loops.csv`: every loop curve on the loop grid.
-pub fn loops_csv(loops: &LoopData) -> String {
-    let names: Vec<(String, String)> = LOOP_CURVES
-        .iter()
-        .map(|c| (format!("{c}_db"), format!("{c}_deg")))
-        .collect();
-    let mut cols: Vec<(&str, &[f64])> = vec![("freq_hz", &loops.freq_hz)];
-    for (c, (db, deg)) in loops.curves().iter().zip(&names) {
-        cols.push((db, &c.magnitude_db));
-        cols.push((deg, &c.phase_deg));
-    }
-    csv_text(&cols)
-}
-
-/// Read `loops.csv` back.
-pub fn read_loops_csv(path: &Path) -> Result<LoopData> {
-    let mut names = vec!["freq_hz".to_string()];
-    for c in LOOP_CURVES {
-        names.push(format!("{c}_db"));
-        names.push(format!("{c}_deg"));
-    }
-    let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    let cols = crate::ident::read_csv_columns(path, &refs)?;
-    let col = |n: &str| cols.column(n).map(|c| c.to_vec()).unwrap_or_default();
-    let mut out = LoopData {
-        freq_hz: col("freq_hz"),
-        ..LoopData::default()
-    };
-    let freq = out.freq_hz.clone();
-    for (c, name) in out.curves_mut().into_iter().zip(LOOP_CURVES) {
-        *c = BodeCurve {
-            label: name.replace('_', " "),
-            freq_hz: freq.clone(),
-            magnitude_db: col(&format!("{name}_db")),
-            phase_deg: col(&format!("{name}_deg")),
-            ..BodeCurve::default()
-        };
-    }
-    Ok(out)
 }
 
 #[cfg(test)]
@@ -530,12 +404,12 @@ mod tests {
         let plot = frf_display(&lines, &tf, t, vec![]).unwrap();
         assert!(plot.measured.freq_hz.len() <= FRF_DISPLAY_POINTS);
         assert!(plot.usable.iter().any(|u| !u));
-        let text = frf_csv(&lines);
+        let text = super::super::data_files::frf_csv(&lines);
         let dir = std::env::temp_dir().join(format!("beltune-plots-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join(FRF_CSV);
+        let p = dir.join(super::super::data_files::FRF_CSV);
         std::fs::write(&p, text).unwrap();
-        let back = read_frf_csv(&p).unwrap();
+        let back = super::super::data_files::read_frf_csv(&p).unwrap();
         assert_eq!(back, lines);
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -24,7 +24,10 @@
 
 mod linear;
 mod mech;
+pub mod truth;
+
 pub(crate) use mech::coulomb_step;
+pub use truth::Truth;
 
 use crate::axis::{Axis, AxisError, AxisInfo, Measurement};
 use crate::error::{require_finite, require_positive};

@@ -207,7 +207,7 @@ impl Axis for Watched {
 pub const TRAVEL_TOLERANCE_M: f64 = 1e-3;
 
 fn velocity_margin_on(design: &ControllerDesign, truth: &crate::model::TwoMassParams) -> f64 {
-    match crate::verdict::margins_on(design, truth) {
+    match crate::design::robust::margins_on(design, truth) {
         Ok(m) => m.velocity_phase_margin_deg,
         Err(_) => f64::NAN,
     }
@@ -307,7 +307,7 @@ pub fn run_plant(
             let rel = |a: f64, b: f64| ((a - b) / b).abs();
             out.true_velocity_phase_margin_deg = Some(velocity_margin_on(&run.design, &truth));
             out.guaranteed_velocity_phase_margin_deg =
-                Some(run.verdict.guaranteed.velocity_phase_margin_deg);
+                Some(run.guaranteed.velocity_phase_margin_deg);
             let seen = identification_truth(&g.params, run.identification_position_m)?;
             out.f_z_error = Some(rel(run.identified.f_z_hz, seen.f_z_hz));
             out.m_c_error = Some(rel(run.identified.m_c, seen.m_c_kg));
@@ -316,11 +316,11 @@ pub fn run_plant(
             out.static_error_m = Some(run.validation.nonlinear.static_error_m);
             out.max_cart_error_m = Some(run.validation.nonlinear.max_tracking_error_m);
             out.reduced_move = Some(run.validation_move.reduced);
-            if run.verdict.meets_limits {
+            if run.verdict.passed {
                 out.kind = OutcomeKind::Success;
             } else {
                 out.kind = OutcomeKind::LimitsNotMet;
-                out.message = run.verdict.failures.join("; ");
+                out.message = run.verdict.failures().join("; ");
             }
         }
         Err(e) => {

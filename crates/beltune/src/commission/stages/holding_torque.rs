@@ -126,6 +126,27 @@ pub fn holding_torque_stage(
     Ok(holding)
 }
 
+/// The bootstrap controller fitted to the friction stage 3 measured
+/// ([`crate::commission::bootstrap::bootstrap_with_friction`] on the
+/// data-sheet inertia), holding the measured holding torque as its offset:
+/// the controller of the positioning moves and the stops from here on.
+pub fn fitted_bootstrap(
+    held: &Holding,
+    ds: &DataSheet,
+    ts_s: f64,
+    torque_max_nm: f64,
+) -> Result<CascadeConfig<f64>> {
+    let mut c = crate::commission::bootstrap::bootstrap_with_friction(
+        ds.rigid_inertia(),
+        ds.i_t_m,
+        ts_s,
+        torque_max_nm,
+        held.viscous_nm_s_per_rad,
+    )?;
+    c.torque_offset_nm = held.holding_nm;
+    Ok(c)
+}
+
 /// The runs: the slow pair with `ctrl`, the fast pair with the bootstrap
 /// fitted to the viscous friction the slow pair bounds (all its friction
 /// taken as viscous: `d <= tau_f / w`), so that a heavily damped axis tracks

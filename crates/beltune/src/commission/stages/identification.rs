@@ -6,15 +6,16 @@
 //! where it explains the record better than the FRF fit.
 
 use super::super::motion::move_to;
-use super::super::result::{IdentifiedModel, TargetStiffness};
 use super::super::{DataSheet, ExcitationConfig};
 use super::Stages;
+use crate::commission::stiffness::TargetStiffness;
 use crate::design::MAX_DEAD_TIME_S;
 use crate::ident::dead_time::{estimate_dead_time, DeadTime};
 use crate::ident::etfe::{etfe, EtfeConfig, Frf};
 use crate::ident::fit::{fit_two_mass, FitConfig, FitModel, TwoMassFit};
 use crate::ident::nonlinear::{fit_nonlinear, NonlinearConfig, NonlinearFit};
 use crate::model::TwoMassParams;
+use crate::record::model::IdentifiedModel;
 use crate::{Error, Result};
 use beltune_rt::control::CascadeConfig;
 use beltune_rt::prbs::Prbs;
@@ -53,6 +54,41 @@ pub struct Identification {
     pub excitation_torque_nm: Vec<f64>,
     /// Motor-side position of each sample, m.
     pub excitation_position_m: Vec<f64>,
+}
+
+impl Identification {
+    /// The friction-aware fit where it is the model used (it exists and
+    /// explains the record better than the FRF fit).
+    pub fn friction_aware(&self) -> Option<&NonlinearFit> {
+        self.nonlinear
+            .as_ref()
+            .filter(|_| self.nonlinear_note.is_none())
+    }
+
+    /// The Coulomb friction at the motor, N m: the friction-aware model's
+    /// (motor and cart), else stage 3's `stage3_coulomb_nm`.
+    pub fn total_coulomb_nm(&self, stage3_coulomb_nm: f64) -> f64 {
+        self.friction_aware().map_or(stage3_coulomb_nm, |n| {
+            n.tau_c_motor_nm + n.cart_coulomb_nm()
+        })
+    }
+
+    /// The excitation as recorded, with the torque limit and the travel
+    /// window of `ds` it ran under (the record moves out of `self`).
+    pub fn take_excitation(
+        &mut self,
+        torque_max_nm: f64,
+        ds: &DataSheet,
+    ) -> crate::commission::ExcitationTrace {
+        crate::commission::ExcitationTrace {
+            time_s: std::mem::take(&mut self.excitation_time_s),
+            torque_command_nm: std::mem::take(&mut self.excitation_torque_nm),
+            position_m: std::mem::take(&mut self.excitation_position_m),
+            torque_max_nm,
+            travel_min_m: ds.travel_min_m,
+            travel_max_m: ds.travel_max_m,
+        }
+    }
 }
 
 /// One open-loop PRBS experiment as recorded.

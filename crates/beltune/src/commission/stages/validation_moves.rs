@@ -3,13 +3,14 @@
 //! to the start runs under the feedback cascade.
 
 use super::super::motion::{FollowingError, TrackOptions};
-use super::super::result::{FrictionResult, Validation};
 use super::super::validation::{
     run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
 };
 use super::super::{positioning_limits, CommissioningConfig, DataSheet};
 use super::Stages;
+use crate::commission::validation::Validation;
 use crate::ident::fit::TwoMassFit;
+use crate::record::model::FrictionResult;
 use crate::{Error, Result};
 use beltune_rt::control::CascadeConfig;
 use beltune_rt::trajectory::{Limits, State, Trajectory};
@@ -200,7 +201,7 @@ pub fn validation_moves(
     friction: &FrictionResult,
     preview: usize,
     holding_nm: f64,
-    belt: &super::super::result::TargetStiffness,
+    belt: &crate::commission::stiffness::TargetStiffness,
     datasheet: &DataSheet,
     cfg: &CommissioningConfig,
 ) -> Result<ValidationMoves> {

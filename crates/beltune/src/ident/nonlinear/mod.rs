@@ -78,7 +78,7 @@ pub struct NonlinearConfig {
 }
 
 /// The identified nonlinear two-mass model (2.30).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NonlinearFit {
     /// The linear part: `Theta_e`, `m_c`, `c`, belt damping `d`, viscous
     /// `d_m` (translational equivalent), `d_c`, `i_t` (SI).

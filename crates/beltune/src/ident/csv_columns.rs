@@ -65,6 +65,41 @@ pub fn open_maybe_gzip(path: &Path) -> std::io::Result<Box<dyn std::io::Read>> {
 /// Most data rows read from one CSV file (100 s at 10 kHz is 10^6).
 pub const MAX_CSV_ROWS: usize = 10_000_000;
 
+/// The column names of a CSV file's header row (plain or gzip), without
+/// reading its data: what a command checks before it starts any work.
+pub fn read_csv_header(path: &Path) -> Result<Vec<String>> {
+    let shown = path.display().to_string();
+    let csv_err = |message: String| Error::Csv {
+        path: shown.clone(),
+        message,
+    };
+    crate::io::check_readable_file(path, crate::io::MAX_CSV_BYTES).map_err(|e| match e {
+        Error::Parse { message, .. } => csv_err(message),
+        Error::Io { source, .. } => csv_err(format!("cannot open: {source}")),
+        other => other,
+    })?;
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .trim(csv::Trim::All)
+        .from_reader(open_maybe_gzip(path).map_err(|e| csv_err(format!("cannot open: {e}")))?);
+    let headers = reader
+        .headers()
+        .map_err(|e| csv_err(format!("cannot read the header row: {e}")))?;
+    Ok(headers.iter().map(str::to_string).collect())
+}
+
+/// Error naming the first of `names` that the header `header` lacks (with the
+/// columns it has), as [`read_csv_columns`] would say it after reading the data.
+pub fn require_columns(path: &Path, header: &[String], names: &[&str]) -> Result<()> {
+    match names.iter().find(|n| !header.iter().any(|h| h == *n)) {
+        None => Ok(()),
+        Some(n) => Err(Error::Csv {
+            path: path.display().to_string(),
+            message: format!("missing column `{n}` (columns: {})", header.join(", ")),
+        }),
+    }
+}
+
 /// Read the named columns of a CSV file with a header row (plain or gzip,
 /// see [`open_maybe_gzip`]). Errors name the
 /// missing column (and list the available ones), or the row and column of a

@@ -1,0 +1,510 @@
+//! `beltune commission`: the one-command self-commissioning of the built-in
+//! simulated axis (or a plant file), of a drive on EtherCAT, or from data
+//! recorded on a real drive (`--csv`: the stages that need the axis are
+//! skipped).
+//!
+//! One path for the three: [`preflight::plan`] checks everything that can be
+//! checked before the axis moves, the mode runs the library
+//! ([`beltune::commission::commission`] or
+//! [`beltune::commission::recorded::commission_recorded`]), and [`deliver`]
+//! writes the result set ([`beltune::report::folder::ResultSet`]) and prints the
+//! summary of the record it wrote; the library's verdict decides the exit
+//! status (5 when a check fails).
+//!
+//! Output: progress bars and stage lines on stderr (not with `--quiet`), the
+//! summary on stdout (text, or JSON with `--json`: `summary.rs`), and after a
+//! safety stop a diagnostic (`diagnostic.rs`). The flags are grouped under
+//! the headings of `help::COMMISSION_HEADINGS`; `--config FILE.toml`
+//! supplies them from a file (`config.rs`).
+
+pub mod preflight;
+
+use super::summary::Summary;
+use crate::exit::{ExitStatus, Failure};
+use crate::progress::BarProgress;
+use anyhow::Context;
+use beltune::commission::recorded::commission_recorded;
+use beltune::commission::{commission, CommissioningConfig};
+use beltune::ident::{
+    identify_from_motion, identify_recorded, read_csv_columns, EtfeConfig, FitConfig,
+    MotionFrictionConfig, RecordedExcitation,
+};
+use beltune::record::commissioning::{AxisRecord, Origin};
+use beltune::record::folder::OutputTarget;
+use beltune::record::provenance::Provenance;
+use beltune::report::folder::ResultSet;
+use beltune::sim::{SimAxis, Truth};
+use beltune_ethercat::master::BusAxis;
+use preflight::{bad, Mode};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `beltune commission`.
+#[derive(clap::Args)]
+#[command(
+    after_help = crate::help::commission_after_help(),
+    args_override_self = true,
+    mut_args = crate::help::with_commission_heading
+)]
+pub struct Args {
+    /// Built-in plant name (egc70, sim-a, sim-b, sim-c) or a plant TOML file
+    /// (a built-in name always means the built-in plant; write `./egc70` for a file).
+    #[arg(long)]
+    pub plant: Option<String>,
+    /// Payload on the cart, kg (physical plants: egc70 default 11.2 kg, or a plant file).
+    #[arg(long, allow_negative_numbers = true)]
+    pub payload: Option<f64>,
+    /// Tilt of the axis, degrees (0 horizontal, 90 vertical; within -90..90).
+    #[arg(long, allow_negative_numbers = true)]
+    pub tilt: Option<f64>,
+    /// Seed of the simulated measurement noise: another seed, another
+    /// realization of the plant's noise (default 1).
+    #[arg(long, allow_negative_numbers = true)]
+    pub seed: Option<u64>,
+    /// Standard deviation of the simulated actual-torque noise, N m (default:
+    /// the plant's `[noise] torque_nm`; 0 for none).
+    #[arg(long, value_name = "NM", allow_negative_numbers = true)]
+    pub torque_noise: Option<f64>,
+    /// Standard deviation of the simulated motor-encoder noise before
+    /// quantization, counts (default: the plant's `[noise] encoder_counts`).
+    #[arg(long, value_name = "COUNTS", allow_negative_numbers = true)]
+    pub encoder_noise: Option<f64>,
+    /// Output folder, written exactly (new or empty; a previous result needs
+    /// --force). Without it: a new timestamped folder under commissioning/ per
+    /// run, with commissioning/latest pointing at the newest.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Replace the result already in --out (its files are replaced together).
+    #[arg(long, requires = "out")]
+    pub force: bool,
+    #[command(flatten)]
+    pub knobs: super::knobs::KnobArgs,
+    /// Travel window MIN,MAX in m (default: inside the stroke).
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    pub travel_window: Option<(f64, f64)>,
+    /// Cart position at start (the homing result), m (default 0.05).
+    #[arg(long, allow_negative_numbers = true)]
+    pub start_position: Option<f64>,
+    /// Fixed PRBS amplitude A_PRBS in N m (values +-A/2) instead of the automatic search.
+    #[arg(long, allow_negative_numbers = true)]
+    pub excitation_amplitude: Option<f64>,
+    /// PRBS order n_PRBS (default 9; 2..=18).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=preflight::MAX_PRBS_ORDER as i64))]
+    pub prbs_order: Option<u32>,
+    /// PRBS clock period P_PRBS in ms (default 1.6 ms = 16 samples at 10 kHz;
+    /// rounded to whole cycles of the axis).
+    #[arg(long, allow_negative_numbers = true)]
+    pub prbs_clock_ms: Option<f64>,
+    /// Commission from recorded data instead of a plant: CSV of a periodic
+    /// excitation (header row). Skips the stages that need the axis.
+    #[arg(long, requires_all = ["input", "output"])]
+    pub csv: Option<PathBuf>,
+    /// Recorded data: time column, s (default t_s).
+    #[arg(long)]
+    pub time: Option<String>,
+    /// Recorded data: desired-torque column, N m.
+    #[arg(long)]
+    pub input: Option<String>,
+    /// Recorded data: motor-angle column, rad.
+    #[arg(long)]
+    pub output: Option<String>,
+    /// Recorded data: actual-torque column (for the dead time).
+    #[arg(long)]
+    pub actual_torque: Option<String>,
+    /// Recorded data: samples per excitation period (default: detected).
+    #[arg(long, value_parser = parse_period)]
+    pub period_samples: Option<usize>,
+    /// Recorded data: leading periods discarded as transient (default 1).
+    #[arg(long, value_parser = parse_skip)]
+    pub skip_periods: Option<usize>,
+    /// Recorded data: data-sheet Theta_e in kg m^2 (fitted when not given).
+    #[arg(long, allow_negative_numbers = true)]
+    pub inertia: Option<f64>,
+    /// Recorded data: transmission i_t in m/rad (default 1).
+    #[arg(long, allow_negative_numbers = true)]
+    pub transmission: Option<f64>,
+    /// Recorded data (required): the drive's torque limit, in the unit of the
+    /// input column (N m, or A with --current-units), written to controller.toml.
+    /// The record's peak is not a limit, so there is no default.
+    #[arg(long, allow_negative_numbers = true)]
+    pub torque_limit: Option<f64>,
+    /// Recorded data: the input column is a motor current in A (torque constant
+    /// unknown): model, gains and limits in current units (A s/rad, A).
+    #[arg(long)]
+    pub current_units: bool,
+    /// Recorded data: a CSV of any motion for the friction regression (same time column name).
+    #[arg(long, requires_all = ["friction_torque", "friction_position"])]
+    pub friction_csv: Option<PathBuf>,
+    /// Friction record: torque column, N m.
+    #[arg(long)]
+    pub friction_torque: Option<String>,
+    /// Friction record: motor-angle column, rad.
+    #[arg(long)]
+    pub friction_position: Option<String>,
+    /// Commission a drive on EtherCAT: the network interface of the bus (a
+    /// CiA 402 drive in cyclic synchronous torque mode; raw sockets need root
+    /// or CAP_NET_RAW). `--plant` and `--payload` then only give the data
+    /// sheet (inertia, transmission, moving mass, travel, torque limit).
+    #[arg(long, value_name = "IFACE", conflicts_with = "csv")]
+    pub ethercat: Option<String>,
+    /// EtherCAT: position of the drive on the bus (0 = the first SubDevice).
+    #[arg(long, default_value_t = 0, requires = "ethercat")]
+    pub subdevice: usize,
+    /// EtherCAT: bus cycle (the drive's SYNC0 period), us.
+    #[arg(long, default_value_t = 1000, requires = "ethercat")]
+    pub cycle_us: u32,
+    /// EtherCAT: how long to wait for a frame, ms (3 consecutive lost frames
+    /// end the commissioning with a quick stop).
+    #[arg(long, default_value_t = 10.0, requires = "ethercat")]
+    pub frame_timeout_ms: f64,
+    /// EtherCAT: run the bus thread under SCHED_FIFO at this priority
+    /// (1-99; root or CAP_SYS_NICE), so that a busy host does not make it
+    /// miss cycles (the computation threads keep normal scheduling).
+    #[arg(long, value_name = "PRIO", requires = "ethercat")]
+    pub realtime_priority: Option<u8>,
+    /// EtherCAT: do not use distributed clocks even where the drive offers
+    /// them (SM-synchronous: the drive runs a cycle per process-data frame).
+    #[arg(long, requires = "ethercat")]
+    pub no_dc: bool,
+    /// No progress bars or stage lines (the summary is still printed).
+    #[arg(long)]
+    pub quiet: bool,
+    /// Print the summary as JSON on stdout (keys: see the README).
+    #[arg(long)]
+    pub json: bool,
+    /// Largest following error allowed in the closed-loop stages before the
+    /// supervisor stops the axis, m (default 0.05).
+    #[arg(long, value_name = "M")]
+    pub following_error_max: Option<f64>,
+    #[command(flatten)]
+    pub limits: super::verdict::LimitArgs,
+    #[command(flatten)]
+    pub config: super::config::ConfigArgs,
+}
+
+pub fn parse_period(s: &str) -> Result<usize, String> {
+    let max = beltune::ident::csv_columns::MAX_CSV_ROWS;
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a whole number of samples"))?;
+    if !(4..=max).contains(&n) {
+        return Err(format!("must lie in 4..={max} samples"));
+    }
+    Ok(n)
+}
+
+pub fn parse_skip(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a whole number of periods"))?;
+    if n > preflight::MAX_SKIP_PERIODS {
+        return Err(format!("must lie in 0..={}", preflight::MAX_SKIP_PERIODS));
+    }
+    Ok(n)
+}
+
+fn parse_pair(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once(',')
+        .ok_or_else(|| format!("expected MIN,MAX, got `{s}`"))?;
+    let num = |x: &str| -> Result<f64, String> {
+        let v: f64 = x
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{}` is not a number", x.trim()))?;
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(format!("`{}` is not finite", x.trim()))
+        }
+    };
+    Ok((num(a)?, num(b)?))
+}
+
+/// An EtherCAT bus to commission on instead of the raw socket of
+/// `--ethercat IFACE` (tests: the virtual drive in-process).
+pub struct Bus<'a> {
+    /// What the summary calls the bus (e.g. `EtherCAT eth0`).
+    pub label: String,
+    /// Open the axis with the master settings of the command line.
+    #[allow(clippy::type_complexity)]
+    pub open: Box<
+        dyn FnOnce(
+                beltune_ethercat::master::MasterConfig,
+            ) -> Result<Box<dyn BusAxis + 'a>, beltune_ethercat::Error>
+            + 'a,
+    >,
+}
+
+/// Run the subcommand.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    run_inner(args, None)
+}
+
+/// Run `commission --ethercat ...` on `bus` instead of the raw socket of the
+/// interface (whose name is then ignored).
+pub fn run_on_bus(args: Args, bus: Bus<'_>) -> anyhow::Result<()> {
+    if args.ethercat.is_none() {
+        return Err(bad("run_on_bus needs --ethercat".to_string()));
+    }
+    run_inner(args, Some(bus))
+}
+
+fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
+    let plan = preflight::plan(&args)?;
+    let started = Instant::now();
+    let set = match plan.mode {
+        Mode::Simulated(s) => run_simulated(&args, &plan.cfg, s)?,
+        Mode::Ethercat(e) => run_ethercat(&args, &plan.cfg, e, bus)?,
+        Mode::Recorded(r) => run_recorded(&args, &plan.cfg, r)?,
+    };
+    deliver(&set, &plan.target, &args, started)
+}
+
+/// Write the result set, print the summary of the record it holds, and end
+/// with the verdict's status: 0, or 5 when a check failed.
+fn deliver(
+    set: &ResultSet,
+    target: &OutputTarget,
+    args: &Args,
+    started: Instant,
+) -> anyhow::Result<()> {
+    let files = set.write(target)?;
+    super::diagnostic::remove_stale(target)?;
+    let summary = Summary::of(&set.record, files, started.elapsed().as_secs_f64());
+    if args.json {
+        println!("{}", summary.json()?);
+    } else {
+        for line in summary.lines() {
+            println!("{line}");
+        }
+    }
+    let status = summary.exit_status();
+    if status != ExitStatus::Success {
+        let failures = set.verdict().map(|v| v.failures()).unwrap_or_default();
+        return Err(anyhow::Error::new(Failure::new(
+            status,
+            format!(
+                "the commissioning finished, but the delivered controller misses its limits: {}",
+                failures.join(", ")
+            ),
+        )));
+    }
+    Ok(())
+}
+
+/// Commission the simulated axis.
+fn run_simulated(
+    args: &Args,
+    cfg: &CommissioningConfig,
+    s: preflight::Simulated,
+) -> anyhow::Result<ResultSet> {
+    let seed = s.sim.seed;
+    let mut axis = SimAxis::new(&s.plant, s.sim)?;
+    let mut progress = BarProgress::new(args.quiet);
+    let run = commission(&mut axis, &s.datasheet, cfg, &mut progress)
+        .map_err(|e| stopped(e, &mut progress, args))?;
+    let origin = Origin {
+        name: s.name.clone(),
+        axis: AxisRecord::simulated(&s.name, &s.plant, s.datasheet.origin_m, seed),
+        truth: Some(Truth::of_plant(&s.plant, run.identification_position_m)?),
+        provenance: Provenance::of_this_process(Some(seed)),
+    };
+    Ok(ResultSet::of_run(&run, &origin)?)
+}
+
+/// Commission the drive on an EtherCAT bus (`--ethercat IFACE`).
+fn run_ethercat(
+    args: &Args,
+    cfg: &CommissioningConfig,
+    e: preflight::Ethercat,
+    bus: Option<Bus<'_>>,
+) -> anyhow::Result<ResultSet> {
+    use beltune_ethercat::master::wire::RawSocket;
+    use beltune_ethercat::master::{EthercatAxis, Storage};
+    if let Some(bus) = bus {
+        return run_on(args, cfg, e, bus);
+    }
+    let storage = Storage::new();
+    let interface = e.interface.clone();
+    let bus = Bus {
+        label: format!("EtherCAT {interface}"),
+        open: Box::new(|master| {
+            let axis = EthercatAxis::open(&storage, master, |tx, rx| {
+                RawSocket::open(&interface, tx, rx)
+            })?;
+            Ok(Box::new(axis) as Box<dyn BusAxis>)
+        }),
+    };
+    run_on(args, cfg, e, bus)
+}
+
+/// Commission the drive on `bus`.
+fn run_on(
+    args: &Args,
+    cfg: &CommissioningConfig,
+    e: preflight::Ethercat,
+    bus: Bus<'_>,
+) -> anyhow::Result<ResultSet> {
+    if let Some(p) = args.realtime_priority {
+        // this thread runs the bus; the computation threads it starts run normally
+        beltune_ethercat::sched::set_realtime_priority(p)
+            .map_err(|e| bad(format!("--realtime-priority: {e}")))?;
+    }
+    let label = bus.label;
+    let mut axis = (bus.open)(e.master).with_context(|| label.clone())?;
+    let id = axis.identity().clone();
+    let sc = axis.scaling();
+    if !args.quiet {
+        let line = format!(
+            "SubDevice {} of {}: {} (vendor {:#010x}, product {:#010x}, rev {:#010x}, serial {}), {}; rated torque {:.3} N m, limit {:.3} N m, {} increments per {} rev{}",
+            args.subdevice,
+            id.subdevices,
+            id.name,
+            id.vendor_id,
+            id.product_code,
+            id.revision,
+            id.serial,
+            if id.dc { "SYNC0" } else { "no distributed clocks" },
+            sc.rated_torque_nm,
+            sc.torque_limit_nm(),
+            sc.encoder_increments,
+            sc.motor_revolutions,
+            if sc.load_m_per_inc.is_some() { ", load-side encoder" } else { "" }
+        );
+        for l in crate::progress::stage_lines(&label, &line) {
+            eprintln!("{l}");
+        }
+    }
+    let mut progress = BarProgress::new(args.quiet);
+    let run = commission(axis.as_axis(), &e.datasheet, cfg, &mut progress);
+    // leave the drive switched off and at rest, also after a stop
+    let _ = axis.stop_drive();
+    let (exchanges, missed) = axis.cycle_counts();
+    drop(axis);
+    if args.realtime_priority.is_some() {
+        // the bus is closed: the report is no real-time work
+        beltune_ethercat::sched::set_normal();
+    }
+    if !args.quiet && id.dc {
+        // a late exchange makes the drive apply the previous torque again
+        let line = format!(
+            "{exchanges} exchanges, {missed} SYNC0 cycles missed by the master (host scheduling)"
+        );
+        for l in crate::progress::stage_lines(&label, &line) {
+            eprintln!("{l}");
+        }
+    }
+    let run = run.map_err(|e| stopped(e, &mut progress, args))?;
+    if !args.quiet {
+        let note = if sc.load_m_per_inc.is_some() {
+            "the cart errors are measured by the load-side encoder"
+        } else {
+            "the drive has no load-side encoder: the cart errors are motor-side"
+        };
+        for l in crate::progress::stage_lines("EtherCAT", note) {
+            eprintln!("{l}");
+        }
+    }
+    let name = format!("{label} SubDevice {} ({})", args.subdevice, id.name);
+    let origin = Origin {
+        name: name.clone(),
+        axis: AxisRecord::Ethercat { source: name },
+        truth: None,
+        provenance: Provenance::of_this_process(None),
+    };
+    Ok(ResultSet::of_run(&run, &origin)?)
+}
+
+/// Commission from recorded data (`--csv`).
+fn run_recorded(
+    args: &Args,
+    cfg: &CommissioningConfig,
+    r: preflight::Recorded,
+) -> anyhow::Result<ResultSet> {
+    let id = identify_recorded(&RecordedExcitation {
+        csv: &r.csv,
+        time: &r.time,
+        input: &r.input,
+        output: &r.output,
+        actual_torque: args.actual_torque.as_deref(),
+        period_samples: args.period_samples,
+        skip_periods: args.skip_periods.unwrap_or(1),
+        etfe: EtfeConfig::default(),
+        fit: FitConfig {
+            theta_e: args.inertia,
+            free_inertia: args.inertia.is_none(),
+            i_t: args.transmission.unwrap_or(1.0),
+            units: r.units,
+            ..FitConfig::default()
+        },
+    })?;
+    let friction = match &r.friction {
+        Some((f, tq, pos)) => {
+            let cols = read_csv_columns(f, &[r.time.as_str(), pos.as_str(), tq.as_str()])?;
+            let column = |n: &str| {
+                cols.column(n)
+                    .ok_or_else(|| anyhow::anyhow!("{}: missing column `{n}`", f.display()))
+            };
+            Some(
+                identify_from_motion(
+                    column(&r.time)?,
+                    column(pos)?,
+                    column(tq)?,
+                    &MotionFrictionConfig::default(),
+                )
+                .with_context(|| f.display().to_string())?,
+            )
+        }
+        None => None,
+    };
+    let run = commission_recorded(id, friction, r.torque_limit, cfg).map_err(|e| {
+        // a friction record in other units than the drive's torque limit
+        match &r.friction {
+            Some((f, ..)) => anyhow::Error::new(e).context(f.display().to_string()),
+            None => anyhow::Error::new(e),
+        }
+    })?;
+    if !args.quiet {
+        for line in &run.log {
+            // "stage: summary", as the stage lines of a run on the axis
+            let (stage, summary) = line.split_once(": ").unwrap_or(("", line));
+            for l in crate::progress::stage_lines(stage, summary) {
+                eprintln!("{l}");
+            }
+        }
+    }
+    let source = r.csv.display().to_string();
+    let origin = Origin {
+        name: source.clone(),
+        axis: AxisRecord::Recorded { source },
+        truth: None,
+        provenance: Provenance::of_this_process(None),
+    };
+    Ok(ResultSet::of_recorded(&run, &origin)?)
+}
+
+/// The error that ends a commissioning: after a safety stop, with the
+/// diagnostic written next to where the results would have gone (the status
+/// stays that of the library error: 3).
+fn stopped(e: beltune::Error, progress: &mut BarProgress, args: &Args) -> anyhow::Error {
+    let stop = progress.take_safety_stop();
+    let e = anyhow::Error::new(e);
+    let Some(stop) = stop else {
+        return e.context("commissioning stopped");
+    };
+    let reason = crate::exit::one_line(&e);
+    let seed = args.ethercat.is_none().then(|| args.seed.unwrap_or(1));
+    match super::diagnostic::write(&preflight::target(args), &stop, &reason, seed) {
+        Ok(files) => e.context(format!(
+            "commissioning stopped in stage `{}` (diagnostic: {})",
+            stop.stage,
+            files[0].display()
+        )),
+        Err(w) => e.context(format!(
+            "commissioning stopped in stage `{}` (the diagnostic could not be written: {})",
+            stop.stage,
+            crate::exit::one_line(&w)
+        )),
+    }
+}
