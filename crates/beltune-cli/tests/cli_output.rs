@@ -170,7 +170,7 @@ fn json_summary_has_the_documented_keys_and_the_run_s_numbers() {
             "files",
         ])
     );
-    assert_eq!(s["schema"], "beltune-commission-summary/1");
+    assert_eq!(s["schema"], "beltune-commission-summary/2");
     assert_eq!(s["status"], "ok");
     assert_eq!(s["exit_code"], 0);
     assert_eq!(
@@ -217,9 +217,15 @@ fn json_summary_has_the_documented_keys_and_the_run_s_numbers() {
             "settling_time_nonlinear_s",
         ])
     );
-    assert_eq!(keys(&s["verdict"]), set(&["passed", "checks"]));
+    assert_eq!(
+        keys(&s["verdict"]),
+        set(&["passed", "validated_on", "checks", "warnings", "next_step"])
+    );
     for c in s["verdict"]["checks"].as_array().unwrap() {
-        assert_eq!(keys(c), set(&["name", "value_m", "limit_m", "passed"]));
+        assert_eq!(
+            keys(c),
+            set(&["name", "value", "limit", "unit", "below", "passed"])
+        );
     }
     // The same run's commissioning.json (written by the library's outputs).
     let full: serde_json::Value =
@@ -236,11 +242,13 @@ fn json_summary_has_the_documented_keys_and_the_run_s_numbers() {
         full["validation"]["nonlinear"]["max_tracking_error_m"]
     );
     assert_eq!(
-        s["verdict"]["checks"][0]["value_m"],
+        s["verdict"]["checks"][0]["value"],
         full["validation"]["nonlinear"]["max_tracking_error_m"]
     );
-    assert_eq!(s["verdict"]["checks"][0]["limit_m"], 1e-3);
-    assert_eq!(s["verdict"]["checks"][1]["limit_m"], 1e-4);
+    assert_eq!(s["verdict"]["checks"][0]["limit"], 1e-3);
+    assert_eq!(s["verdict"]["checks"][1]["limit"], 1e-4);
+    // one verdict: the summary's is the record's
+    assert_eq!(s["verdict"], full["verdict"]);
     let files: Vec<PathBuf> = s["files"]
         .as_array()
         .unwrap()
@@ -480,9 +488,9 @@ fn limits_not_met_is_5_with_the_results_written() {
     let c = &s["verdict"]["checks"][0];
     assert_eq!(c["name"], "max_tracking_error");
     assert_eq!(c["passed"], false);
-    assert!(c["value_m"].as_f64().unwrap() >= 1e-5);
+    assert!(c["value"].as_f64().unwrap() >= 1e-5);
     assert_eq!(
-        c["value_m"],
+        c["value"],
         s["validation"]["max_tracking_error_nonlinear_m"]
     );
     let err = text(&o.stderr);
@@ -504,7 +512,7 @@ fn limits_not_met_is_5_with_the_results_written() {
         ]
     );
     // The same run passes once the limit is what it achieved (a technician's own limit).
-    let achieved = c["value_m"].as_f64().unwrap() * 1.01;
+    let achieved = c["value"].as_f64().unwrap() * 1.01;
     let o = commission(
         &dir.join("out2"),
         &["--quiet", "--max-tracking-error", &achieved.to_string()],
@@ -740,23 +748,25 @@ fn help_has_headings_examples_and_exit_statuses() {
 /// The README documents every exit status of `help::EXIT_STATUSES` and the
 /// summary's JSON keys.
 #[test]
-fn readme_documents_the_exit_statuses_and_json_keys() {
-    let readme =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md"))
-            .unwrap();
+fn the_command_reference_documents_the_exit_statuses_and_json_keys() {
+    let docs = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/commands.md"),
+    )
+    .unwrap();
     for (code, _) in beltune_cli::help::EXIT_STATUSES {
         assert!(
-            readme.contains(&format!("\n| {code} | ")),
-            "README lacks exit status {code}"
+            docs.contains(&format!("\n| {code} | ")),
+            "docs/commands.md lacks exit status {code}"
         );
     }
     for key in [
-        "beltune-commission-summary/1",
-        "`limits_not_met`",
+        beltune_cli::cmd::summary::SCHEMA,
+        "limits_not_met",
+        "not_validated",
         "`max_tracking_error_nonlinear_m`",
         "`checks`",
     ] {
-        assert!(readme.contains(key), "README lacks {key}");
+        assert!(docs.contains(key), "docs/commands.md lacks {key}");
     }
 }
 
@@ -878,8 +888,11 @@ fn recorded_data_summary_has_null_axis_parts() {
     let o = args(true, "a");
     assert_eq!(code(&o), 0, "{}", text(&o.stderr));
     let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(s["status"], "ok");
-    for k in ["truth", "validation", "verdict", "axis_busy_s"] {
+    assert_eq!(s["status"], "not_validated");
+    assert_eq!(s["exit_code"], 0);
+    assert_eq!(s["verdict"]["validated_on"], "none");
+    assert_eq!(s["verdict"]["passed"], false);
+    for k in ["truth", "validation", "axis_busy_s"] {
         assert!(s[k].is_null(), "{k}: {}", s[k]);
     }
     assert!(s["identified"]["f_r_hz"].as_f64().unwrap() > 0.0);

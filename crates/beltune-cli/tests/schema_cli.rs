@@ -293,7 +293,8 @@ fn commission_csv_in_current_units_labels_every_unit_as_current() {
         })
         .collect();
     assert!(units.len() >= 12, "{units:?}");
-    let plain = ["Hz", "ms", "deg", "dB", "1/s", "m/rad"];
+    // (the drive-settings table: position gain in (m/min)/mm, the filter's kind without unit)
+    let plain = ["Hz", "ms", "deg", "dB", "1/s", "m/rad", "(m/min)/mm", ""];
     for u in &units {
         assert!(
             plain.contains(&u.as_str())

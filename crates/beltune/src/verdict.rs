@@ -111,7 +111,8 @@ pub struct Check {
     pub value: Option<f64>,
     /// The limit in [`Self::unit`].
     pub limit: f64,
-    /// The SI unit of value and limit: `m`, `s`, `N m` or `deg`.
+    /// The unit of value and limit: `m`, `s`, `N m` (`A` for a record in
+    /// current units) or `deg`.
     pub unit: String,
     /// Whether the value must stay below the limit (`true`) or reach it (`false`).
     pub below: bool,
@@ -141,8 +142,9 @@ pub enum ValidatedOn {
     None,
 }
 
-/// The verdict: every check, the warnings and the next step.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// The verdict: every check, the warnings and the next step. (The default
+/// is an empty verdict that judged nothing.)
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Verdict {
     /// A move was judged and every check passed.
     pub passed: bool,
@@ -244,11 +246,15 @@ pub fn judge(input: &VerdictInput) -> Verdict {
             "s",
             true,
         ));
+        // a record in current units judges a current against the current limit
+        let torque_unit = input
+            .identified
+            .map_or("N m", |id| crate::units::labels(id.units).torque);
         let mut saturation = check(
             CheckName::Saturation,
             Some(s.max_torque_nm),
             m.torque_max_nm,
-            "N m",
+            torque_unit,
             true,
         );
         saturation.passed = below(
@@ -397,6 +403,7 @@ fn display_unit(c: &Check) -> (f64, &'static str, usize) {
         "m" => (1e3, "mm", 3),
         "s" => (1.0, "s", 3),
         "N m" => (1.0, "N m", 3),
+        "A" => (1.0, "A", 3),
         _ => (1.0, "deg", 1),
     }
 }
@@ -427,7 +434,7 @@ impl Check {
         tidy(self.limit * display_unit(self).0)
     }
 
-    /// The display unit (`mm`, `um`, `s`, `N m`, `deg`).
+    /// The display unit (`mm`, `um`, `s`, `N m`, `A`, `deg`).
     pub fn display_unit(&self) -> &'static str {
         display_unit(self).1
     }

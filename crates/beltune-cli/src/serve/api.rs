@@ -428,6 +428,9 @@ pub struct InfoResponse {
     pub measured_frf: Option<FrfOverlay>,
     /// The commissioning's own validation, when known.
     pub commissioned: Option<CommissionedNumbers>,
+    /// The loaded result's verdict as the terminal and the report say it
+    /// (`PASS: ...`, `FAIL: ...`, `NOT VALIDATED: ...`), when it has one.
+    pub commissioned_verdict: Option<String>,
 }
 
 /// Default prefilter attenuation per prefilter kind, dB.

@@ -486,6 +486,7 @@ impl Tuner for LibraryTuner {
                     max_error_m: m.max_tracking_error_m,
                     static_error_m: m.static_error_m,
                 }),
+            commissioned_verdict: self.model.result.record.verdict.as_ref().map(|v| v.text()),
         }
     }
 

@@ -383,6 +383,7 @@ async fn info(State(state): State<AppState>) -> Json<InfoResponse> {
         save_dir: state.save_dir.display().to_string(),
         measured_frf: model.measured_frf,
         commissioned: model.commissioned,
+        commissioned_verdict: model.commissioned_verdict,
     })
 }
 

@@ -39,6 +39,8 @@ pub struct ModelSummary {
     pub measured_frf: Option<FrfOverlay>,
     /// The commissioning's own validation numbers, when known.
     pub commissioned: Option<CommissionedNumbers>,
+    /// The result's verdict as text (`PASS: ...`), when it has one.
+    pub commissioned_verdict: Option<String>,
 }
 
 /// One file of a saved set: name and contents.

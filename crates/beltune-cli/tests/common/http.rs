@@ -122,6 +122,7 @@ pub fn double_model() -> ModelSummary {
         nominal_payload_kg: 11.2,
         measured_frf: None,
         commissioned: None,
+        commissioned_verdict: None,
     }
 }
 

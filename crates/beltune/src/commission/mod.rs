@@ -227,33 +227,9 @@ pub fn commission(
         datasheet,
         cfg,
     )?;
-    let verdict = crate::verdict::judge(&crate::verdict::VerdictInput {
-        limits: &cfg.limits,
-        validation: Some(crate::verdict::MoveInput {
-            summary: &val.validation.nonlinear,
-            record_after_move_s: cfg.validation.settle_s,
-            torque_max_nm: torque_max,
-            on: crate::verdict::ValidatedOn::Axis,
-        }),
-        guaranteed: Some(&delivered.guaranteed),
-        design: &delivered.design,
-        identified: Some(&ident.identified),
-        controller_file: crate::record::CONTROLLER_FILE,
-    });
-    st.log.push(format!(
-        "verdict: {}{}",
-        verdict.text(),
-        verdict
-            .warnings
-            .iter()
-            .map(|w| format!("; warning: {}: {}", w.topic, w.reason))
-            .collect::<String>(),
-    ));
-    let experiment_time_s = st.runner.busy_time_s();
-    let log = std::mem::take(&mut st.log);
-    let computation_time_s = st.compute_s;
-    Ok(Commissioning {
+    let mut run = Commissioning {
         datasheet: *datasheet,
+        torque_max_nm: torque_max,
         identification_position_m: ident.measured_position_m,
         holding_torque_nm: holding,
         target_stiffness,
@@ -272,11 +248,45 @@ pub fn commission(
         validation: val.validation,
         validation_move: val.planned,
         guaranteed: delivered.guaranteed,
-        verdict,
+        verdict: crate::verdict::Verdict::default(),
         excitation,
-        experiment_time_s,
-        computation_time_s,
-        log,
+        experiment_time_s: 0.0,
+        computation_time_s: 0.0,
+        log: Vec::new(),
+    };
+    run.verdict = judge_run(&run, cfg);
+    let verdict = &run.verdict;
+    st.log.push(format!(
+        "verdict: {}{}",
+        verdict.text(),
+        verdict
+            .warnings
+            .iter()
+            .map(|w| format!("; warning: {}: {}", w.topic, w.reason))
+            .collect::<String>(),
+    ));
+    run.experiment_time_s = st.runner.busy_time_s();
+    run.computation_time_s = st.compute_s;
+    run.log = std::mem::take(&mut st.log);
+    Ok(run)
+}
+
+/// The verdict on a run ([`crate::verdict::judge`]): its delivered
+/// controller's validation move (nonlinear feedforward) against the limits of
+/// `cfg`, and the margins it guarantees.
+pub fn judge_run(run: &Commissioning, cfg: &CommissioningConfig) -> crate::verdict::Verdict {
+    crate::verdict::judge(&crate::verdict::VerdictInput {
+        limits: &cfg.limits,
+        validation: Some(crate::verdict::MoveInput {
+            summary: &run.validation.nonlinear,
+            record_after_move_s: cfg.validation.settle_s,
+            torque_max_nm: run.torque_max_nm,
+            on: crate::verdict::ValidatedOn::Axis,
+        }),
+        guaranteed: Some(&run.guaranteed),
+        design: &run.design,
+        identified: Some(&run.identified),
+        controller_file: crate::record::CONTROLLER_FILE,
     })
 }
 

@@ -37,6 +37,9 @@ pub struct ExcitationTrace {
 pub struct Commissioning {
     /// The data sheet used.
     pub datasheet: DataSheet,
+    /// The torque limit the commissioning ran under: the smaller of the data
+    /// sheet's and the drive's, N m.
+    pub torque_max_nm: f64,
     /// Where the model was measured: the mean motor-side position over the
     /// compared periods of the excitation, m.
     pub identification_position_m: f64,

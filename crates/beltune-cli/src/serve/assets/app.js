@@ -426,6 +426,9 @@
     const cm = info.commissioned;
     setNumber('commissioned_max_error', cm ? cm.max_error_m : null, 1e3);
     setNumber('commissioned_static_error', cm ? cm.static_error_m : null, 1e6);
+    const verdict = info.commissioned_verdict || '';
+    $('commissioned_verdict').textContent = verdict ? verdict.split(':')[0] : '-';
+    $('commissioned_verdict').title = verdict;
     drawFrf();
     for (const r of info.ranges) {
       const s = $(r.name);
