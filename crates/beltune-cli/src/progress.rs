@@ -124,9 +124,9 @@ impl Progress for BarProgress {
 mod tests {
     use super::*;
 
-    /// Issue 16: the identification line of a commissioning was 190 columns.
+    /// The identification line of a commissioning was 190 columns.
     #[test]
-    fn issue_16_stage_lines_fit_100_columns() {
+    fn stage_lines_fit_100_columns() {
         let summary = "f_r 110.81 Hz, f_z 21.10 Hz, m_c 12.38 kg, c 217.5 kN/m, d_m 40.73 N s/m, d_c 185.75 N s/m, dead time 1.00 ms, fit 1.37 dB rms, coherence 0.992 [axis busy 7.3 s]";
         let lines = stage_lines("identification (open loop)", summary);
         assert!(lines.len() >= 2);

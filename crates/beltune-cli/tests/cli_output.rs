@@ -1,4 +1,4 @@
-//! Issue 16, item 5: the command line. Every exit status produced by the
+//! Item 5: the command line. Every exit status produced by the
 //! situation it documents, the diagnostic file after a safety stop, output
 //! that fits 100 columns without float noise, `--quiet` keeping the summary,
 //! `--json` with its documented keys, `--config`, `plant template`,
@@ -8,7 +8,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// The width every line of the command's output fits in (issue 16).
+/// The width every line of the command's output fits in.
 const WIDTH: usize = 100;
 
 fn beltune() -> Command {
@@ -102,7 +102,7 @@ fn success_is_0_and_every_line_fits_100_columns() {
     let (out, err) = (text(&o.stdout), text(&o.stderr));
     assert_fits("summary", &out);
     assert_fits("stage lines", &err);
-    // The identification stage line was 190 columns (issue 16): now wrapped,
+    // The identification stage line was 190 columns: now wrapped,
     // continuation lines indented under the start of the text.
     let id = err
         .lines()

@@ -1,5 +1,5 @@
-//! Issue 6 through the command line: outputs are complete and atomic, a safety
-//! stop leaves no results behind (only its diagnostic, issue 16), and the
+//! `beltune commission` through the command line: outputs are complete and atomic, a safety
+//! stop leaves no results behind (only its diagnostic), and the
 //! report renders in headless Chromium with every plot present and non-empty.
 
 mod common;
@@ -49,7 +49,7 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mut names = files_in(&out);
     names.sort();
-    // issue 16: the report's data files beside it
+    // the report's data files beside it
     assert_eq!(
         names,
         [
@@ -170,14 +170,14 @@ fn safety_stop_exits_non_zero_and_writes_only_its_diagnostic() {
         "left behind: {:?}",
         files_in(&out)
     );
-    // Only the diagnostic, beside the output folder (issue 16; tests/cli_output.rs reads it).
+    // Only the diagnostic, beside the output folder (tests/cli_output.rs reads it).
     let mut left = files_in(&dir.join("out-safety-stop"));
     left.sort();
     assert_eq!(left, ["safety-stop.csv", "safety-stop.json"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Issue 12: a light cart excited with a generous fixed amplitude in a
+/// A light cart excited with a generous fixed amplitude in a
 /// narrow window (until then a travel stop during the excitation): the
 /// excitation's guard band ends it, the axis is stopped inside the window,
 /// and the window is refused for the drift in one line, status 4, nothing

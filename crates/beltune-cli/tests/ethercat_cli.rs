@@ -1,4 +1,4 @@
-//! Issue 14 on the command line: `beltune commission --ethercat IFACE`
+//! EtherCAT on the command line: `beltune commission --ethercat IFACE`
 //! against `beltune virtual-drive` (a child process inside a network
 //! namespace, on the other end of a veth pair; both created and always
 //! removed by the test, skipped with a message where namespaces, veth pairs or
@@ -18,14 +18,14 @@ fn beltune() -> Command {
     Command::new(env!("CARGO_BIN_EXE_beltune"))
 }
 
-/// Issue 14: identified resonance and antiresonance within 2 % of the truth.
+/// Identified resonance and antiresonance within 2 % of the truth.
 const FREQUENCY_TOLERANCE: f64 = 0.02;
 /// Thesis chapter 5: static positioning error.
 const STATIC_ERROR_M: f64 = 100e-6;
 /// The dynamic error over the wire against the direct simulation at the same
 /// 1 ms cycle: one cycle of bus transport delay, as in-process ...
 const WIRE_ERROR_FACTOR: f64 = 1.25;
-/// ... plus this much, m: since the record is aligned (issue 14) both errors
+/// ... plus this much, m: since the record is aligned both errors
 /// are near 0.15 mm, where the start at rest within the static error band
 /// alone moves them by a few tens of um.
 const WIRE_ERROR_ABS_M: f64 = 50e-6;
@@ -104,7 +104,7 @@ fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
-/// Issue 14: the full commissioning over a veth pair, `beltune commission
+/// The full commissioning over a veth pair, `beltune commission
 /// --ethercat` against `beltune virtual-drive` run as a real child process
 /// of the test inside the namespace. An earlier version ran the drive on a
 /// thread of the test because the child "lost frames after 100-2000 cycles":
@@ -120,7 +120,7 @@ fn temp_dir(name: &str) -> PathBuf {
 /// clocks this host misses SYNC0 cycles (counted on both sides, see the
 /// README).
 #[test]
-fn issue_14_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_process() {
+fn a_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_process() {
     let net = match Netns::create("cli") {
         Ok(n) => n,
         Err(e) => {
@@ -146,7 +146,7 @@ fn issue_14_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_ch
         // a real drive answers within microseconds, a process on a shared
         // host sometimes within milliseconds
         .args(["--frame-timeout-ms", "20"])
-        // the verdict (issue 16) judges the move over a bus with late
+        // the verdict judges the move over a bus with late
         // frames: this test checks the wire path, not the thesis' 1 mm
         // (exit status 5 otherwise)
         .args([

@@ -1,4 +1,4 @@
-//! Issue 14: a failed bus exchange during `beltune commission --ethercat`
+//! A failed bus exchange during `beltune commission --ethercat`
 //! (lost frames, a drive fault, the drive's watchdog) ends like a safety
 //! stop: the drive's quick stop, exit status 3, one line naming the stage and
 //! the diagnostic `DIR-safety-stop/` (what was running, the last second of

@@ -1,4 +1,4 @@
-//! Issue 15, item 5: `beltune excitation` writes a signal another drive can
+//! Item 5: `beltune excitation` writes a signal another drive can
 //! play, with the metadata `commission --csv` needs; the README walk-through
 //! (export, record, commission from the CSV) closes on a simulated drive: the
 //! signal is played on a simulated drive (the `sim-a` set of Table A.11),
@@ -68,7 +68,7 @@ fn record_on(plant: &str, u: &[f64], path: &Path) -> (f64, TwoMassParams) {
     (info.ts_s, truth.unwrap())
 }
 
-/// 3 %: the resonance tolerance of the identification tests (issue 4).
+/// 3 %: the resonance tolerance of the identification tests.
 const FREQUENCY_TOL: f64 = 0.03;
 
 fn walk_through(plant: &str, kind_args: &[&str], name: &str) {
@@ -157,14 +157,14 @@ fn chirp_walk_through_identifies_sim_a() {
     );
 }
 
-/// Issue 15 item 5: the README walk-through with the thesis PRBS (order 9,
+/// The README walk-through with the thesis PRBS (order 9,
 /// clock 16, +-0.6 N m) played on the simulated `sim-a` drive and commissioned
 /// from the recording without a data-sheet inertia (`Theta_e` fitted). The
 /// free-inertia fit used to diverge on this record (`Theta_e -> 0`, f_r
 /// ~1e88 Hz: a noisy line next to the PRBS null at 625 Hz was taken for the
 /// resonance); now f_r and f_z are within 3 % of the simulator's truth.
 #[test]
-fn prbs_walk_through_identifies_sim_a_issue_15() {
+fn prbs_walk_through_identifies_sim_a() {
     walk_through(
         "sim-a",
         &[

@@ -76,7 +76,7 @@ fn identify_measured_bench_writes_model_and_frf() {
             v["identified"][key]
         );
     }
-    // the fitted modes within 3 % of the measured FRF's peak and dip (issue 4)
+    // the fitted modes within 3 % of the measured FRF's peak and dip
     let f_r = v["identified"]["f_r_hz"].as_f64().unwrap();
     let f_z = v["identified"]["f_z_hz"].as_f64().unwrap();
     let peak = v["fit"]["features"]["resonance_hz"].as_f64().unwrap();
@@ -260,12 +260,12 @@ fn friction_from_a_recorded_motion() {
     expect_error(&a, &["missing column `force_n`"]);
 }
 
-/// Issue 11: `beltune identify ... | head -3` panicked ("failed printing to
+/// `beltune identify ... | head -3` panicked ("failed printing to
 /// stdout: Broken pipe"). The reader here closes its end before the command
 /// prints anything; the command must end quietly: exit 0 or killed by SIGPIPE,
 /// and no panic text on stderr.
 #[test]
-fn identify_into_a_closed_pipe_ends_quietly_issue_11() {
+fn identify_into_a_closed_pipe_ends_quietly() {
     use std::os::unix::process::ExitStatusExt;
     use std::process::Stdio;
     let mut child = identify_measured()
@@ -291,11 +291,11 @@ fn libc_sigpipe() -> i32 {
     13
 }
 
-/// Issue 16: data that cannot be fitted (here a record without a resonance:
+/// Data that cannot be fitted (here a record without a resonance:
 /// the output is the input, scaled) is bad input, exit status 2, with the
 /// reason; not status 1 (an internal failure).
 #[test]
-fn a_record_that_cannot_be_fitted_is_bad_input_issue_16() {
+fn a_record_that_cannot_be_fitted_is_bad_input() {
     let dir = tmpdir("unfittable");
     // a periodic +-1 sequence of 256 samples (a fixed linear congruential
     // generator), 10 periods, sampled at 10 kHz

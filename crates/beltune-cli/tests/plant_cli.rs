@@ -20,7 +20,7 @@ fn json(args: &[&str]) -> serde_json::Value {
 }
 
 /// Table A.4 (11.2 kg) and Table A.5 (0 kg): the data-sheet rig is within 10 %
-/// of the identified resonance/antiresonance (issue 2).
+/// of the identified resonance/antiresonance.
 const DATASHEET_VS_IDENTIFIED: f64 = 0.10;
 
 #[test]

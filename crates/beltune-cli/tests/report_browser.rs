@@ -1,4 +1,4 @@
-//! Issue 16: the report and the tuning page in headless Chromium.
+//! The report and the tuning page in headless Chromium.
 //!
 //! - `beltune commission` (egc70, its defaults) writes the report; the tuning
 //!   page on the built-in axis (which commissions the same axis at start-up)
@@ -46,7 +46,7 @@ const SAME_MOVE_REL_TOL: f64 = 0.06;
 /// near 0.2 mm (since the design rule, the Coulomb hold and the aligned record)
 /// that start alone moves the max error by a few tens of um.
 const SAME_MOVE_ABS_TOL_M: f64 = 50e-6;
-/// The phase axis of the FRF plot must lie within this interval, deg (issue 16).
+/// The phase axis of the FRF plot must lie within this interval, deg.
 const PHASE_AXIS_DEG: (f64, f64) = (-720.0, 360.0);
 
 fn temp(tag: &str) -> PathBuf {
@@ -350,7 +350,7 @@ async fn report_and_page_show_the_same_numbers_and_readable_plots() {
         assert_eq!(rad, Value::Bool(false), "the page still shows rad/s");
         assert_no_overlapping_labels(&c, "tuning page").await;
 
-        // ---- the page on the loaded folder (issue 16) ----
+        // ---- the page on the loaded folder ----
         // `commissioning.json` records the plant the commissioning ran on, so
         // the page simulates on egc70 with 11.2 kg as the report did, not on
         // the identified linear model (0.139 mm against the measured 0.640 mm).

@@ -72,7 +72,7 @@ fn keys(v: &serde_json::Value, at: &str, out: &mut Vec<String>) {
 }
 
 #[test]
-fn a_loaded_egc70_folder_simulates_on_its_plant_and_saves_every_section_issue_16() {
+fn a_loaded_egc70_folder_simulates_on_its_plant_and_saves_every_section() {
     let dir = tmpdir("egc70");
     let out = dir.join("run");
     run(bench::bin()
@@ -121,7 +121,7 @@ fn a_loaded_egc70_folder_simulates_on_its_plant_and_saves_every_section_issue_16
 }
 
 #[test]
-fn a_folder_in_current_units_saves_in_current_units_issue_15() {
+fn a_folder_in_current_units_saves_in_current_units() {
     let dir = tmpdir("current");
     let out = dir.join("run");
     run(bench::on_record("commission")

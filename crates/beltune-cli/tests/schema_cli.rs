@@ -1,4 +1,4 @@
-//! Issue 15 through the command line: one identified-model schema from
+//! The file formats through the command line: one identified-model schema from
 //! `identify` and `commission` into `design`, the export and the excitation;
 //! units carried through for a record in current units.
 
@@ -129,10 +129,10 @@ fn commission_then_design_from_commissioning_json_and_export() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Issue 13, item 11: `identify --json` without an actual-torque column wrote
+/// Item 11: `identify --json` without an actual-torque column wrote
 /// `"dead_time_s": null`, which `design --model` rejected.
 #[test]
-fn identify_json_without_dead_time_feeds_design_issue_13_item_11() {
+fn identify_json_without_dead_time_feeds_design() {
     let dir = temp_dir("identify");
     let base = [
         "--time",
@@ -312,11 +312,11 @@ fn commission_csv_in_current_units_labels_every_unit_as_current() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Issue 15: the keys of `commissioning.json` and `controller.toml` come in
+/// The keys of `commissioning.json` and `controller.toml` come in
 /// the order of their structs (the identity of the file first, then the model,
 /// the controller, the data), not alphabetically.
 #[test]
-fn files_keep_their_documented_key_order_issue_15() {
+fn files_keep_their_documented_key_order() {
     let dir = temp_dir("order");
     let out = dir.join("run");
     ok(&beltune()

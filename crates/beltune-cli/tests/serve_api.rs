@@ -1,4 +1,4 @@
-//! API tests of `beltune serve` (issue 7): the server runs in-process on
+//! API tests of `beltune serve`: the server runs in-process on
 //! 127.0.0.1:0 and is spoken to with plain HTTP/1.1 over a tokio `TcpStream`.
 //!
 //! The request-validation tests use a counting test double behind the `Tuner`
@@ -276,7 +276,7 @@ fn from_kind(k: bdesign::PrefilterKind) -> PrefilterKind {
 }
 
 fn egc70_input() -> DesignInput {
-    // The page's default model (issue 16): what the commissioning of the built-in
+    // The page's default model: what the commissioning of the built-in
     // axis with the defaults of `beltune commission` identifies.
     let (_, run) = serve::library::builtin_commissioning().unwrap();
     run.design.input
@@ -547,7 +547,7 @@ fn save_writes_controller_toml_with_the_design() {
     assert_eq!(status, 200, "{body}");
     let saved: serve::api::SaveResponse = serde_json::from_str(&body).unwrap();
     let path = PathBuf::from(&saved.path);
-    // issue 16: a new folder per save, never the save folder itself
+    // a new folder per save, never the save folder itself
     let folder = PathBuf::from(&saved.dir);
     assert_eq!(path, folder.join(serve::CONTROLLER_FILE));
     assert_eq!(folder.parent().unwrap(), s.dir);

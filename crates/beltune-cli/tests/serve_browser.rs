@@ -1,4 +1,4 @@
-//! End-to-end test of the tuning page (issue 7) in headless Chromium driven by
+//! End-to-end test of the tuning page in headless Chromium driven by
 //! `fantoccini`: the server runs in-process on 127.0.0.1:0, the test starts
 //! `chromedriver` itself on a free port. Missing Chromium or ChromeDriver fails the
 //! test (install: `apt-get install -y chromium chromium-driver`).
@@ -64,7 +64,7 @@ fn free_port() -> u16 {
 }
 
 fn egc70_input() -> DesignInput {
-    // The page's default model (issue 16): what the commissioning of the built-in
+    // The page's default model: what the commissioning of the built-in
     // axis with the defaults of `beltune commission` identifies.
     let (_, run) = serve::library::builtin_commissioning().unwrap();
     run.design.input
@@ -277,7 +277,7 @@ async fn check_against(c: &Client, d: &bdesign::ControllerDesign) {
         .await
         .parse()
         .unwrap();
-        // the page's frequency axis is in Hz (issue 16)
+        // the page's frequency axis is in Hz
         assert_close(name, x, w / (2.0 * std::f64::consts::PI));
     }
     // K_P is shown rounded to 4 significant digits

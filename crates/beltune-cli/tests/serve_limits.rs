@@ -1,4 +1,4 @@
-//! Issue 13 items 1 and 13 against `serve` on loopback: concurrent saves
+//! The tuning page's server against careless and hostile clients on loopback: concurrent saves
 //! never expose a partial `controller.toml`, slow or abusive clients are cut
 //! off, the `Host` check is strict, and every error answer is JSON.
 
@@ -48,8 +48,8 @@ fn start(tag: &str) -> Server {
 }
 
 #[test]
-fn concurrent_saves_never_expose_a_partial_file_issue_13_1() {
-    // Issue 16: every save makes its own folder `tuned-<time>[-n]` in the save
+fn concurrent_saves_never_expose_a_partial_file() {
+    // Every save makes its own folder `tuned-<time>[-n]` in the save
     // folder (renamed into place whole); a reader must never see a folder
     // without its complete controller.toml, and no save may replace another.
     let s = start("saves");
@@ -136,7 +136,7 @@ fn concurrent_saves_never_expose_a_partial_file_issue_13_1() {
 }
 
 #[test]
-fn host_header_must_be_exactly_one_loopback_name_issue_13_13() {
+fn host_header_must_be_exactly_one_loopback_name() {
     let s = start("host");
     let save = |headers: &str| {
         request(
@@ -179,7 +179,7 @@ fn host_header_must_be_exactly_one_loopback_name_issue_13_13() {
 }
 
 #[test]
-fn every_error_answer_is_json_issue_13_13() {
+fn every_error_answer_is_json() {
     let s = start("json");
     let host = "Host: 127.0.0.1\r\n";
     let (status, body) = request(s.addr, "DELETE", "/api/save", host, "");
@@ -205,7 +205,7 @@ fn every_error_answer_is_json_issue_13_13() {
 }
 
 #[test]
-fn slow_clients_are_cut_off_and_connections_are_limited_issue_13_13() {
+fn slow_clients_are_cut_off_and_connections_are_limited() {
     let s = start("slow");
     // A partial head (slowloris): the server closes the connection after
     // the header timeout instead of holding it.

@@ -6,7 +6,7 @@ use std::process::{Command, Output};
 
 /// Relative tolerance on the closed-form duration (rounding only).
 const DURATION_REL_TOL: f64 = 1e-9;
-/// The last sample must be at the target (issue 3: final states within 1e-8).
+/// The last sample must be at the target (final states within 1e-8).
 const FINAL_STATE_TOL: f64 = 1e-8;
 
 fn beltune(args: &[&str]) -> Output {
@@ -149,7 +149,7 @@ fn assert_one_line_error(args: &[&str], needle: &str, status: i32) {
 fn invalid_requests_print_one_line_and_fail() {
     let mut negative_jerk = THESIS_MOVE.to_vec();
     negative_jerk[10] = "-40";
-    // The flag as typed, not the core's field name (issue 13 item 14).
+    // The flag as typed, not the core's field name.
     assert_one_line_error(&negative_jerk, "--j-max", 2);
 
     let mut positive_j_min = THESIS_MOVE.to_vec();

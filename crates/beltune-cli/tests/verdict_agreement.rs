@@ -7,7 +7,7 @@
 
 mod common;
 
-use beltune::commission::{judge_run, CommissioningConfig};
+use beltune::commission::{judge_run, Commissioning, CommissioningConfig};
 use beltune::record::commissioning::{AxisRecord, Origin};
 use beltune::record::folder::OutputTarget;
 use beltune::record::provenance::Provenance;
@@ -112,6 +112,9 @@ fn assert_every_output_agrees(dir: &Path, verdict: &Verdict, what: &str) {
     );
 }
 
+/// What breaks one check of a run.
+type Breaks = dyn Fn(&mut Commissioning);
+
 /// The result set of `run` written into `dir`.
 fn write_run(
     run: &beltune::commission::Commissioning,
@@ -141,7 +144,7 @@ fn each_failing_condition_is_said_the_same_by_every_output() {
     let dir = temp_dir("conditions");
     write_run(&run, &plant, &dir.join("pass"));
     assert_every_output_agrees(&dir.join("pass"), &run.verdict, "the passing run");
-    let conditions: [(CheckName, &dyn Fn(&mut beltune::commission::Commissioning)); 5] = [
+    let conditions: [(CheckName, &Breaks); 5] = [
         (CheckName::MaxTrackingError, &|r| {
             r.validation.nonlinear.max_tracking_error_m = 2e-3
         }),

@@ -123,7 +123,7 @@ impl MailboxClient {
     }
 }
 
-/// Issue 14: the virtual drive answers an SDO upload of an object longer than
+/// The virtual drive answers an SDO upload of an object longer than
 /// its mailbox in segments (ETG.1000.6 5.6.2.3/5.6.2.6, CiA 301 7.2.4.3):
 /// through a 32-byte mailbox (16 data bytes in a normal answer, 23 per
 /// segment) the 21-byte device name 0x1008 comes as the initiate response
@@ -209,7 +209,7 @@ fn a_mailbox_outside_the_sync_manager_layout_is_a_config_error() {
     }
 }
 
-/// Issue 14, distributed clocks: the master configures SYNC0 with the bus
+/// Distributed clocks: the master configures SYNC0 with the bus
 /// cycle as its period (1, 2 and 4 kHz), the drive runs one cycle per SYNC0
 /// with the outputs of the frame in between, and a master that misses SYNC0
 /// cycles (here: 5 cycles without a frame) is seen on both sides: the master

@@ -1,4 +1,4 @@
-//! Issue 14: the full commissioning through ethercrab against the virtual
+//! The full commissioning through ethercrab against the virtual
 //! drive in-process, at 1 kHz and 4 kHz bus cycles. Reference values as for
 //! the direct simulation (crates/beltune/tests/commission.rs): the
 //! simulator's own linearization at the identification position (truth), the
@@ -97,16 +97,16 @@ fn check(cycle_s: f64) {
     );
 }
 
-/// Issue 14: at 1 kHz the cart met the thesis' 1 mm only once the record
+/// At 1 kHz the cart met the thesis' 1 mm only once the record
 /// paired each measurement with the desired position of its own instant
 /// (`procedure::motion::track`; before: 1.97 mm).
 #[test]
-fn commissioning_through_ethercrab_at_1_khz_meets_the_thesis_limits_issue_14() {
+fn commissioning_through_ethercrab_at_1_khz_meets_the_thesis_limits() {
     check(1e-3);
 }
 
 #[test]
-fn commissioning_through_ethercrab_at_2_khz_meets_the_thesis_limits_issue_14() {
+fn commissioning_through_ethercrab_at_2_khz_meets_the_thesis_limits() {
     check(500e-6);
 }
 

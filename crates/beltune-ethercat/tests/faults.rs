@@ -1,4 +1,4 @@
-//! Issue 14: faults injected in-process end safely with one line and no
+//! Faults injected in-process end safely with one line and no
 //! result: a drive fault during the PRBS, lost frames for longer than the
 //! allowed cycles, and a master that stops sending (the drive's SM watchdog
 //! removes the torque).

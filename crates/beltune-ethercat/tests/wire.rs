@@ -60,7 +60,7 @@ fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
     assert_eq!(axis.identity().name, "beltune virtual servo");
     // distributed clocks over the veth pair: SYNC0 configured and running
     assert!(axis.identity().dc, "SYNC0 in use on the wire");
-    // issue 14: one late answer (sent after the master's frame timeout, before
+    // one late answer (sent after the master's frame timeout, before
     // the answer to the next frame) is one lost frame, bridged; before, it
     // aborted every exchange after it (each answer came after its exchange
     // had been given up)

@@ -1,4 +1,4 @@
-//! Cost of one trajectory planning and one sample (issue 3, item 9).
+//! Cost of one trajectory planning and one sample (item 9).
 //! Run: `cargo bench -p beltune-rt --bench trajectory`.
 
 use beltune_rt::trajectory::{Limits, State, Trajectory};

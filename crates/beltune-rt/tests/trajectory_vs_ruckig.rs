@@ -14,7 +14,7 @@ use support::cases::{
     check_samples, random_case, reference_duration, Jerk, FAMILIES, FINAL_STATE_TOL,
 };
 
-/// Durations must equal the reference's to this relative tolerance (issue 3).
+/// Durations must equal the reference's to this relative tolerance.
 const DURATION_REL_TOL: f64 = 1e-9;
 /// Absolute floor for (near-)zero durations, s.
 const DURATION_ABS_FLOOR: f64 = 1e-12;

@@ -409,7 +409,7 @@ mod tests {
     }
 
     #[test]
-    fn concurrent_writers_use_distinct_temporaries_issue_13_1() {
+    fn concurrent_writers_use_distinct_temporaries() {
         // 8 threads x 50 writes of the same file; a reader never sees an
         // empty or foreign file, no write fails, nothing is left behind.
         let dir = temp("concurrent");
@@ -448,7 +448,7 @@ mod tests {
     }
 
     #[test]
-    fn special_files_are_written_through_not_replaced_issue_13_7() {
+    fn special_files_are_written_through_not_replaced() {
         let dir = temp("special");
         // A symlink stays a symlink; its target gets the contents.
         let target = dir.join("target.csv");
@@ -471,7 +471,7 @@ mod tests {
     }
 
     #[test]
-    fn reads_refuse_devices_fifos_and_oversized_files_issue_13_5() {
+    fn reads_refuse_devices_fifos_and_oversized_files() {
         let e = read_capped(Path::new("/dev/zero"), MAX_TEXT_BYTES).unwrap_err();
         assert!(e.to_string().contains("not a regular file"), "{e}");
         let dir = temp("read");

@@ -1,4 +1,4 @@
-//! Issue 6: the one-command self-commissioning on the simulated EGC-70 axis.
+//! The one-command self-commissioning on the simulated EGC-70 axis.
 //!
 //! Reference values: thesis chapter 5 (0 -> 500 mm move with nonlinear
 //! feedforward: dynamic error below 1 mm, static error below 100 um) and the
@@ -11,13 +11,13 @@ use beltune::model::rigs::{self, Plant};
 use beltune::sim::{SimAxis, SimConfig};
 use beltune::Error;
 
-/// Issue 6: identified resonance and antiresonance within 2 % of the truth.
+/// Identified resonance and antiresonance within 2 % of the truth.
 const FREQUENCY_TOLERANCE: f64 = 0.02;
 /// Thesis chapter 5: maximum cart tracking error with nonlinear feedforward.
 const MAX_TRACKING_ERROR_M: f64 = 1e-3;
 /// Thesis chapter 5: static positioning error.
 const STATIC_ERROR_M: f64 = 100e-6;
-/// Issue 6: the axis busy for about 20 s (the thesis' FRF measurement alone
+/// The axis busy for about 20 s (the thesis' FRF measurement alone
 /// takes about 16 s). Issue 12 added 0.2 s: the holding-torque stage runs up
 /// and down at two speeds to separate gravity, Coulomb and viscous friction
 /// before the long move (measured 20.1 s); the three unmeasured returns to
@@ -106,7 +106,7 @@ fn egc70_with_payload_identifies_within_2_percent_and_tracks_like_the_thesis() {
     // printed by `beltune commission` ("time:" line, about 0.3 s against 20 s
     // of axis time in a release build) and not asserted here.
     // the design met its own (nominal) conditions, and the margins the robust
-    // rule guarantees over the identification's uncertainty (issue 12)
+    // rule guarantees over the identification's uncertainty
     let k = run.design.knobs;
     assert!((run.design.velocity_margins.phase_margin_deg - k.pm_velocity_deg).abs() < 0.01);
     assert!((run.design.position_margins.phase_margin_deg - k.pm_position_deg).abs() < 0.01);
@@ -149,7 +149,7 @@ fn egc70_vertical_meets_the_same_limits() {
 
 /// A light cart excited with a generous fixed amplitude in a narrow window:
 /// the commissioning must stop it inside the window with a clear message.
-/// Issue 12: the excitation's guard band ends the PRBS before the supervisor
+/// The excitation's guard band ends the PRBS before the supervisor
 /// has to, and refuses the window as too short for the drift.
 #[test]
 fn excitation_that_would_leave_the_travel_window_is_stopped_inside_it() {
@@ -229,12 +229,12 @@ impl beltune::axis::Axis for FailingAxis {
     }
 }
 
-/// Issue 14 (the fallible axis seam): a drive fault in the middle of the
+/// The fallible axis seam: a drive fault in the middle of the
 /// commissioning (here during the excitation-amplitude bursts, after 4 s of
 /// the axis' time) ends it at once with the drive's code, after exactly one
 /// quick stop and no further exchange.
 #[test]
-fn a_drive_fault_ends_the_commissioning_with_a_quick_stop_issue_14() {
+fn a_drive_fault_ends_the_commissioning_with_a_quick_stop() {
     let plant = rigs::builtin("egc70", None).unwrap();
     let start = 0.05;
     let inner = SimAxis::new(
@@ -276,12 +276,12 @@ fn a_drive_fault_ends_the_commissioning_with_a_quick_stop_issue_14() {
     assert_eq!(err.to_string(), "axis: the drive reports fault 0x7500");
 }
 
-/// Issue 14: the procedure's settings are in seconds, so a slower cycle (a
+/// The procedure's settings are in seconds, so a slower cycle (a
 /// PC fieldbus master at 1 kHz) uses the same configuration: the PRBS clock
 /// of 1.6 ms is 16 samples at 10 kHz and 2 at 1 kHz (rounded), the bursts
 /// and windows scale alike.
 #[test]
-fn excitation_settings_derive_their_sample_counts_from_the_cycle_time_issue_14() {
+fn excitation_settings_derive_their_sample_counts_from_the_cycle_time() {
     let ex = beltune::commission::ExcitationConfig::default();
     assert_eq!(ex.clock_samples(100e-6), 16);
     assert_eq!(ex.clock_samples(1e-3), 2);

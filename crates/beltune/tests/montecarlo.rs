@@ -1,4 +1,4 @@
-//! Issue 12: the seeded CI sample of the Monte Carlo robustness study. Every
+//! The seeded CI sample of the Monte Carlo robustness study. Every
 //! failure must be a correct refusal of an infeasible plant, the true cart
 //! never leaves its travel window, and every delivered controller keeps a
 //! velocity-loop phase margin of at least 30 deg on the true linearized plant.
@@ -17,30 +17,30 @@ const PLANTS: u64 = 96;
 /// these plants and 8 correct refusals of axes too heavy to hold; more
 /// refusals than 16 would be a commissioning that gives up on feasible axes.
 const MIN_SUCCESSES: usize = 80;
-/// Issue 12: the true-plant velocity margin never below this, deg.
+/// The true-plant velocity margin never below this, deg.
 const MIN_TRUE_PHASE_MARGIN_DEG: f64 = 30.0;
 
-/// Issue 12, the static error: plant #4 of the sample (3 kg, tilted 26 deg,
+/// The static error: plant #4 of the sample (3 kg, tilted 26 deg,
 /// Coulomb friction x1.44) ended 189 um short of its target with the cart
 /// stuck, because the Coulomb feedforward dropped with the trajectory's
 /// velocity and the integrator needed seconds to build the torque; with the
 /// controller's Coulomb hold (beltune-rt, refinement (c)) it meets the
 /// thesis' 100 um.
 #[test]
-fn the_coulomb_hold_brings_a_sticking_cart_to_its_target_issue_12() {
+fn the_coulomb_hold_brings_a_sticking_cart_to_its_target() {
     let o = run_plant(SEED, 4, &Ranges::default(), &CommissioningConfig::default()).unwrap();
     let e = o.static_error_m.expect("a controller");
     assert!(e < 100e-6, "static error {:.1} um ({})", e * 1e6, o.message);
 }
 
-/// Issue 12, the static error: plant #252 (13.3 kg, horizontal, slow loops)
+/// The static error: plant #252 (13.3 kg, horizontal, slow loops)
 /// overshot its target by 0.38 mm at the motor and stuck there, 440 um from
 /// the target at the cart, while the integrator built the breakaway torque at
 /// 0.01 N m per 100 ms; with the controller's Coulomb breakaway (beltune-rt,
 /// refinement (c): the hold re-engages toward the target beyond 20 um) it
 /// meets the thesis' 100 um (24 um).
 #[test]
-fn the_coulomb_breakaway_brings_an_overshooting_cart_back_issue_12() {
+fn the_coulomb_breakaway_brings_an_overshooting_cart_back() {
     let o = run_plant(
         SEED,
         252,
@@ -59,7 +59,7 @@ fn the_coulomb_breakaway_brings_an_overshooting_cart_back_issue_12() {
 /// limits or not, is stable on the true linearized plant with at least 30 deg
 /// velocity-loop phase margin.
 #[test]
-fn the_seeded_ci_sample_has_no_defects_and_keeps_its_margins_issue_12() {
+fn the_seeded_ci_sample_has_no_defects_and_keeps_its_margins() {
     let cfg = CommissioningConfig::default();
     let ranges = Ranges::default();
     // in parallel as `beltune montecarlo` runs the study (rayon keeps the order)

@@ -1,4 +1,4 @@
-//! `beltune compare A B`: a report comparing two commissionings (issue 16):
+//! `beltune compare A B`: a report comparing two commissionings:
 //! both FRFs and fits, the loops and the moves overlaid, and the change of
 //! every parameter in percent.
 

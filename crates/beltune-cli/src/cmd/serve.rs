@@ -1,4 +1,4 @@
-//! `beltune serve`: the interactive tuning page (issue 7), see [`crate::serve`].
+//! `beltune serve`: the interactive tuning page, see [`crate::serve`].
 
 use crate::serve::{self, AppState};
 use anyhow::Context;
@@ -77,7 +77,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .await
             .with_context(|| format!("binding {addr}"))?;
         let local = listener.local_addr().context("local address")?;
-        // A closed stdout must not end the server (issue 11): ignore the error.
+        // A closed stdout must not end the server: ignore the error.
         let _ = writeln!(
             std::io::stdout(),
             "beltune tuning page: http://{local}/  (Ctrl-C to stop)"

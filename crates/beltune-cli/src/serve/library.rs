@@ -798,13 +798,13 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
-    /// Issue 13 item 3: the payload slider at its limit (30 kg) once ended
+    /// The payload slider at its limit (30 kg) once ended
     /// "axis stopped at 640.9 mm", beyond the 600 mm stroke. Whatever the
     /// knobs, the simulated move either completes inside the travel window or
     /// stops inside the stroke (its stop planned with the deceleration the
     /// heavier axis really has), and says where.
     #[test]
-    fn the_heaviest_payload_stays_inside_the_stroke_issue_13_3() {
+    fn the_heaviest_payload_stays_inside_the_stroke() {
         let tuner = LibraryTuner::builtin().unwrap();
         let stroke_mm = rigs::builtin("egc70", None).unwrap().stroke_m().unwrap() * 1e3;
         let window_max_mm = MoveSpec::default().limits.position_max * 1e3;

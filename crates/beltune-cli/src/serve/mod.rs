@@ -1,4 +1,4 @@
-//! The interactive tuning page behind `beltune serve` (issue 7).
+//! The interactive tuning page behind `beltune serve`.
 //!
 //! - `GET /`, `/app.js`, `/style.css`: the page, embedded in the binary (no CDN, no
 //!   network); the plots are drawn client-side as inline SVG from the API's data.

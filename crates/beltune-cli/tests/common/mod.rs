@@ -11,6 +11,17 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+/// The two-mass model of thesis Table A.4 as the keys of a model TOML file
+/// (`theta_e`, `m_c`, `c`, `d_m`, `d_c`, `i_t`; no dead time, no friction),
+/// from the library's one definition ([`beltune::model::TwoMassParams::thesis_table_a4`]).
+pub fn table_a4_model_toml() -> String {
+    let p = beltune::model::TwoMassParams::thesis_table_a4();
+    format!(
+        "theta_e = {:?}\nm_c = {:?}\nc = {:?}\nd_m = {:?}\nd_c = {:?}\ni_t = {:?}\n",
+        p.theta_e, p.m_c, p.c, p.d_m, p.d_c, p.i_t
+    )
+}
+
 /// Debian's Chromium (`apt-get install chromium chromium-driver`; `.ci/run` installs it).
 pub const CHROMIUM: &str = "/usr/bin/chromium";
 

@@ -70,7 +70,7 @@ impl Transport for RawSocket<'_> {
                 // `ReceiveFrame` and returns. Passing that on aborted the
                 // exchange in flight, whose answer then came after it had been
                 // given up and aborted the next one, and so on: once one answer
-                // was late, no exchange succeeded any more (issue 14, "lost
+                // was late, no exchange succeeded any more ("lost
                 // frames after 100-2000 cycles"). The late answer is dropped
                 // and the task (re-entrant: it keeps its queues) polled again.
                 Poll::Ready(Err(ethercrab::error::Error::ReceiveFrame)) => {

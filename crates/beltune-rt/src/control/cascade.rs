@@ -30,7 +30,7 @@
 //! offset (holding torque, e.g. on a tilted axis) is treated like the feedforward
 //! in (6.26). With `K_I = 0` there is no integral action and (6.26) is skipped.
 //!
-//! Refinement (c), the Coulomb hold (issue 12): `sign(omega_d)` drops to 0 when
+//! Refinement (c), the Coulomb hold: `sign(omega_d)` drops to 0 when
 //! the trajectory ends, while the axis, a few hundred um short of its target,
 //! sticks; the integrator alone then needs seconds to build the Coulomb torque
 //! from the small standing error (`K_I K_PP e` per second). The hold `h` keeps
@@ -41,7 +41,7 @@
 //! cascade's feedback, and stops at the target where the hold lets go. It acts
 //! only with the Coulomb term switched on.
 //!
-//! The breakaway (`FeedforwardParams::coulomb_breakaway_rad > 0`, issue 12)
+//! The breakaway (`FeedforwardParams::coulomb_breakaway_rad > 0`)
 //! engages the hold again, toward the target, when the axis rests with an
 //! error beyond the threshold: after an overshoot, or when it stuck before
 //! the target. Without it the integrator alone must build the breakaway
@@ -54,7 +54,7 @@
 //! one when the trajectory moves again: a light cart with high friction,
 //! pushed with the whole `tau_c`, can overshoot beyond the threshold in the
 //! other direction, and a constant threshold let it hunt between the two for
-//! seconds (issue 12: 1.2 kg, 0.23 N m, +-600 um at the motor); a growing
+//! seconds (1.2 kg, 0.23 N m, +-600 um at the motor); a growing
 //! one ends any such cycle after a few pushes and leaves the rest to the
 //! integrator. Pushes the same way (a heavy load on a slope creeping back)
 //! keep the threshold.
@@ -631,7 +631,7 @@ mod tests {
     /// its target, lets go for good when the error reaches zero, and never
     /// acts without the Coulomb term.
     #[test]
-    fn the_coulomb_hold_completes_the_move_and_lets_go_at_the_target_issue_12() {
+    fn the_coulomb_hold_completes_the_move_and_lets_go_at_the_target() {
         let tau_c = 0.1;
         let mut cfg = config();
         cfg.feedforward = Feedforward::nonlinear(0.0, 0.0, tau_c);
@@ -685,13 +685,13 @@ mod tests {
         cfg
     }
 
-    /// Refinement (c) with the breakaway (issue 12, static error): an axis
+    /// Refinement (c) with the breakaway (static error): an axis
     /// resting beyond the threshold from its target, after an overshoot or
     /// short of it, gets the Coulomb push toward the target; inside the
     /// threshold nothing is pushed (dead zone), and the push ends at the
     /// target.
     #[test]
-    fn the_coulomb_breakaway_pushes_a_resting_axis_back_toward_its_target_issue_12() {
+    fn the_coulomb_breakaway_pushes_a_resting_axis_back_toward_its_target() {
         let tau_c = 0.1;
         let th = 2e-3;
         let cfg = breakaway_config(tau_c, th);
@@ -725,13 +725,13 @@ mod tests {
         }
     }
 
-    /// Issue 12, a light cart with high friction hunted for seconds after
+    /// A light cart with high friction hunted for seconds after
     /// its move: each breakaway push overshot beyond the threshold the other
     /// way. A push against the previous one doubles the threshold, so a hunt
     /// of constant amplitude ends; pushes the same way keep it; a moving
     /// trajectory restores it.
     #[test]
-    fn a_breakaway_hunt_ends_the_threshold_doubling_issue_12() {
+    fn a_breakaway_hunt_ends_the_threshold_doubling() {
         let tau_c = 0.1;
         let th = 2e-3;
         let cfg = breakaway_config(tau_c, th);

@@ -20,7 +20,7 @@
 //! ([`BeltProfile`]). For (2.26) the compliance is exactly quadratic in
 //! `xi`: `K = (l_1 + l_e)(l_2 + l_3 + 2 l_e) / (c_b (l_1 + l_2 + l_3 + 3 l_e))`
 //! with `l_1 + l_2` constant, so three coefficients hold it over the stroke
-//! (issue 12: on a soft belt the stiffness along a 0.5 m move changed by a
+//! (on a soft belt the stiffness along a 0.5 m move changed by a
 //! factor two, and the constant one left the cart up to 0.6 mm off).
 //!
 //! The belt also carries the cart's own friction while it moves,
@@ -277,7 +277,7 @@ impl<T: Real> SetpointConversion<T> {
     /// slows (the form measured on the robustness study; a latched lead
     /// with a consistent velocity setpoint was not measured with the final
     /// creep as built). For the final approach of
-    /// [`crate::trajectory::Approach`] (issue 12): a cart dragged slowly
+    /// [`crate::trajectory::Approach`]: a cart dragged slowly
     /// lags its motor by the stretch of its kinetic friction, and the held
     /// lead stops it on the target. Cost: [`Self::motor_sample`] plus 6
     /// multiplications and a division.
@@ -456,7 +456,7 @@ mod tests {
         assert!(compensated < RK4_TOL_M, "compensated error {compensated}");
     }
 
-    /// Issue 12, the belt profile: a cart on a belt whose compliance changes
+    /// The belt profile: a cart on a belt whose compliance changes
     /// with the cart's position (quadratic, 3.8 to 9.8 um/N over the move,
     /// like a soft egc70 belt between 0 and 0.5 m) and that carries a static
     /// force (gravity on a 30 deg slope), driven by the converted motor
@@ -464,7 +464,7 @@ mod tests {
     /// the move's end leaves it more than 0.3 mm off. The converted velocity
     /// is the derivative of the converted angle (central difference).
     #[test]
-    fn a_belt_profile_makes_the_cart_follow_where_the_stiffness_changes_issue_12() {
+    fn a_belt_profile_makes_the_cart_follow_where_the_stiffness_changes() {
         let profile = SOFT_BELT;
         let run = |belt: BeltStretch<f64>| -> f64 {
             let conv = SetpointConversion::new(I_T, belt).unwrap();
@@ -491,7 +491,7 @@ mod tests {
         assert_velocity_is_angle_derivative(&conv, &[0.05, 0.2, 0.31], 1e-6, 1e-6);
     }
 
-    /// Issue 12: the belt also carries the cart's friction while it moves
+    /// The belt also carries the cart's friction while it moves
     /// (soft belts with a sticky cart: up to 0.3 mm of stretch). A cart
     /// with viscous friction and the ramped Coulomb sign of the profile,
     /// on the belt of the test above, follows `xi_d` exactly from rest
@@ -499,7 +499,7 @@ mod tests {
     /// about `(d_c v + F_c) / c`. The converted velocity is the derivative of
     /// the converted angle, inside the ramp too.
     #[test]
-    fn the_cart_friction_lead_makes_the_rubbing_cart_follow_issue_12() {
+    fn the_cart_friction_lead_makes_the_rubbing_cart_follow() {
         let profile = BeltProfile {
             cart_viscous_n_s_per_m: 30.0,
             cart_coulomb_n: 15.0,
@@ -542,7 +542,7 @@ mod tests {
         assert_velocity_is_angle_derivative(&conv, &[0.002, 0.01, 0.2, 0.31], 1e-7, 1e-5);
     }
 
-    /// Issue 12, the held Coulomb lead of the final approach: at rest (and
+    /// The held Coulomb lead of the final approach: at rest (and
     /// below the ramp's speed) the angle leads by the whole stretch of the
     /// cart's kinetic friction in the held direction, so that a cart
     /// dragged there from behind (belt force `F_s + F_c` at the edge of its
@@ -551,7 +551,7 @@ mod tests {
     /// it the conversion is unchanged; the velocity setpoint is never
     /// changed.
     #[test]
-    fn the_held_lead_rests_a_dragged_cart_on_its_target_issue_12() {
+    fn the_held_lead_rests_a_dragged_cart_on_its_target() {
         let profile = BeltProfile {
             cart_coulomb_n: 15.0,
             coulomb_velocity_m_s: 0.02,

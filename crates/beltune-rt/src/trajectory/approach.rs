@@ -1,4 +1,4 @@
-//! Single-direction final approach (beyond the thesis; issue 12): a move
+//! Single-direction final approach (beyond the thesis): a move
 //! that stops `distance_m` short of its target at the move's limits, then
 //! creeps the rest at `speed_m_s`, both jerk-limited. The axis always
 //! arrives at the target slowly and from the side it came from, as CNC
@@ -39,7 +39,7 @@ pub struct ApproachConfig {
 /// acceleration over it (at most the move's). A creep that started with
 /// the move's jerk (40 m/s^3: the acceleration within a millisecond) broke
 /// sticky carts loose at its start and left them up to 0.19 mm past the
-/// target (issue 12).
+/// target.
 pub const CREEP_RAMP_S: f64 = 0.04;
 
 /// A move with its final approach: the main move to `target - d * distance`

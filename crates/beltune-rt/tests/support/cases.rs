@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rsruckig::prelude::*;
 
-/// The final state must equal the target to this (issue 3).
+/// The final state must equal the target to this.
 pub const FINAL_STATE_TOL: f64 = 1e-8;
 /// Slack on the limits when sampling (the brake uses 2.2e-14 s margins,
 /// Ruckig's profile check allows 1e-12 on v and a).

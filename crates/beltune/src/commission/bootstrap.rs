@@ -29,8 +29,6 @@ pub const BREAKAWAY_ERROR_M: f64 = 5e-3;
 /// Largest shift of the PI zero by the plant's damping pole `d / J`, as a
 /// fraction of the crossover (see [`bootstrap_with_friction`]).
 pub const BOOTSTRAP_ZERO_MAX: f64 = 0.5;
-/// Velocity-filter time constant `T_R`, s (Table A.4).
-pub const T_R_S: f64 = 2e-3;
 
 /// The crossover: a friction step `tau_f` makes a following error of about
 /// `tau_f / (J w_c^2)`; a light axis therefore needs a faster loop than a heavy
@@ -64,7 +62,7 @@ pub fn bootstrap_controller(
 /// `K_P (s + w_c / 4 + d / J) / (J s (s + d / J))`, which for `d = 0` is the
 /// loop above and for a heavily damped axis stays close to `K_P / (J s)`
 /// (crossover `w_c`, phase -90 deg) instead of a velocity loop whose gain
-/// sinks to `K_P / d` below the crossover (issue 12: on sim-b, where
+/// sinks to `K_P / d` below the crossover (on sim-b, where
 /// `d / J = 155 rad/s` is 3.5 times the crossover, the position loop lagged
 /// and overshot its target by 50 mm). The viscous friction is fed forward
 /// with the inertia.
@@ -89,7 +87,7 @@ pub fn bootstrap_with_friction(
     // little phase left.
     let zero = w_c / 4.0 + (d / j).min(BOOTSTRAP_ZERO_MAX * w_c);
     let gains = CascadeGains::new(w_c / 5.0, k_p, k_p * zero);
-    let mut cfg = CascadeConfig::new(gains, ts_s, T_R_S, torque_max_nm)?;
+    let mut cfg = CascadeConfig::new(gains, ts_s, crate::design::DEFAULT_T_R_S, torque_max_nm)?;
     cfg.prefilter = [butterworth_lowpass(4.0 * w_c, ts_s)?, SosCoeffs::IDENTITY];
     cfg.anti_windup = AntiWindup::ConditionalIntegration;
     // The data-sheet inertia is known: accelerate it by feedforward (4.16),
@@ -107,7 +105,6 @@ mod tests {
     use crate::commission::safety::{SafetyLimits, SafetySupervisor};
     use crate::model::rigs;
     use crate::sim::{SimAxis, SimConfig};
-    use beltune_rt::trajectory::Limits;
 
     /// Move sim-b (viscous friction 0.031 N m s/rad on 2e-4 kg m^2) 0.45 m at
     /// the positioning limits with `ctrl`; the largest following error, m.
@@ -126,16 +123,7 @@ mod tests {
         let (j, i_t) = (truth.rigid_inertia(), truth.i_t);
         let ctrl =
             bootstrap_with_friction(j, i_t, info.ts_s, info.torque_max_nm, viscous_nm_s_per_rad)?;
-        let limits = Limits {
-            v_max: 0.5,
-            v_min: -0.5,
-            a_max: 4.0,
-            a_min: -4.0,
-            j_max: 40.0,
-            j_min: -40.0,
-            position_min: -0.01,
-            position_max: 0.57,
-        };
+        let limits = crate::commission::config::positioning_limits_in(-0.01, 0.57);
         let sup = SafetySupervisor::new(
             SafetyLimits {
                 travel_min_m: -0.01,
@@ -157,13 +145,13 @@ mod tests {
             .fold(0.0, f64::max))
     }
 
-    /// Issue 12: sim-b's bootstrap loop without its viscous friction overshot
+    /// Sim-b's bootstrap loop without its viscous friction overshot
     /// the worst-case position by 50 mm (a following-error stop); with the
     /// friction measured (the plant's own 0.0308 N m s/rad, here from the
     /// truth) the following error stays within a few millimetres, a tenth
     /// of the limit.
     #[test]
-    fn the_bootstrap_fits_heavy_viscous_friction_issue_12() {
+    fn the_bootstrap_fits_heavy_viscous_friction() {
         let d = rigs::builtin("sim-b", None)
             .unwrap()
             .friction_totals()

@@ -228,7 +228,7 @@ pub struct CommissioningConfig {
     pub friction_speeds_m_s: Vec<f64>,
     /// Time each friction run spends at its constant speed, s: the run is
     /// as long as that plateau and its acceleration and deceleration need
-    /// (at most the travel window allows). Issue 12: with runs of a fixed
+    /// (at most the travel window allows). With runs of a fixed
     /// 0.1 m, the 0.4 m/s plateau of a heavy cart on a soft belt lasted
     /// 0.2 s, two periods of its ringing and less than the velocity loop's
     /// settling, and the fitted viscous friction came out at a third of the
@@ -241,7 +241,7 @@ pub struct CommissioningConfig {
     pub following_error_max_m: f64,
     /// How the controller is designed from the identified model
     /// ([`crate::design::robust`]): by default the robust rule for lightly
-    /// damped axes (issue 12: friction separated from damping, prefilter and
+    /// damped axes (friction separated from damping, prefilter and
     /// nominal margins chosen for margins that hold over the
     /// identification's uncertainty); [`DesignRule::Knobs`] uses exactly
     /// [`Self::knobs`]; [`DesignRule::Thesis`] the thesis' design on the fit as

@@ -146,7 +146,7 @@ pub fn track(
         // cycle ([`crate::axis::Axis::exchange`]), i.e. at (k+1) T: the record
         // pairs it with the desired position of that instant. Pairing it with
         // the desired position at k T added up to v T to the tracking error
-        // (1.36 mm at 1 ms for the Table A.8 move; issue 14).
+        // (1.36 mm at 1 ms for the Table A.8 move).
         let t_end = (k + 1) as f64 * ts;
         desired = traj.sample(t_end);
         rec.time_s.push(t_end);

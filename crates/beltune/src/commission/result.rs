@@ -58,7 +58,7 @@ pub struct Commissioning {
     pub fit: TwoMassFit,
     /// The thesis' fit of the FRF's magnitude (3.5).
     pub frf_fit: TwoMassFit,
-    /// The friction-aware fit (issue 12), `None` where it failed.
+    /// The friction-aware fit, `None` where it failed.
     pub nonlinear: Option<crate::ident::NonlinearFit>,
     /// The dead time.
     pub dead_time: DeadTime,

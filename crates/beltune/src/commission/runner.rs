@@ -19,8 +19,6 @@ use beltune_rt::filter::{velocity_filter, FirstOrder};
 use beltune_rt::trajectory::{Limits, State, Trajectory};
 use std::collections::VecDeque;
 
-/// Velocity filter time constant used for supervision, s (as `T_R` of Table A.4).
-const SUPERVISION_T_R_S: f64 = 2e-3;
 /// How long the axis is held after a stop trajectory, s.
 const STOP_SETTLE_S: f64 = 0.2;
 /// Speed below which a stopped axis counts as at rest, m/s.
@@ -47,7 +45,7 @@ const RIGID_VELOCITY_WINDOW_S: f64 = 20e-3;
 /// The cart's rigid-body velocity as the motor encoder shows it, without the
 /// belt resonance: two cascaded moving averages of the motor-side velocity
 /// over [`RIGID_VELOCITY_WINDOW_S`] each. In open loop the motor vibrates at
-/// the resonance (issue 12: 0.85 m/s peak while the cart moves at 0.1 m/s);
+/// the resonance (0.85 m/s peak while the cart moves at 0.1 m/s);
 /// that vibration moves the motor by `v / w` (millimetres), not towards the
 /// window edge. The gain at `f` is `sinc^2(f W)`: zero at 50 Hz and its
 /// multiples, below 4 % above 80 Hz; the lag is `W` (20 ms).
@@ -216,7 +214,7 @@ impl<'a> Runner<'a> {
         crate::error::require_positive("motor_rad_per_count", info.motor_rad_per_count)?;
         crate::error::require_positive("i_t", i_t)?;
         crate::error::require_finite("origin_m", origin_m)?;
-        let coeffs = velocity_filter(SUPERVISION_T_R_S, info.ts_s)?;
+        let coeffs = velocity_filter(crate::design::DEFAULT_T_R_S, info.ts_s)?;
         let mut velocity = FirstOrder::new(coeffs);
         velocity.reset_to(origin_m, 0.0);
         let rigid = RigidVelocity::new(info.ts_s, origin_m);
@@ -344,7 +342,7 @@ impl<'a> Runner<'a> {
 
     /// [`Runner::step`] in closed loop whose following error `following_error_m`
     /// is recorded but not limited: a move whose lag is expected (the
-    /// validation's comparison variants without feedforward, issue 12). The
+    /// validation's comparison variants without feedforward). The
     /// look-ahead is the closed loop's; travel, velocity and torque are
     /// supervised as always.
     pub fn step_unlimited(&mut self, torque_nm: f64, following_error_m: f64) -> Result<Sample> {
@@ -368,7 +366,7 @@ impl<'a> Runner<'a> {
         };
         self.open_loop = following_error_m.is_none();
         // In closed loop the fast estimate, where the rigid-body estimate
-        // confirms it (issue 12: a chattering loop on a coarse encoder shows
+        // confirms it (a chattering loop on a coarse encoder shows
         // 0.5 m/s spikes over a creeping cart, which tripped the look-ahead);
         // where the smaller rigid-body estimate is judged, the look-ahead
         // adds its lag.
@@ -547,7 +545,7 @@ impl<'a> Runner<'a> {
     /// history ([`STOP_HISTORY_S`]) in open loop or within that window of
     /// it (a closed-loop stage may have just begun). In open loop the
     /// command is the holding torque plus a PRBS, which averages out over
-    /// many of its bits, not over 20 ms (issue 12, seed 13 plant #787: 20 ms
+    /// many of its bits, not over 20 ms (seed 13 plant #787: 20 ms
     /// of mostly one PRBS level preloaded the stop 0.44 N m short of the
     /// 1.84 N m that held a load on a 59 deg slope; the load pushed the
     /// stop 6.9 mm on, 3.8 mm out of the window).
@@ -587,7 +585,7 @@ impl<'a> Runner<'a> {
         let ts = self.info.ts_s;
         let v = stop_start_velocity(self.supervised_velocity_m_s(), self.rigid_velocity_m_s);
         let p = self.position_m();
-        // Brake with what the axis has in this direction (gravity, issue 12),
+        // Brake with what the axis has in this direction (gravity),
         // never harder than the configured stop limits.
         let a_stop = stop_deceleration(
             self.supervisor.capability(),
@@ -616,7 +614,7 @@ impl<'a> Runner<'a> {
         // A designed cascade comes without feedforward (the validation adds
         // it): the stop's deceleration is fed forward with the inertia the
         // capability was computed for, so that the feedback does not have to
-        // build the braking torque from a growing error (issue 12: a heavy
+        // build the braking torque from a growing error (a heavy
         // cart braking downhill overshot its stop by 20 mm).
         let mut config = self.stop_controller;
         let inertia = self.supervisor.capability().inertia_kg_m2;
@@ -625,7 +623,7 @@ impl<'a> Runner<'a> {
         }
         let mut ctrl = CascadeController::new(config)?;
         // Bumpless: the stop continues from the torque the axis was getting
-        // (issue 12: a reset integrator dropped the 3.1 N m that held a
+        // (a reset integrator dropped the 3.1 N m that held a
         // heavy vertical load, which fell 65 mm instead of 10 mm).
         let w0 = v / self.i_t;
         let feedforward = config.feedforward.torque_nm(w0, 0.0);
@@ -685,7 +683,7 @@ impl<'a> Runner<'a> {
 
 /// The velocity a stop starts its trajectory from: the supervised estimate,
 /// but never beyond the rigid-body estimate in magnitude, and zero when the
-/// two disagree in sign. Issue 12: a chattering closed loop on a coarse
+/// two disagree in sign. A chattering closed loop on a coarse
 /// encoder showed 0.5 m/s spikes in the fast estimate while the cart crept
 /// at 0.02 m/s; the stop planned from the spike drove the axis 58 mm on,
 /// out of the window. A real motion shows in both (the rigid estimate lags
@@ -711,7 +709,7 @@ fn stop_distance_m(velocity_m_s: f64, deceleration_m_s2: f64) -> f64 {
 /// limits); if that stop would end closer than
 /// [`super::safety::STOP_EDGE_MARGIN_M`] to the window's edge (or beyond
 /// it), as much more as it takes to stop there, up to the capability's
-/// reserve (issue 12: the look-ahead trips when the planned stop would end
+/// reserve (the look-ahead trips when the planned stop would end
 /// outside, so a stop with the planned deceleration always did).
 fn stop_deceleration(
     capability: &super::safety::StopCapability,
@@ -854,16 +852,7 @@ mod tests {
             5.0,
         )
         .unwrap();
-        let limits = Limits {
-            v_max: 0.5,
-            v_min: -0.5,
-            a_max: 4.0,
-            a_min: -4.0,
-            j_max: 40.0,
-            j_min: -40.0,
-            position_min: 0.0,
-            position_max: 0.6,
-        };
+        let limits = crate::commission::config::positioning_limits_in(0.0, 0.6);
         let mut progress = NoProgress;
         let (r, drift) = {
             let mut runner =
@@ -875,7 +864,7 @@ mod tests {
     }
 
     #[test]
-    fn issue_14_a_real_time_axis_is_held_in_closed_loop_while_the_computation_runs() {
+    fn a_real_time_axis_is_held_in_closed_loop_while_the_computation_runs() {
         // The computation ends once the axis has been held for HELD cycles
         // (counted by the axis, not timed: a loaded machine stretches every
         // sleep, and a timed wait once saw fewer cycles than it asked for).
@@ -915,12 +904,12 @@ mod tests {
         assert_eq!((during, exchanges), (0, 0));
     }
 
-    /// Issue 12 (false open-loop travel trips): the motor side vibrating at
+    /// False open-loop travel trips: the motor side vibrating at
     /// the resonance with 0.85 m/s peak while the cart drifts at 0.1 m/s must
     /// read as 0.1 m/s to the look-ahead. Worst case inside the band the
     /// filter claims (above 80 Hz: gain below 4 %): 0.85 * 0.04 = 0.034 m/s.
     #[test]
-    fn the_rigid_velocity_ignores_the_resonance_vibration_issue_12() {
+    fn the_rigid_velocity_ignores_the_resonance_vibration() {
         let ts = 100e-6;
         for f in [50.0, 80.0, 111.0, 150.0, 400.0] {
             let w = 2.0 * std::f64::consts::PI * f;
@@ -945,13 +934,13 @@ mod tests {
         assert!((v - 0.3).abs() < 1e-9, "{v}");
     }
 
-    /// Issue 12 (stops ending outside the window): the look-ahead trips when
+    /// Stops ending outside the window: the look-ahead trips when
     /// the planned stop would end outside, so a stop with the planned
     /// deceleration always did; it brakes with the reserve to end
     /// STOP_EDGE_MARGIN_M inside instead, and with the planned one where
     /// there is room.
     #[test]
-    fn a_stop_near_the_edge_brakes_with_its_reserve_issue_12() {
+    fn a_stop_near_the_edge_brakes_with_its_reserve() {
         use crate::commission::safety::{StopCapability, STOP_EDGE_MARGIN_M};
         let cap = StopCapability::from_axis(3.1, 2e-3, 0.0124, 0.3, 0.0).unwrap();
         let limits = SafetyLimits {
@@ -980,15 +969,15 @@ mod tests {
         assert_eq!(a, cap.reserve_deceleration_negative_m_s2);
     }
 
-    /// Issue 12 (a heavy load fell 65 mm in its stop, 56.8 mm out of the
-    /// window: plant #839): the stop continues from the torque that held
+    /// A heavy load fell 65 mm in its stop, 56.8 mm out of the
+    /// window: plant #839: the stop continues from the torque that held
     /// the load (the mean of the last 20 ms of commands), not from a reset
     /// integrator and the stop controller's offset. A 20 kg cart on a
     /// vertical egc70 held by its holding torque (2.5 N m) stays where it
     /// is when stopped; from zero torque it would fall until the loop
     /// built 2.5 N m again.
     #[test]
-    fn a_stop_keeps_the_torque_that_held_the_load_issue_12() {
+    fn a_stop_keeps_the_torque_that_held_the_load() {
         let mut p = rigs::egc70_params(20.0);
         p.tilt_rad = 90f64.to_radians();
         let hold = -p.i_t() * p.gravity_force_n();
@@ -1026,10 +1015,10 @@ mod tests {
         );
     }
 
-    /// Issue 12: a 0.5 m/s spike of the fast estimate over a creeping cart
+    /// A 0.5 m/s spike of the fast estimate over a creeping cart
     /// starts no stop trajectory at 0.5 m/s; a real motion does.
     #[test]
-    fn a_stop_starts_from_a_confirmed_velocity_issue_12() {
+    fn a_stop_starts_from_a_confirmed_velocity() {
         assert_eq!(stop_start_velocity(0.5, 0.02), 0.02);
         assert_eq!(stop_start_velocity(-0.5, -0.6), -0.5);
         assert_eq!(stop_start_velocity(0.5, -0.01), 0.0);
@@ -1093,13 +1082,13 @@ mod tests {
         );
     }
 
-    /// Issue 12, seed 13 plant #787: a stop right after an open-loop PRBS
+    /// Seed 13 plant #787: a stop right after an open-loop PRBS
     /// starts from the mean command over the last second (the holding
     /// torque, the PRBS averaged out over its bits), not from the last
     /// 20 ms, which are mostly one PRBS level (0.44 N m short of the load
     /// on #787). egc70, open loop, a PRBS of 20 ms bits around 0.1 N m.
     #[test]
-    fn the_stop_preload_after_an_open_loop_excitation_is_its_mean_issue_12() {
+    fn the_stop_preload_after_an_open_loop_excitation_is_its_mean() {
         let plant = rigs::builtin("egc70", None).unwrap();
         let start = 0.3;
         let mut axis = sim_at(&plant, start);
@@ -1273,7 +1262,7 @@ mod tests {
         }
     }
 
-    /// Issue 14: a failed exchange hands over the last second of samples
+    /// A failed exchange hands over the last second of samples
     /// (for the same diagnostic as a safety stop), once, after the drive's
     /// quick stop.
     #[test]

@@ -174,7 +174,7 @@ pub struct StopCapability {
     /// outside the travel window (the whole command budget
     /// [`STOP_COMMAND_FRACTION`] instead of [`STOP_TORQUE_FRACTION`]), m/s^2.
     /// The look-ahead plans with the smaller deceleration above; this is
-    /// the stop's reserve (issue 12: stops that ended outside the window).
+    /// the stop's reserve (stops that ended outside the window).
     #[serde(default)]
     pub reserve_deceleration_positive_m_s2: f64,
     /// Reserve deceleration towards -x, m/s^2 (see above).
@@ -235,12 +235,12 @@ impl StopCapability {
     /// to brake it downhill. The braking torque in the weak direction is
     /// what the first hold leaves, at least [`PROVISIONAL_MIN_FRACTION`] of
     /// the limit; the finer refusal is left to the holding-torque stage,
-    /// which measures gravity without friction (issue 12: plants refused on
+    /// which measures gravity without friction (plants refused on
     /// the first hold that physics allows). A plant refused here is
     /// infeasible unless its first hold overstates gravity by more than
     /// `STOP_MIN_FRACTION T_max - tau_c / 2` (from_axis accepts up to
     /// `(STOP_COMMAND_FRACTION - STOP_MIN_FRACTION) T_max + tau_c / 2`;
-    /// issue 12: such loads were run until a stop or a following error
+    /// such loads were run until a stop or a following error
     /// ended the holding-torque runs).
     pub fn provisional(
         torque_max_nm: f64,
@@ -603,12 +603,12 @@ mod tests {
         ));
     }
 
-    /// Issue 12 (stops that ended outside the window): on a tilted axis the
+    /// Stops that ended outside the window: on a tilted axis the
     /// stop brakes downhill with the torque gravity leaves, uphill with the
     /// torque plus gravity; the look-ahead uses the deceleration of the
     /// direction of travel.
     #[test]
-    fn stops_are_planned_with_the_deceleration_gravity_leaves_issue_12() {
+    fn stops_are_planned_with_the_deceleration_gravity_leaves() {
         let (t_max, j, i_t) = (3.1, 2e-3, 0.0124);
         let hold = 1.0; // gravity pulls towards -x
         let c = StopCapability::from_axis(t_max, j, i_t, hold, 0.0).unwrap();
@@ -633,12 +633,12 @@ mod tests {
         assert!(StopCapability::from_axis(t_max, j, i_t, f64::NAN, 0.0).is_err());
     }
 
-    /// Issue 12: the first hold (gravity plus the static friction a sagging
+    /// The first hold (gravity plus the static friction a sagging
     /// load meets) refuses no axis within the stop's command budget that
     /// from_axis would; the braking torque it leaves is assumed, at least
     /// PROVISIONAL_MIN_FRACTION of the limit.
     #[test]
-    fn a_provisional_capability_refuses_nothing_within_the_budget_issue_12() {
+    fn a_provisional_capability_refuses_nothing_within_the_budget() {
         let (t_max, j, i_t) = (3.1, 3e-3, 0.0124);
         let first_hold = 2.4; // from_axis refuses: 0.9 * 3.1 - 2.4 < 0.15 * 3.1
         assert!(StopCapability::from_axis(t_max, j, i_t, first_hold, 0.0).is_err());
@@ -657,12 +657,12 @@ mod tests {
         assert!(StopCapability::provisional(t_max, j, i_t, f64::NAN).is_err());
     }
 
-    /// Issue 12 (heavy loads run until a stop): a first hold beyond the
+    /// Heavy loads run until a stop: a first hold beyond the
     /// stop's whole command budget leaves nothing to brake downhill; it is
     /// refused at once, in either direction of gravity, while a first hold
     /// just inside it is still left to the holding-torque stage.
     #[test]
-    fn a_first_hold_beyond_the_command_budget_is_refused_issue_12() {
+    fn a_first_hold_beyond_the_command_budget_is_refused() {
         let (t_max, j, i_t) = (3.1, 3.9e-3, 0.0124);
         let budget = STOP_COMMAND_FRACTION * t_max;
         for hold in [budget + 1e-3, 2.9, 3.05, 3.1] {
@@ -680,7 +680,7 @@ mod tests {
     /// A lagging (smoothed) velocity estimate: the look-ahead adds the
     /// distance covered during the lag.
     #[test]
-    fn a_lagging_velocity_adds_its_distance_issue_12() {
+    fn a_lagging_velocity_adds_its_distance() {
         let s = SafetySupervisor::with_capability(limits(), instant(10.0)).unwrap();
         // 0.449 m at 0.99 m/s stops at 0.498 m; 20 ms of lag add 19.8 mm
         assert!(s.check_lagged(0.449, 0.99, 0.0, 0.0, Some(0.0)).is_ok());
@@ -703,7 +703,7 @@ mod tests {
         assert!(SafetySupervisor::new(l, 10.0).is_err());
     }
 
-    /// Issue 16: a following-error limit of 1 um printed as "0.00 mm".
+    /// A following-error limit of 1 um printed as "0.00 mm".
     #[test]
     fn a_small_following_error_limit_prints_in_um() {
         let v = Violation::FollowingError {

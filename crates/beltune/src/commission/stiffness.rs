@@ -6,7 +6,7 @@ use crate::record::model::FrictionResult;
 use serde::{Deserialize, Serialize};
 
 /// The belt stiffness where the validation move ends, and how it changes
-/// along the stroke (issue 12): the static belt stretch the motor setpoint
+/// along the stroke: the static belt stretch the motor setpoint
 /// leads by (`tau_hold / (i_t c)`) is that of the stiffness where the cart
 /// rests, and the replacement stiffness (2.26) changes along the stroke (by
 /// a factor two over a 0.5 m move on a soft belt). Its compliance `1 / c`
@@ -41,7 +41,7 @@ pub struct TargetStiffness {
 /// move; with the Table A.8 jerk (40 m/s^3, `|a| <= sqrt(2 j v)`) and a
 /// 0.15 mm lead that stays below the speed, so the motor setpoint does not
 /// reverse. A wider ramp left slow moves' carts short: inside it the belt
-/// carries less than the kinetic friction (issue 12: 0.05 m/s left a heavy
+/// carries less than the kinetic friction (0.05 m/s left a heavy
 /// cart on a slow reduced move 0.25 mm short; 0.02 m/s passed the 15
 /// plants that missed 100 um with the wider or a linear ramp but one).
 pub const CART_COULOMB_VELOCITY_M_S: f64 = 0.02;

@@ -41,7 +41,7 @@ pub struct Validation {
 /// Band within which the error counts as settled, m: the thesis' static
 /// positioning limit (chapter 5, 100 um). A narrower band (it was 50 um)
 /// called a cart "not settled" that rests within the static limit it is
-/// judged by (issue 12); hunting beyond the limit still counts as unsettled.
+/// judged by; hunting beyond the limit still counts as unsettled.
 pub const SETTLING_BAND_M: f64 = crate::verdict::MAX_STATIC_ERROR_M;
 /// Window at the end of the record over which the static error is averaged, s.
 pub const STATIC_WINDOW_S: f64 = 0.1;
@@ -61,14 +61,14 @@ pub const FINAL_APPROACH_MARGIN_M: f64 = 1e-3;
 /// by the belt, stops without a swing of its own (`v / w_z`, 20 um at
 /// 15 Hz), fast enough that the creep of about 1.3 mm takes 0.7 s. With
 /// the margin above the creep lasts long enough for the cascade's
-/// integrator to settle the torque (issue 12).
+/// integrator to settle the torque.
 pub const FINAL_APPROACH_SPEED_M_S: f64 = 2e-3;
 
 /// The final approach of a move to `target_m` (cart coordinates of the
 /// runner, origin `origin_m`) for the belt model `belt`: where the setpoint
 /// leads the cart's Coulomb friction `F_c` (a [`BeltStretch::Profile`]),
 /// the last `2 K(target) F_c +` [`FINAL_APPROACH_MARGIN_M`] at
-/// [`FINAL_APPROACH_SPEED_M_S`]; `None` otherwise. Issue 12: the cart rests
+/// [`FINAL_APPROACH_SPEED_M_S`]; `None` otherwise. The cart rests
 /// anywhere in its friction band `+-K F_c` (up to 0.18 mm on the study's
 /// soft, sticky axes) depending on how the fast move's end left it; dragged
 /// slowly from behind with the lead held, it stops at the target (static
@@ -245,7 +245,7 @@ pub fn run_move(
     spec: &MoveSpec,
 ) -> Result<MoveResult> {
     if (runner.position_m() - spec.start_m).abs() > 1e-4 {
-        // Issue 12: the start is 10 mm from the window's edge and the return
+        // The start is 10 mm from the window's edge and the return
         // runs without feedforward; approach it from inside the window and
         // creep the last part, so that the feedback's overshoot cannot reach
         // the edge.
@@ -272,7 +272,7 @@ pub fn run_move(
     // The move starts where the cart rests, not where the motor is: under a
     // static force the belt is stretched, and a trajectory from the motor's
     // position made the setpoint jump by the static stretch at its first
-    // sample (issue 12: 0.35 mm on a soft 46 deg axis, the move's largest error).
+    // sample (0.35 mm on a soft 46 deg axis, the move's largest error).
     let start = cart_at_rest_m(runner.position_m(), runner.origin_m(), &opts.belt_stretch);
     let path = match spec.approach(&opts.belt_stretch, runner.origin_m()) {
         Some(a) => Approach::plan(&State::at_rest(start), spec.target_m, &spec.limits, &a)?,
@@ -319,7 +319,7 @@ pub fn cart_at_rest_m(
 /// cascade refinement (c)): a fifth of the thesis' static limit, so that the
 /// integrator alone finishes the positioning inside it, and at least two
 /// counts of the coarsest motor encoder of the robustness study (4x egc70's,
-/// 10 um at the cart). Issue 12: without it an axis that rested after an
+/// 10 um at the cart). Without it an axis that rested after an
 /// overshoot or stuck short of its target waited for the integrator to build
 /// the breakaway torque, seconds on slow loops (47 of 109 static-error
 /// failures of the 1000-plant study).
@@ -332,7 +332,7 @@ pub const COULOMB_BREAKAWAY_CART_M: f64 = 20e-6;
 /// that stretch while the cart moves and retreats from it as the cart
 /// stops (`beltune_rt::control::BeltProfile`); the motor then rests up to
 /// that far beyond its setpoint with the cart at its target, held by its
-/// friction. Issue 12: a push inside that band, with the whole Coulomb
+/// friction. A push inside that band, with the whole Coulomb
 /// torque on a motor whose cart stuck, made the motor hunt against the belt
 /// and dragged carts that had stopped 20 um from the target 130 um off
 /// (8 static-error failures of the 1000-plant study; none beyond it).
@@ -420,7 +420,7 @@ pub fn validation_controller(
 /// belt-stretch compensation `K(xi) (m_c a + F)` with the belt's compliance
 /// along the stroke `belt` (stages 5b/5c) and the force `F = tau_hold / i_t`
 /// the belt carries under the holding torque `holding_nm`, positions from
-/// `origin_m` (the runner's). Issue 12: the stiffness identified at the
+/// `origin_m` (the runner's). The stiffness identified at the
 /// worst-case position is up to 30 % lower than at the target, and the cart
 /// rested that share of the static stretch, up to hundreds of um, short of
 /// it; the stiffness along a 0.5 m move changes by a factor two on a soft
@@ -482,7 +482,7 @@ pub fn simulate_validation_move(
     // The stop is planned and supervised with the deceleration this plant
     // really has (its torque limit on its own rigid inertia, as stage 2 does
     // on the axis), not with the design model's: a payload the design did not
-    // assume decelerates slower, and the look-ahead must know it (issue 13 item 3).
+    // assume decelerates slower, and the look-ahead must know it.
     let truth = plant.linearize(spec.start_m)?;
     let capability = super::safety::StopCapability::from_axis(
         torque_max,
@@ -555,13 +555,13 @@ mod tests {
     use super::*;
     use beltune_rt::control::{BeltProfile, BeltStretch, CartSample, SetpointConversion};
 
-    /// Issue 12: the validation move starts where the cart rests. The
+    /// The validation move starts where the cart rests. The
     /// setpoint conversion at rest at that position must ask for exactly
     /// the motor position that holds it (no jump at the first sample), on a
     /// soft belt whose compliance changes along the stroke, under the static
     /// force of a 46 deg slope (-65 N, 0.3-0.6 mm of stretch).
     #[test]
-    fn the_move_starts_where_the_cart_rests_issue_12() {
+    fn the_move_starts_where_the_cart_rests() {
         let i_t = 0.0124;
         let profile = BeltProfile {
             m_c_kg: 9.2,

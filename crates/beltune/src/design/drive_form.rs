@@ -72,15 +72,7 @@ mod tests {
     use crate::model::TwoMassParams;
 
     fn table_a4() -> TwoMassParams {
-        TwoMassParams {
-            theta_e: 71.73e-6,
-            m_c: 13.44,
-            c: 203.74e3,
-            d: 0.0,
-            d_m: 33.17,
-            d_c: 226.42,
-            i_t: 0.0124141,
-        }
+        TwoMassParams::thesis_table_a4()
     }
 
     /// `T_n = K_P / K_I` by definition; the Butterworth cut-off in Hz is

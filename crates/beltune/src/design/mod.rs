@@ -6,7 +6,7 @@
 //! - [`feedforward`]: inertia and friction feedforward (4.15)-(4.17),
 //! - [`sampled`]: the coefficients at `T_s` and the stability check of the discretized loops,
 //! - [`dynamics`]: the one-knob mode,
-//! - [`robust`]: the design rule for lightly damped axes (issue 12): friction separated from
+//! - [`robust`]: the design rule for lightly damped axes: friction separated from
 //!   damping, the prefilter chosen for margins that hold over the identification's uncertainty,
 //!
 //! Interpretation (docs/thesis-map.md, "The printed controller gains"): the prefilter sits

@@ -1,4 +1,4 @@
-//! The design rule for lightly damped axes (issue 12): margins that hold on the
+//! The design rule for lightly damped axes: margins that hold on the
 //! axis, not only on the identified model.
 //!
 //! Two facts of a belt axis identified with a small excitation drive this rule:
@@ -38,7 +38,7 @@ use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
 /// Velocity-loop phase margin the robust design guarantees over the
-/// uncertainty box, deg (issue 12: >= 45 deg on the axis).
+/// uncertainty box, deg (>= 45 deg on the axis).
 pub const GUARANTEED_PHASE_MARGIN_DEG: f64 = 45.0;
 /// Position-loop phase margin the robust design guarantees over the box, deg
 /// (a position loop below 60 deg overshoots its target: the thesis asks 80
@@ -470,11 +470,11 @@ pub fn guaranteed_margins(
 mod tests {
     use super::*;
 
-    /// Issue 12 (margins on the fit only): the design model's rigid-body
+    /// Margins on the fit only: the design model's rigid-body
     /// damping is the measured viscous friction, its resonance damping the
     /// fit's, and the split is exact.
     #[test]
-    fn the_design_model_separates_friction_from_resonance_damping_issue_12() {
+    fn the_design_model_separates_friction_from_resonance_damping() {
         let fit = TwoMassParams {
             d: 0.0,
             ..TwoMassParams::thesis_table_a4()
@@ -491,14 +491,14 @@ mod tests {
         assert_eq!(design_model(&fit, f64::NAN), fit);
     }
 
-    /// Issue 12, the root cause: on egc70 the thesis design on the fit keeps
+    /// The root cause: on egc70 the thesis design on the fit keeps
     /// far less than its 60 deg on the axis' true linearization, the robust
     /// design on the design model keeps at least the guaranteed margin. The
     /// "fit" here is the egc70 commissioning's identified model (rounded), the
     /// measured viscous friction the friction runs' value; the truth is the
     /// simulator's linearization with its belt damping.
     #[test]
-    fn the_robust_design_keeps_its_margins_on_the_true_egc70_issue_12() {
+    fn the_robust_design_keeps_its_margins_on_the_true_egc70() {
         let plant = crate::model::rigs::egc70_params(11.2);
         let truth = plant.linearize(0.5).unwrap();
         let fit = TwoMassParams {

@@ -15,9 +15,9 @@ use std::f64::consts::{PI, SQRT_2};
 const SPEC_TOL_DEG: f64 = 0.01;
 /// Requested-vs-achieved tolerance of the issue: 0.01 dB.
 const SPEC_TOL_DB: f64 = 0.01;
-/// Discrete vs continuous open loop up to the crossover (issue 5): 0.2 dB.
+/// Discrete vs continuous open loop up to the crossover: 0.2 dB.
 const DISCRETE_TOL_DB: f64 = 0.2;
-/// Discrete vs continuous open loop up to the crossover (issue 5): 2 deg.
+/// Discrete vs continuous open loop up to the crossover: 2 deg.
 const DISCRETE_TOL_DEG: f64 = 2.0;
 /// Time-domain oscillation frequency at the delay margin vs the crossover: 3 %
 /// (the period is read from zero crossings over ~10 periods; ZOH and Tustin shift
@@ -430,7 +430,7 @@ fn infeasible_and_invalid_requests_are_errors() {
 /// fuzz test (`tests/fuzz_readers.rs`) hung on it; it is a typed error now,
 /// in the design and in the discretization alike.
 #[test]
-fn a_huge_dead_time_is_a_typed_error_not_a_hang_issue_13() {
+fn a_huge_dead_time_is_a_typed_error_not_a_hang() {
     for dead_time_s in [1e300, f64::MAX, MAX_DEAD_TIME_S * 1.01] {
         let input = DesignInput {
             dead_time_s,

@@ -65,9 +65,9 @@ pub fn open_maybe_gzip(path: &Path) -> std::io::Result<Box<dyn std::io::Read>> {
 /// Most data rows read from one CSV file (100 s at 10 kHz is 10^6).
 pub const MAX_CSV_ROWS: usize = 10_000_000;
 
-/// The column names of a CSV file's header row (plain or gzip), without
-/// reading its data: what a command checks before it starts any work.
-pub fn read_csv_header(path: &Path) -> Result<Vec<String>> {
+/// A CSV reader of `path` (a regular file of at most
+/// [`crate::io::MAX_CSV_BYTES`], plain or gzip) and its header row.
+fn open_csv(path: &Path) -> Result<(csv::Reader<Box<dyn std::io::Read>>, csv::StringRecord)> {
     let shown = path.display().to_string();
     let csv_err = |message: String| Error::Csv {
         path: shown.clone(),
@@ -84,8 +84,15 @@ pub fn read_csv_header(path: &Path) -> Result<Vec<String>> {
         .from_reader(open_maybe_gzip(path).map_err(|e| csv_err(format!("cannot open: {e}")))?);
     let headers = reader
         .headers()
-        .map_err(|e| csv_err(format!("cannot read the header row: {e}")))?;
-    Ok(headers.iter().map(str::to_string).collect())
+        .map_err(|e| csv_err(format!("cannot read the header row: {e}")))?
+        .clone();
+    Ok((reader, headers))
+}
+
+/// The column names of a CSV file's header row (plain or gzip), without
+/// reading its data: what a command checks before it starts any work.
+pub fn read_csv_header(path: &Path) -> Result<Vec<String>> {
+    Ok(open_csv(path)?.1.iter().map(str::to_string).collect())
 }
 
 /// Error naming the first of `names` that the header `header` lacks (with the
@@ -110,19 +117,7 @@ pub fn read_csv_columns(path: &Path, names: &[&str]) -> Result<CsvColumns> {
         path: shown.clone(),
         message,
     };
-    crate::io::check_readable_file(path, crate::io::MAX_CSV_BYTES).map_err(|e| match e {
-        Error::Parse { message, .. } => csv_err(message),
-        Error::Io { source, .. } => csv_err(format!("cannot open: {source}")),
-        other => other,
-    })?;
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .trim(csv::Trim::All)
-        .from_reader(open_maybe_gzip(path).map_err(|e| csv_err(format!("cannot open: {e}")))?);
-    let headers = reader
-        .headers()
-        .map_err(|e| csv_err(format!("cannot read the header row: {e}")))?
-        .clone();
+    let (mut reader, headers) = open_csv(path)?;
     let mut index = Vec::with_capacity(names.len());
     for (k, name) in names.iter().enumerate() {
         if names[..k].contains(name) {

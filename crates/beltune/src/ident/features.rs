@@ -54,7 +54,7 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
         .collect();
     // A running median over neighbouring lines: a single noisy line (the
     // encoder's quantization against a weak input) is not a resonance
-    // (issue 12: sim-a's "resonance" at 613 Hz next to the PRBS null).
+    // (sim-a's "resonance" at 613 Hz next to the PRBS null).
     let comp = running_median(&raw, MEDIAN_HALF_WIDTH);
     // resonance: the largest interior local maximum of |G| w^2
     let peak = (1..idx.len() - 1)
@@ -66,7 +66,7 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
     // antiresonance: the deepest interior local minimum below the resonance;
     // a dip narrower than the running median (two lines on a short PRBS
     // period) survives only on the raw lines, where it must be clearly
-    // deeper than its neighbours to count (issue 12: seed 13 plant #23, a
+    // deeper than its neighbours to count (seed 13 plant #23, a
     // sticky, very viscous axis, dip at 14.7 Hz on two lines; seed 14 #378,
     // 24.6 kg on a soft belt, at 7.3 Hz).
     let local_min = |v: &[f64], k: usize| v[k] < v[k - 1] && v[k] <= v[k + 1];
@@ -188,7 +188,7 @@ const FLANK_MIN_LINES: usize = 3;
 ///
 /// A heavy cart on a soft belt with much Coulomb friction puts the
 /// antiresonance at a few Hz, where the cart sticks for part of each PRBS
-/// period and friction, not the belt, shapes the lines (issue 12: seed 14
+/// period and friction, not the belt, shapes the lines (seed 14
 /// #994, 24 kg, Coulomb x2.9, its dip 0.7 of its neighbours, level with the
 /// friction's scatter). Above the dip the undamped two-mass shape of (2.42),
 /// written with `w_r` and `Theta_e` (`J = Theta_e (w_r/w_z)^2`), is
@@ -327,7 +327,7 @@ mod tests {
         }
     }
 
-    /// Issue 12, seed 14 #994 (24 kg on a soft belt, Coulomb x2.9): friction
+    /// Seed 14 #994 (24 kg on a soft belt, Coulomb x2.9): friction
     /// hid the antiresonance and a wiggle on the resonance's flank was taken
     /// for it, which started the fit at a tenth of the cart mass (the
     /// wiggle, a median artefact of a noisy flat top, is refused by
@@ -338,7 +338,7 @@ mod tests {
     /// 0.7 % and m_c 1.6 % off). Without the flank estimate: "no
     /// antiresonance dip".
     #[test]
-    fn a_hidden_antiresonance_is_read_from_the_resonance_flank_issue_12() {
+    fn a_hidden_antiresonance_is_read_from_the_resonance_flank() {
         let p = TwoMassParams {
             theta_e: 71.7e-6,
             m_c: 25.0,

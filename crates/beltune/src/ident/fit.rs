@@ -73,7 +73,7 @@ pub enum FitModel {
     WithBeltDamping,
     /// The nonlinear two-mass model (2.30) with the Coulomb friction of the
     /// motor and of the cart, identified from the time record
-    /// ([`crate::ident::nonlinear`], issue 12); its linear part is (2.38)
+    /// ([`crate::ident::nonlinear`]); its linear part is (2.38)
     /// with belt damping.
     Nonlinear,
 }
@@ -327,7 +327,7 @@ pub fn start_values(f: &FrfFeatures, theta_e: Option<f64>, i_t: f64) -> Result<T
     }
     // With the data-sheet Theta_e, the inertia ratio comes from the rigid-body
     // asymptote (many lines, well excited), not from the resonance peak (one
-    // noisy line near the top of the band; issue 12).
+    // noisy line near the top of the band).
     let (theta_e, kappa) = match theta_e {
         Some(t) if f.rigid_inertia > t * (1.0 + MIN_INERTIA_RATIO) => {
             (t, f.rigid_inertia / t - 1.0)
@@ -371,7 +371,7 @@ const MIN_INERTIA_RATIO: f64 = 0.05;
 /// How far (as a factor of the start value) the fitted inertias and the belt
 /// stiffness may go: the start values come from the FRF's own features, so
 /// an optimum further away is not the two-mass resonance of the data but a
-/// degenerate one (a rigid belt, a vanishing cart; issue 12).
+/// degenerate one (a rigid belt, a vanishing cart).
 pub const MASS_STIFFNESS_RANGE: f64 = 10.0;
 /// The same for the damping coefficients (which may legitimately be tiny).
 pub const DAMPING_RANGE: f64 = 1e4;
@@ -602,7 +602,7 @@ mod tests {
         (a / b - 1.0).abs()
     }
 
-    /// Issue 4: on sim-a/b/c without noise all four parameters within 1 %.
+    /// On sim-a/b/c without noise all four parameters within 1 %.
     /// (2.42) neglects the belt damping `d`, so the data come from the plant
     /// with `d = 0`; (2.42) is then the model of (2.39) up to the rigid/flexible
     /// split of the damping, which is what the 1 % tolerance covers.
@@ -650,13 +650,13 @@ mod tests {
         assert!(rel(fit.start.d_c, truth.d_c) < 0.6, "{:?}", fit.start);
     }
 
-    /// Issue 12: a fit that cannot be done is a typed error that says so,
+    /// A fit that cannot be done is a typed error that says so,
     /// never a "physical" model with a vanishing cart. Here the data sheet's
     /// `Theta_e` is 30 times the truth: no two-mass model with that motor
     /// inertia has the measured high-frequency asymptote, and the fit must not
     /// escape to a rigid belt (`m_c -> 0`, which it did before the bounds).
     #[test]
-    fn an_impossible_fit_is_a_typed_error_issue_12() {
+    fn an_impossible_fit_is_a_typed_error() {
         let truth = sim_set("sim-a", 0.0);
         let ts = 100e-6;
         let u = prbs(11, 2, 0.3, 4);

@@ -339,7 +339,7 @@ pub fn identify_from_motion(
 const MAX_TERM_TO_TORQUE: f64 = 100.0;
 
 /// A fit whose numbers are not finite, or whose terms are far larger than the
-/// torque they explain, is an error: nothing absurd reaches a file (issue 13).
+/// torque they explain, is an error: nothing absurd reaches a file.
 fn check_plausible(fit: &MotionFriction, tau_peak: f64, a_peak: f64, v_peak: f64) -> Result<()> {
     let values = [
         ("inertia", fit.inertia),
@@ -450,7 +450,7 @@ mod tests {
     /// Table A.10 (G_A): d_v~ = 2.530 mN m s/rad, tau_c~ = 0.125 N m.
     const D_V: f64 = 2.530e-3;
     const TAU_C: f64 = 0.125;
-    /// Issue 4: friction recovered within 5 %.
+    /// Friction recovered within 5 %.
     const TOL: f64 = 0.05;
 
     /// Runs at the (A.1) velocities in both directions, torque (3.36) with
@@ -494,13 +494,13 @@ mod tests {
         assert!(lin.rms_residual_nm > fit.rms_residual_nm);
     }
 
-    /// Issue 12: the holding torque of stage 3 was up to 0.1 N m off on
+    /// The holding torque of stage 3 was up to 0.1 N m off on
     /// sticky tilted axes; the friction runs determine the offset it left.
     /// Exact runs (3.36) plus an offset of 0.04 N m, three speeds each way:
     /// the fit returns the offset and the Table A.10 friction to rounding;
     /// runs in one direction only cannot separate the offset from Coulomb.
     #[test]
-    fn the_friction_runs_give_the_torque_offset_issue_12() {
+    fn the_friction_runs_give_the_torque_offset() {
         let offset = 0.04;
         let runs: Vec<ConstantVelocityRun> = [20.0, -20.0, 40.0, -40.0, 60.0, -60.0]
             .iter()

@@ -7,7 +7,7 @@
 //! - [`features`]: resonance peak, antiresonance dip, rigid-body asymptote (start values)
 //! - [`fit`]: Levenberg-Marquardt fit of (2.42), (3.32)-(3.34), with uncertainties
 //! - [`friction`]: constant-velocity runs (3.35)-(3.36) and regression on any motion
-//! - [`nonlinear`]: the nonlinear two-mass model (2.30) with its Coulomb friction, from the excitation (issue 12)
+//! - [`nonlinear`]: the nonlinear two-mass model (2.30) with its Coulomb friction, from the excitation
 //! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24)
 //! - [`dead_time`]: current-loop dead time (3.25)-(3.30)
 //! - [`csv_columns`]: the columns of a recorded CSV file, validated

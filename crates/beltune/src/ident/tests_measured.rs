@@ -71,11 +71,11 @@ fn measured_frf_band_and_modes() {
 }
 
 /// Rotary, current units, free inertia: the fitted model's modes lie within
-/// 3 % (issue 4) of the measured FRF's peak and dip, its rigid-body inertia
+/// 3 % of the measured FRF's peak and dip, its rigid-body inertia
 /// matches the low-frequency asymptote, and the two current signals agree.
 #[test]
 fn measured_fit_matches_peak_dip_and_asymptote() {
-    /// Issue 4: fitted f_r, f_z within 3 % of the measured peak and dip.
+    /// Fitted f_r, f_z within 3 % of the measured peak and dip.
     const MODE_TOL: f64 = 0.03;
     /// The asymptote is read from lines 11-37 Hz, only 1.5-5x below the
     /// antiresonance, through an undamped shape correction: 5 %.

@@ -37,7 +37,7 @@ fn rel(a: f64, b: f64) -> f64 {
     (a / b - 1.0).abs()
 }
 
-/// Issue 4: open-loop identification with averaging on `egc70` at the
+/// Open-loop identification with averaging on `egc70` at the
 /// worst-case position finds f_r and f_z within 2 % of the linearized truth,
 /// m_c and c within 5 %, the dead time within one sample.
 #[test]
@@ -255,7 +255,7 @@ fn egc70_inertia_from_a_recorded_motion() {
     assert!(rel(r.inertia, j) < TOL, "{r:?}");
 }
 
-/// Issue 4: viscous and Coulomb friction of the simulated `egc70` within 5 %
+/// Viscous and Coulomb friction of the simulated `egc70` within 5 %
 /// (measured: 2.60e-3 N m s/rad and 0.1236 N m against Table A.10's 2.53e-3
 /// and 0.125). Was ignored while the recording loop ran at 3 Hz and
 /// limit-cycled (see [`egc70_motion_regression`]); the simulator's friction
@@ -269,7 +269,7 @@ fn egc70_friction_from_a_recorded_motion() {
     assert!(rel(r.coulomb, truth.coulomb_nm) < TOL, "{r:?}");
 }
 
-/// Issue 12: the commissioning's PRBS (order 9, clock 16 = 1.6 ms, the band
+/// The commissioning's PRBS (order 9, clock 16 = 1.6 ms, the band
 /// up to the clock frequency 625 Hz, where the PRBS has its spectral null) on
 /// `sim-a` with the simulator's encoder and noise. The lines next to the null
 /// carry almost no input, so their response is the encoder's noise, and one
@@ -277,9 +277,9 @@ fn egc70_friction_from_a_recorded_motion() {
 /// 219 kg cart and the fit ran into a rigid belt (`m_c` 1e-20 kg, "f_r
 /// 7.7e11 Hz"). Now the features skip weak lines and median-smooth, and the
 /// fit weighs the lines by their coherence: f_z and m_c within 2 % and 5 %
-/// of the truth (the tolerances of issue 12's table).
+/// of the truth (the tolerances of the robustness study's table).
 #[test]
-fn prbs_null_in_the_band_is_not_a_resonance_issue_12() {
+fn prbs_null_in_the_band_is_not_a_resonance() {
     let plant = builtin("sim-a", None).unwrap();
     let mut axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
     let truth = axis.linearized_truth();
@@ -324,11 +324,11 @@ fn prbs_null_in_the_band_is_not_a_resonance_issue_12() {
     assert!(rel(fit.f_r_hz, truth.f_r_hz()) < 0.1, "f_r {}", fit.f_r_hz);
 }
 
-/// Issue 15: the same record without a data-sheet inertia (`Theta_e` fitted
+/// The same record without a data-sheet inertia (`Theta_e` fitted
 /// too, as `identify`/`commission --csv` do without `--inertia`) diverged to
 /// `Theta_e -> 0` (f_r ~1e88 Hz); now f_r and f_z within 5 % and 2 %.
 #[test]
-fn prbs_record_without_data_sheet_inertia_issue_15() {
+fn prbs_record_without_data_sheet_inertia() {
     let plant = builtin("sim-a", None).unwrap();
     let mut axis = SimAxis::new(&plant, SimConfig::default()).unwrap();
     let truth = axis.linearized_truth();

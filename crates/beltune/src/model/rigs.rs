@@ -523,7 +523,7 @@ mod tests {
     }
 
     /// The data-sheet rig comes within 10 % of the identified Tables A.4 / A.5
-    /// (issue 2: the thesis' values were identified on hardware).
+    /// (the thesis' values were identified on hardware).
     const DATASHEET_VS_IDENTIFIED: f64 = 0.10;
 
     #[test]

@@ -160,7 +160,7 @@ impl TwoMassParams {
     /// High-frequency approximation `G^hf` (2.41). Its damping term is the
     /// `a3` of (2.38g), `i_t^2 m_c (d + d_m) + Theta_e (d + d_c)`, which is
     /// (2.41)'s `i_t^2 m_c d_m + Theta_e d_c` for `d = 0`: a model whose
-    /// resonance is damped by the belt (issue 12: the simulator's truth, or a
+    /// resonance is damped by the belt (the simulator's truth, or a
     /// design model whose resonance damping is not the rigid-body friction)
     /// keeps that damping.
     pub fn tf_high_frequency(&self) -> Tf {

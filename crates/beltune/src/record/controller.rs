@@ -480,15 +480,7 @@ mod tests {
     use beltune_rt::control::{CascadeController, MotionSample, Setpoint};
 
     fn table_a4() -> TwoMassParams {
-        TwoMassParams {
-            theta_e: 71.73e-6,
-            m_c: 13.44,
-            c: 203.74e3,
-            d: 0.0,
-            d_m: 33.17,
-            d_c: 226.42,
-            i_t: 0.0124141,
-        }
+        TwoMassParams::thesis_table_a4()
     }
 
     fn friction() -> FrictionResult {
@@ -583,14 +575,14 @@ mod tests {
             let sc = back.setpoint_conversion().unwrap();
             // the model's stiffness everywhere, the holding torque's force
             let want_sc = SetpointConversion::new(
-                0.0124141,
+                table_a4().i_t,
                 BeltStretch::Profile(beltune_rt::control::BeltProfile {
                     m_c_kg: 13.44,
                     reference_m: 0.0,
                     compliance_m_per_n: 1.0 / 203.74e3,
                     compliance_slope_per_n: 0.0,
                     compliance_curvature_per_n_m: 0.0,
-                    static_force_n: f.holding_torque_nm / 0.0124141,
+                    static_force_n: f.holding_torque_nm / table_a4().i_t,
                     // the cart's friction the friction-aware model found
                     cart_viscous_n_s_per_m: 9.2,
                     cart_coulomb_n: 6.4,
@@ -602,7 +594,7 @@ mod tests {
         }
     }
 
-    /// Issue 12: the file's setpoint leads by the static stretch of the
+    /// The file's setpoint leads by the static stretch of the
     /// stiffness measured where the validation move ended, not of the
     /// worst-case position's (the cart rested short by the difference).
     #[test]
@@ -620,28 +612,28 @@ mod tests {
             )
             .unwrap()
         };
-        // 0.31 N m / 0.0124141 m/rad = 24.97 N: 122.6 um on the model's
+        // 0.31 N m / table_a4().i_t m/rad = 24.97 N: 122.6 um on the model's
         // 203.74 kN/m, 99.9 um on 250 kN/m
         let tol = 1e-9;
         let model = file(None).setpoint;
-        assert!((model.static_stretch_m - 0.31 / (0.0124141 * 203.74e3)).abs() < tol);
+        assert!((model.static_stretch_m - 0.31 / (table_a4().i_t * 203.74e3)).abs() < tol);
         let target = TargetStiffness::constant(0.5, 250e3, 22.0, true);
         let at_target = file(Some(&target)).setpoint;
-        assert!((at_target.static_stretch_m - 0.31 / (0.0124141 * 250e3)).abs() < tol);
+        assert!((at_target.static_stretch_m - 0.31 / (table_a4().i_t * 250e3)).abs() < tol);
         // the dynamic stretch compensation m_c a / c uses it too, as the
         // validation move did
         assert_eq!(model.c_n_per_m, 203.74e3);
         assert_eq!(at_target.c_n_per_m, 250e3);
     }
 
-    /// Issue 12: the file carries the belt's compliance along the stroke
+    /// The file carries the belt's compliance along the stroke
     /// and the static force, and its setpoint conversion is the one the
     /// validation moved with: at the target it leads by the static stretch
     /// there, at another position by the stretch of that position's
     /// stiffness, `F K(xi)`; an older file (no profile keys) reads as one
     /// stiffness with the static force `static_stretch_m c`.
     #[test]
-    fn the_setpoint_carries_the_belt_profile_issue_12() {
+    fn the_setpoint_carries_the_belt_profile() {
         let des = designed(PrefilterKind::Butterworth);
         let f = friction();
         let profile = TargetStiffness {
@@ -665,14 +657,14 @@ mod tests {
         assert!((back.setpoint.final_approach_distance_m - approach).abs() < 1e-15);
         assert_eq!(back.setpoint.final_approach_speed_m_s, 2e-3);
         let conv = back.setpoint_conversion().unwrap();
-        let force = 0.31 / 0.0124141;
+        let force = 0.31 / table_a4().i_t;
         let at_rest = |x: f64| {
             conv.motor_sample(&beltune_rt::control::CartSample {
                 position_m: x,
                 ..Default::default()
             })
             .angle_rad
-                * 0.0124141
+                * table_a4().i_t
                 - x
         };
         let tol = 1e-12;
@@ -709,7 +701,7 @@ mod tests {
                 ..Default::default()
             })
             .angle_rad
-            * 0.0124141
+            * table_a4().i_t
             - 0.1;
         assert!((lead - s.static_stretch_m).abs() < tol, "{lead}");
     }
@@ -756,7 +748,7 @@ mod tests {
         assert!(ControllerFile::parse(&neg, "c.toml").is_err());
         let extra = text.replace("ts_s =", "bogus = 1\nts_s =");
         assert!(ControllerFile::parse(&extra, "c.toml").is_err());
-        // A file from before the breakaway (issue 12) loads with it off.
+        // A file from before the breakaway loads with it off.
         assert!(text.contains("coulomb_breakaway_rad = "), "{text}");
         let before: String = text
             .lines()

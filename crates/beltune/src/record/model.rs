@@ -405,7 +405,7 @@ const DOCUMENT_KEYS: &[&str] = &["schema_version", "provenance", "identified", "
 
 /// A hand-written (TOML) model may hold only the keys beltune reads: a key it
 /// does not know (a typo such as `colomb_nm`, or a unit beltune does not use)
-/// would otherwise be silently ignored (issue 13 item 10). JSON records
+/// would otherwise be silently ignored. JSON records
 /// (`identify --json`, `commissioning.json`) carry more sections and are not
 /// checked. In current units a key may carry the current suffix (`_a`).
 fn check_known_keys(v: &serde_json::Value) -> std::result::Result<(), String> {
@@ -530,7 +530,7 @@ impl ModelFile {
             Ok(())
         })();
         // The file's name and its own spelling of the key (current units:
-        // `torque_max_a`), not the library's (issue 13 item 14).
+        // `torque_max_a`), not the library's.
         checked.map_err(|e| match e {
             Error::InvalidParameter {
                 name,
@@ -620,7 +620,7 @@ mod tests {
     fn toml_and_old_identify_json_with_extras() {
         let m = ModelFile::parse(TOML, "a.toml").unwrap();
         assert_eq!(m.schema_version, 0);
-        assert_eq!(m.identified.t_r_s, 2e-3);
+        assert_eq!(m.identified.t_r_s, crate::design::DEFAULT_T_R_S);
         assert_eq!(m.identified.d, 0.0);
         let inp = m.design_input(Some(1e-4)).unwrap();
         assert_eq!(inp.friction.unwrap().coulomb_nm, 0.125);
@@ -699,7 +699,7 @@ mod tests {
     /// A TOML model with a key beltune does not read is an error naming the
     /// key; JSON records with more sections (`commissioning.json`) still load.
     #[test]
-    fn unknown_keys_in_a_toml_model_are_errors_issue_13_10() {
+    fn unknown_keys_in_a_toml_model_are_errors() {
         for (text, key) in [
             (TOML.to_string() + "colomb_nm = 0.1\n", "colomb_nm"),
             (
@@ -754,7 +754,7 @@ mod tests {
         let lim = TOML.to_string() + "torque_max_nm = -3\n";
         let e = ModelFile::parse(&lim, "x.toml").unwrap_err().to_string();
         assert!(e.starts_with("x.toml: `torque_max_nm` = -3"), "{e}");
-        // the file's own spelling of the key in current units (issue 13 item 14)
+        // the file's own spelling of the key in current units
         let lim = TOML.to_string() + "units = \"current\"\ntorque_max_a = -3\n";
         let e = ModelFile::parse(&lim, "x.toml").unwrap_err().to_string();
         assert!(

@@ -258,27 +258,29 @@ impl ResultSet {
             .unwrap_or_default();
         let tf = FitModel::WithBeltDamping.tf(&record.identified.params());
         let mut absent = Vec::new();
-        let folder_file = |name: &str| match t.from_folder {
-            true => format!("the loaded folder has no {name}"),
-            false => format!("no {name} is known"),
-        };
-        if data.excitation.is_none() {
-            absent.push((
-                "identification experiment".to_string(),
-                format!(
-                    "{} (written by `beltune commission` on an axis; a record from a CSV file has no excitation trace of its own)",
-                    folder_file(super::data_files::EXCITATION_CSV)
-                ),
-            ));
-        }
-        if data.friction.is_none() {
-            absent.push((
-                "friction".to_string(),
-                format!(
-                    "{} (the constant-velocity runs of `beltune commission` on an axis, or `--friction-csv`)",
-                    folder_file(super::data_files::FRICTION_CSV)
-                ),
-            ));
+        let sections = [
+            (
+                data.excitation.is_none(),
+                "identification experiment",
+                super::data_files::EXCITATION_CSV,
+                "written by `beltune commission` on an axis; a record from a CSV file has no excitation trace of its own",
+            ),
+            (
+                data.friction.is_none(),
+                "friction",
+                super::data_files::FRICTION_CSV,
+                "the constant-velocity runs of `beltune commission` on an axis, or `--friction-csv`",
+            ),
+        ];
+        for (missing, section, file, whence) in sections {
+            if missing {
+                let lacking = if t.from_folder {
+                    format!("the loaded folder has no {file}")
+                } else {
+                    format!("no {file} is known")
+                };
+                absent.push((section.to_string(), format!("{lacking} ({whence})")));
+            }
         }
         if t.sim.is_none() {
             absent.push((

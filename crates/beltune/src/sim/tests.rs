@@ -8,7 +8,7 @@ use crate::model::rigs::{builtin, egc70_params};
 use crate::model::three_mass::ThreeMass;
 use std::f64::consts::PI;
 
-/// Issue 2: the simulated FRF equals the analytical one within 0.5 dB and 3 deg.
+/// The simulated FRF equals the analytical one within 0.5 dB and 3 deg.
 const FRF_TOL_DB: f64 = 0.5;
 const FRF_TOL_DEG: f64 = 3.0;
 

@@ -1,4 +1,4 @@
-//! Monte Carlo robustness study (issue 12): a seeded generator of physically
+//! Monte Carlo robustness study: a seeded generator of physically
 //! plausible belt axes derived from the egc70 data sheet ([`generate`]), a
 //! computed feasibility classification ([`Feasibility`]), one commissioning per
 //! plant with the simulation truth watched ([`run_plant`]), and the table of
@@ -228,7 +228,7 @@ pub struct IdentificationTruth {
     pub m_c_kg: f64,
 }
 
-/// The truth the identification is compared with (issue 12).
+/// The truth the identification is compared with.
 ///
 /// The two-mass linearization [`crate::model::PhysicalParams::linearize`]
 /// neglects the end-pulley inertia (thesis 2.1.4); the simulator does not.
@@ -367,7 +367,7 @@ mod tests {
     /// the end pulley has no inertia, and sits below its `f_z` otherwise
     /// (the end pulley adds to the oscillating mass).
     #[test]
-    fn identification_truth_is_the_two_mass_one_without_end_pulley_issue_12() {
+    fn identification_truth_is_the_two_mass_one_without_end_pulley() {
         let mut p = crate::model::rigs::egc70_params(0.0);
         let xi = p.stroke_m - 0.05;
         let with = identification_truth(&p, xi).unwrap();
@@ -385,7 +385,7 @@ mod tests {
         assert!((without.m_c_kg / two.m_c - 1.0).abs() < 1e-6);
     }
 
-    /// Issue 12, the yardstick checked independently: the two-mass fit
+    /// The yardstick checked independently: the two-mass fit
     /// (data-sheet `Theta_e`, the commissioning's lines and band) of the
     /// exact frequency response of the simulator's linear three-mass model
     /// (no friction, no noise) finds the truth's `f_z` (the motor-locked
@@ -399,7 +399,7 @@ mod tests {
     /// -4.2 % over 72 study plants, median -1.9 %) is the model's, not the
     /// identification's.
     #[test]
-    fn identification_truth_is_what_a_fit_of_the_exact_three_mass_frf_shows_issue_12() {
+    fn identification_truth_is_what_a_fit_of_the_exact_three_mass_frf_shows() {
         use crate::ident::{fit_two_mass, FitConfig, Frf, LineStatus};
         for payload in [0.0, 11.2, 25.0] {
             let p = crate::model::rigs::egc70_params(payload);

@@ -254,7 +254,7 @@ fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
     let plan = preflight::plan(&args)?;
     let started = Instant::now();
     let set = match plan.mode {
-        Mode::Simulated(s) => run_simulated(&args, &plan.cfg, s)?,
+        Mode::Simulated(s) => run_simulated(&args, &plan.cfg, *s)?,
         Mode::Ethercat(e) => run_ethercat(&args, &plan.cfg, e, bus)?,
         Mode::Recorded(r) => run_recorded(&args, &plan.cfg, r)?,
     };

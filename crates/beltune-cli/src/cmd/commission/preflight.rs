@@ -43,7 +43,7 @@ pub struct Plan {
 /// What a run is made on.
 pub enum Mode {
     /// The simulated axis.
-    Simulated(Simulated),
+    Simulated(Box<Simulated>),
     /// A drive on EtherCAT (the plant gives the data sheet).
     Ethercat(Ethercat),
     /// A recording.
@@ -153,12 +153,12 @@ pub fn plan(args: &Args) -> anyhow::Result<Plan> {
     Ok(Plan {
         target,
         cfg,
-        mode: Mode::Simulated(Simulated {
+        mode: Mode::Simulated(Box::new(Simulated {
             name: args.plant.clone().unwrap_or_else(|| "egc70".to_string()),
             plant,
             datasheet,
             sim,
-        }),
+        })),
     })
 }
 

@@ -34,7 +34,7 @@ const RUN_TORQUE_SHARE: f64 = 0.8;
 /// less where the torque the axis has left after holding its load
 /// (`holding_nm`) and its Coulomb friction (`coulomb_nm`) within
 /// [`super::validation_moves::MOVE_TORQUE_FRACTION`] of `torque_max_nm`
-/// cannot accelerate the rigid `inertia_kg_m2` that hard (issue 12: plant
+/// cannot accelerate the rigid `inertia_kg_m2` that hard (plant
 /// #155, 20.6 kg on a 54 deg slope, held with 2.1 of 3.1 N m; 10 m/s^2 needed
 /// 2.7 N m more, and the runs ended in a following-error stop; now 1.4
 /// m/s^2). `None`
@@ -123,7 +123,7 @@ pub fn friction_stage(
         })?;
     let runs = friction_runs(st.runner, ctrl, ds, cfg, preview, f_ring_hz, a_run)?;
     let mut points: Vec<ConstantVelocityRun> = runs.iter().map(|r| r.point).collect();
-    // The holding torque again, from the runs (issue 12): stage 3's short
+    // The holding torque again, from the runs: stage 3's short
     // runs of a sticky tilted axis were up to 0.1 N m off, and the feedforward
     // needs it within a few hundredths (the slow position loop integrates
     // any torque error into a lag of a millimetre).
@@ -350,7 +350,7 @@ pub fn constant_velocity_point(
 
 /// [`constant_velocity_point`] with the momentum balance of the rigid body
 /// `inertia` (kg m^2): the velocity loop is still settling on a short plateau
-/// (issue 12: the motor velocity rose by 8 % over the 0.16 s plateau of a
+/// (the motor velocity rose by 8 % over the 0.16 s plateau of a
 /// 0.4 m/s run, which put 0.05 N m of acceleration torque into the "friction"),
 /// so the mean torque over `[t_a, t_b]` is the mean friction plus
 /// `J (omega(t_b) - omega(t_a)) / (t_b - t_a)`, which is subtracted. The end
@@ -455,10 +455,10 @@ mod tests {
 
     /// The friction runs' acceleration from the torque budget, against the
     /// closed form `0.8 (0.9 tau_max - |tau_hold| - tau_c) i_t / J`, capped at
-    /// 10 m/s^2; nothing left is `None`. Plant #155 of issue 12: 3.1 N m,
+    /// 10 m/s^2; nothing left is `None`. Plant #155 of the robustness study: 3.1 N m,
     /// 2.1 N m holding, 0.19 N m Coulomb, J 3.4e-3 kg m^2: 1.76 m/s^2.
     #[test]
-    fn the_runs_accelerate_with_the_torque_left_issue_12() {
+    fn the_runs_accelerate_with_the_torque_left() {
         let (i_t, j) = (0.012414, 3.4e-3);
         let a = run_acceleration_m_s2(3.1, -2.1156, 0.1909, j, i_t).unwrap();
         let expected = 0.8 * (0.9 * 3.1 - 2.1156 - 0.1909) * i_t / j;
@@ -471,11 +471,11 @@ mod tests {
         assert_eq!(run_acceleration_m_s2(3.1, 0.0, 0.1, f64::NAN, i_t), None);
     }
 
-    /// Issue 12: the acceleration torque of a settling velocity loop is not
+    /// The acceleration torque of a settling velocity loop is not
     /// friction. Without the momentum balance the mean torque is more than
     /// 10 % too high here; with it the friction comes out within 1 %.
     #[test]
-    fn momentum_balance_removes_the_settling_torque_issue_12() {
+    fn momentum_balance_removes_the_settling_torque() {
         let (j, tau_f) = (3e-3, 0.12);
         let rec = settling_run(j, tau_f);
         let plain = constant_velocity_point(&rec, 0.4, Some(22.5)).unwrap();

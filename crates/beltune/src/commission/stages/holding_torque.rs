@@ -7,6 +7,7 @@
 //! controller to the axis ([`crate::commission::bootstrap::bootstrap_with_friction`])
 //! before the long move to the identification position.
 
+use super::super::config::POSITIONING_ACCELERATION_M_S2;
 use super::super::motion::{move_to, track, TrackOptions};
 use super::super::safety::StopCapability;
 use super::super::{positioning_limits, DataSheet};
@@ -150,7 +151,7 @@ pub fn fitted_bootstrap(
 /// The runs: the slow pair with `ctrl`, the fast pair with the bootstrap
 /// fitted to the viscous friction the slow pair bounds (all its friction
 /// taken as viscous: `d <= tau_f / w`), so that a heavily damped axis tracks
-/// the fast runs (issue 12: on sim-b the unfitted loop lagged so far that
+/// the fast runs (on sim-b the unfitted loop lagged so far that
 /// the fast runs had no constant-velocity part).
 fn holding_runs(
     st: &mut Stages,
@@ -166,7 +167,7 @@ fn holding_runs(
     let mut pairs = Vec::with_capacity(RUN_SPEEDS_M_S.len());
     'speeds: for (i, v) in RUN_SPEEDS_M_S.into_iter().enumerate() {
         // The faster runs only where the axis can stop from their speed
-        // with room to spare in both directions (issue 12: a heavy cart on
+        // with room to spare in both directions (a heavy cart on
         // a steep axis brakes downhill with little torque; its look-ahead
         // stopped the fast run towards the lower edge).
         let sup = runner.supervisor();
@@ -200,8 +201,8 @@ fn holding_runs(
         let limits = Limits {
             v_max: v,
             v_min: -v,
-            a_max: 4.0,
-            a_min: -4.0,
+            a_max: POSITIONING_ACCELERATION_M_S2,
+            a_min: -POSITIONING_ACCELERATION_M_S2,
             j_max: 100.0,
             j_min: -100.0,
             position_min: ds.travel_min_m,

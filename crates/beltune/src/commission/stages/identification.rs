@@ -2,7 +2,7 @@
 //! period and the averaged periods around the holding torque, the FRF with
 //! Clary's method II and coherence, the two-mass fit and the current-loop dead
 //! time; then the friction-aware fit of the nonlinear model (2.30) to the
-//! same record ([`crate::ident::nonlinear`], issue 12), which the design uses
+//! same record ([`crate::ident::nonlinear`]), which the design uses
 //! where it explains the record better than the FRF fit.
 
 use super::super::motion::move_to;
@@ -125,7 +125,7 @@ const EXCITATION_ATTEMPTS: usize = 3;
 /// clock of `ex`) and amplitude `amplitude_nm` for `periods` periods.
 ///
 /// Open loop, the axis drifts (a holding torque a little off, little
-/// friction on a slope: issue 12, seed 13 plant #787 drifted 57 mm). Where
+/// friction on a slope: robustness study seed 13 plant #787 drifted 57 mm). Where
 /// the closed loop could no longer take the axis over with
 /// [`EXCITATION_GUARD_M`] to spare ([`Runner::closed_loop_handover_clear`]),
 /// the attempt ends, the hold catches the axis, and the next attempt starts
@@ -598,7 +598,7 @@ pub fn start_side_position_m(ds: &DataSheet, excursion_m: f64) -> f64 {
     ds.travel_min_m + (0.25 * width).max(0.1).max(room)
 }
 
-/// Stages 5b and 5c (issue 12): the belt stiffness where the validation move
+/// Stages 5b and 5c: the belt stiffness where the validation move
 /// ends (`target_m`) and near where it starts (`start_side_m`), each by an
 /// open-loop PRBS there ([`measure_stiffness`]); with the identification
 /// position's, the compliance through the three (exactly quadratic for

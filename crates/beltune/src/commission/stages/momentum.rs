@@ -1,5 +1,5 @@
 //! The rigid-body inertia `m_e` (4.15) from the momentum balance of the
-//! friction runs (stage 7; issue 12).
+//! friction runs (stage 7).
 //!
 //! The feedforward's inertia acts over the validation move's large, slow
 //! motion. The FRF fit (stage 5) measures it through the small-signal
@@ -16,7 +16,7 @@ use super::super::runner::Sample;
 
 /// Largest relative standard error of [`rigid_inertia_from_phases`] that
 /// is accepted: beyond it the phases do not determine the inertia better
-/// than the FRF fit's uncertainty on the heavy, soft axes of issue 12
+/// than the FRF fit's uncertainty on the heavy, soft axes of the robustness study
 /// (m_c one-sigma up to 8 %).
 pub const MAX_INERTIA_RELATIVE_SIGMA: f64 = 0.05;
 
@@ -240,14 +240,14 @@ mod tests {
         (samples, middles)
     }
 
-    /// Issue 12, second method for the feedforward's inertia: the momentum
+    /// Second method for the feedforward's inertia: the momentum
     /// balance between plateaus returns the rigid body's inertia although
     /// the friction fit it subtracts is 30 % off and the holding torque
     /// 0.05 N m (10 %) off. The residual error: the Coulomb error times the
     /// unequal time the two directions take between plateaus of different
     /// speeds, a few 0.1 % here.
     #[test]
-    fn momentum_balance_gives_the_rigid_inertia_despite_a_wrong_friction_fit_issue_12() {
+    fn momentum_balance_gives_the_rigid_inertia_despite_a_wrong_friction_fit() {
         let speeds = [8.0, 8.0, 20.0, 20.0, 32.0, 32.0];
         let delay = 12;
         let (samples, middles) = back_and_forth(&speeds, delay);

@@ -49,7 +49,7 @@ pub fn plausibility(
     };
     // Stop deceleration: what 60 % of the torque limit gives on the data-sheet
     // inertia, at most 20 m/s^2; gravity and friction are not known yet (the
-    // later stages replace it with what the axis really has, issue 12).
+    // later stages replace it with what the axis really has).
     let capability = StopCapability::from_axis(torque_max, j_ds, datasheet.i_t_m, 0.0, 0.0)?;
     let a_stop = capability.worst_deceleration_m_s2();
     let supervisor = SafetySupervisor::with_capability(limits, capability)?;

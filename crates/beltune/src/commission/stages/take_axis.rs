@@ -47,7 +47,7 @@ pub fn take_axis(
     boot.torque_offset_nm = first_hold;
     st.runner.set_stop_controller(boot);
     // The first holding torque is gravity (and friction): the stops brake
-    // with what is left of the torque in each direction (issue 12). It is
+    // with what is left of the torque in each direction. It is
     // known only within the friction band, so it refuses only a load that
     // takes the stop's whole command budget: the holding-torque stage does
     // the rest, on gravity measured without friction.
@@ -114,7 +114,7 @@ pub fn move_to_worst_case(
 /// is caught by the loop alone, as before: the holding-torque runs, which
 /// start from the first hold as their offset, measure what they measured.
 ///
-/// Issue 12: the bootstrap loop alone builds the holding torque from the
+/// The bootstrap loop alone builds the holding torque from the
 /// sag through its slow velocity loop (a crossover of 4 Hz, kept below the
 /// unidentified resonance): a 25 kg cart on a steep axis fell for 60 ms,
 /// reached 0.31 m/s and, with 0.2 N m left of the torque limit to brake
@@ -198,7 +198,7 @@ mod tests {
     /// the holding torque of a rigid body from its first fall is exact on a
     /// fall computed in closed form, with and without commands applied.
     #[test]
-    fn the_first_fall_shows_the_holding_torque_issue_12() {
+    fn the_first_fall_shows_the_holding_torque() {
         let (ts, j, i_t, x0) = (1e-4, 3.9e-3, 0.0124, 0.05);
         for (tau_h, command) in [(2.9, 0.0), (-1.3, 0.0), (2.9, 0.4), (0.0, 0.0)] {
             // x(t) = x0 + (i_t / J) (command - tau_h) t^2 / 2 for a constant command

@@ -34,7 +34,7 @@ const START_CLEARANCE_M: f64 = 0.01;
 /// (Table A.8: 0.5 m target in a window up to 0.57 m).
 const TARGET_CLEARANCE_M: f64 = 0.07;
 
-/// The validation move fitted to the axis (issue 12): Table A.8's limits
+/// The validation move fitted to the axis: Table A.8's limits
 /// where the axis can do them, else the fastest move it can do.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlannedMove {
@@ -144,7 +144,7 @@ pub fn plan_validation_move(
 /// stop's deceleration after a reaction time, never trips on the return's
 /// own braking).
 ///
-/// Issue 12 (travel stops of feasible plants): at the validation move's
+/// Travel stops of feasible plants: at the validation move's
 /// 1.1 m/s the slow bootstrap loop, without Coulomb feedforward, lagged a
 /// light cart with high friction by 30 mm and its integrator, wound up
 /// against the friction, carried the cart 18 mm past the approach point,
@@ -245,7 +245,7 @@ pub fn validation_moves(
     // it ran under there, braking with at most half the stop deceleration,
     // to a point 15 mm
     // inside the window from which it creeps to the start
-    // ([`super::super::validation::run_move`]). Issue 12: under the designed
+    // ([`super::super::validation::run_move`]). Under the designed
     // feedback without feedforward, a loop that is poorly damped on the real
     // axis overshot and hunted at the torque limit on the way back, and the
     // look-ahead stopped it 80 mm before the window's edge.
@@ -256,7 +256,7 @@ pub fn validation_moves(
         .worst_deceleration_m_s2();
     let return_limits = return_limits(&planned.limits, datasheet, worst_stop);
     for variant in FeedforwardVariant::ALL {
-        // the same controller the tuning page simulates (issue 16)
+        // the same controller the tuning page simulates
         let c = validation_controller(
             feedback,
             m_e,
@@ -268,7 +268,7 @@ pub fn validation_moves(
         // The following-error limit guards the delivered controller (the
         // nonlinear feedforward). The comparison variants lag by design: a
         // slow loop without torque feedforward trailed the Table A.8 move by
-        // 53 mm on plant #248 of issue 12 (position loop 1.3 Hz), which
+        // 53 mm on plant #248 of the robustness study (position loop 1.3 Hz), which
         // stopped the whole commissioning. They track in closed loop with
         // their error recorded, not limited; the closed loop's travel
         // look-ahead, the torque and the velocity limits still guard them.

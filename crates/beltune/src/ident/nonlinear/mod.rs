@@ -1,5 +1,5 @@
 //! Identification of the nonlinear two-mass model (2.30) from the open-loop
-//! excitation (issue 12): the Coulomb friction the excitation meets,
+//! excitation: the Coulomb friction the excitation meets,
 //! separated from the damping, and the cart's mass and the belt's
 //! stiffness as the sliding cart has them.
 //!

@@ -117,7 +117,7 @@ fn sticky_heavy_cart() -> PhysicalParams {
     p
 }
 
-/// Issue 12: the cart that sticks under the excitation. The linear fit of
+/// The cart that sticks under the excitation. The linear fit of
 /// the FRF puts `f_z` 5.3 % low and `m_c` 11 % heavy (measured); the
 /// friction-aware fit finds `f_z` (measured -0.19 %) within 1 % and `m_c`
 /// (+0.42 %) within 2 % of the two-mass truth at the mean position, the
@@ -129,7 +129,7 @@ fn sticky_heavy_cart() -> PhysicalParams {
 /// quantization; each bound is five times or more what the fit reaches on
 /// this record.
 #[test]
-fn a_sticking_cart_is_identified_with_its_friction_issue_12() {
+fn a_sticking_cart_is_identified_with_its_friction() {
     let p = sticky_heavy_cart();
     let r = record(&p, 2.0);
     let truth = p.linearize(r.mean_position_m).unwrap();
@@ -199,7 +199,7 @@ fn without_friction_it_agrees_with_the_linear_fit() {
 /// stretched; the fit is as good as on the horizontal axis (measured
 /// `f_z` -0.22 %, `m_c` +0.47 %; the linear fit's `f_z` -5.4 %).
 #[test]
-fn a_tilted_sticking_cart_is_identified_issue_12() {
+fn a_tilted_sticking_cart_is_identified() {
     let mut p = sticky_heavy_cart();
     p.tilt_rad = (-30f64).to_radians();
     let r = record(&p, 2.0);
@@ -281,7 +281,7 @@ fn bad_records_are_typed_errors() {
 /// fit with `m_c` held finds `c` there (measured +0.015 %; bound 1 %, about
 /// the belt stiffness' change over the cart's few-mm excursion).
 #[test]
-fn with_the_mass_held_the_fit_finds_the_stiffness_issue_12() {
+fn with_the_mass_held_the_fit_finds_the_stiffness() {
     let p = sticky_heavy_cart();
     let r = record(&p, 2.0);
     let truth = p.linearize(r.mean_position_m).unwrap();

@@ -1,4 +1,5 @@
-//! Issue 12: built-in plants that the thesis' move does not fit, and the
+//! Built-in plants that the thesis' move does not fit, study plants whose
+//! antiresonance was hard to find or whose cart stuck short, and the
 //! verdict of the result.
 
 use beltune::commission::NoProgress;
@@ -33,7 +34,7 @@ fn commission_builtin(name: &str, payload_kg: Option<f64>) -> beltune::commissio
 /// fastest move the axis can do instead of failing, reports it as such, and
 /// meets the thesis' accuracy with it.
 #[test]
-fn sim_c_validates_with_the_fastest_feasible_move_issue_12() {
+fn sim_c_validates_with_the_fastest_feasible_move() {
     let run = commission_builtin("sim-c", None);
     assert!(run.validation_move.reduced, "{:?}", run.validation_move);
     assert!(run.validation_move.reduced);
@@ -48,7 +49,7 @@ fn sim_c_validates_with_the_fastest_feasible_move_issue_12() {
 /// egc70 at its heaviest payload of the issue's range commissions and says
 /// what it guarantees.
 #[test]
-fn egc70_with_25_kg_meets_its_limits_issue_12() {
+fn egc70_with_25_kg_meets_its_limits() {
     let run = commission_builtin("egc70", Some(25.0));
     assert!(run.verdict.passed, "{:?}", run.verdict);
     assert!(run.guaranteed.models > 0);
@@ -64,14 +65,14 @@ const TARGET_STIFFNESS_TOLERANCE: f64 = 0.05;
 /// Thesis chapter 5: static positioning error.
 const STATIC_ERROR_M: f64 = 100e-6;
 
-/// Issue 12: the static belt stretch the motor setpoint leads by used the
+/// The static belt stretch the motor setpoint leads by used the
 /// stiffness identified at the worst-case position (far end of the stroke),
 /// 21 % below the true replacement stiffness (2.26) at the validation target
 /// of plant 131 of seed 12 (19 kg on an axis tilted 59 deg: a 0.9 mm
 /// stretch), and the cart rested 160 um short of the target. Stage 5b
 /// measures the stiffness at the target; with it the static error passes.
 #[test]
-fn static_stretch_uses_the_stiffness_measured_at_the_target_issue_12() {
+fn static_stretch_uses_the_stiffness_measured_at_the_target() {
     use beltune::study::{generate, Ranges};
     let g = generate(12, 131, &Ranges::default()).unwrap();
     let plant = rigs::Plant::Physical(g.params.clone());
@@ -132,7 +133,7 @@ fn static_stretch_uses_the_stiffness_measured_at_the_target_issue_12() {
 /// target 500 mm, identified at 500.4 mm), the main fit's stiffness stands
 /// for it and no second experiment runs.
 #[test]
-fn egc70_reuses_the_identified_stiffness_at_its_target_issue_12() {
+fn egc70_reuses_the_identified_stiffness_at_its_target() {
     let run = commission_builtin("egc70", None);
     let t = run.target_stiffness;
     assert!(!t.measured, "{t:?}");
@@ -165,7 +166,7 @@ fn study_success(seed: u64, index: u64) -> beltune::study::Outcome {
 /// as a narrow antiresonance. The plants commission with f_z within the
 /// issue's 2 %.
 #[test]
-fn a_narrow_antiresonance_dip_is_found_issue_12() {
+fn a_narrow_antiresonance_dip_is_found() {
     for (seed, index) in [(13, 23), (14, 378)] {
         let o = study_success(seed, index);
         let f_z_error = o.f_z_error.expect("a success identifies f_z");
@@ -186,7 +187,7 @@ fn a_narrow_antiresonance_dip_is_found_issue_12() {
 /// resonance's rising flank (`ident::features`). The plant commissions with
 /// f_z and m_c within the issue's 2 % and 5 % (measured 0.7 % and 1.6 %).
 #[test]
-fn a_hidden_antiresonance_is_read_from_the_resonance_flank_issue_12() {
+fn a_hidden_antiresonance_is_read_from_the_resonance_flank() {
     let o = study_success(14, 994);
     let f_z_error = o.f_z_error.expect("a success identifies f_z");
     let m_c_error = o.m_c_error.expect("a success identifies m_c");
@@ -206,7 +207,7 @@ const STATIC_LIMIT_M: f64 = 100e-6;
 /// behind with the cart's Coulomb lead held (`final_approach`): 35, 6 and
 /// 2 um.
 #[test]
-fn the_final_approach_rests_sticky_carts_on_their_targets_issue_12() {
+fn the_final_approach_rests_sticky_carts_on_their_targets() {
     for (seed, index) in [(12, 792), (13, 345), (13, 411)] {
         let o = study_success(seed, index);
         let e = o.static_error_m.expect("a success has a static error");

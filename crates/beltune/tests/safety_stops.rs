@@ -1,4 +1,4 @@
-//! Issue 12, the safety defects of the excitation, holding-torque and
+//! The safety defects of the excitation, holding-torque and
 //! validation stages: plants of the seeded study (seed 12; one of seed 13) that ended in a
 //! travel stop or left their travel window, and the measurement noise as a
 //! plant parameter.
@@ -25,7 +25,7 @@ fn plant(index: u64) -> Outcome {
 /// under the designed feedback, which on these axes hunts at the torque
 /// limit. It now runs under the bootstrap cascade at positioning limits.
 #[test]
-fn the_validation_return_ends_in_no_travel_stop_issue_12() {
+fn the_validation_return_ends_in_no_travel_stop() {
     for index in [24, 38] {
         let o = plant(index);
         assert!(!o.travel_violation, "#{index}: {:?}", o.travel_excess_m);
@@ -42,7 +42,7 @@ fn the_validation_return_ends_in_no_travel_stop_issue_12() {
 /// planned from the spike drove the cart 50 mm out of the window. The stop
 /// now starts from a velocity the rigid-body estimate confirms.
 #[test]
-fn a_stop_ends_inside_the_window_issue_12() {
+fn a_stop_ends_inside_the_window() {
     let o = plant(8);
     assert!(
         !o.travel_violation,
@@ -63,7 +63,7 @@ fn a_stop_ends_inside_the_window_issue_12() {
 /// axis over with 10 mm to spare, and starts again against its drift: the
 /// plant commissions, inside its window.
 #[test]
-fn an_open_loop_excitation_that_drifts_starts_again_against_its_drift_issue_12() {
+fn an_open_loop_excitation_that_drifts_starts_again_against_its_drift() {
     let o = run_plant(13, 787, &Ranges::default(), &CommissioningConfig::default()).unwrap();
     assert_eq!(o.class, Class::Success, "{}", o.message);
     assert!(
@@ -78,7 +78,7 @@ fn an_open_loop_excitation_that_drifts_starts_again_against_its_drift_issue_12()
 /// load met); physics lets it be stopped. The refusal is left to the
 /// holding-torque stage, which measures gravity without friction.
 #[test]
-fn the_first_hold_does_not_refuse_a_stoppable_axis_issue_12() {
+fn the_first_hold_does_not_refuse_a_stoppable_axis() {
     let o = plant(97);
     assert!(o.feasibility.feasible, "{:?}", o.feasibility);
     assert!(!o.message.contains("take axis"), "{}", o.message);
@@ -97,7 +97,7 @@ fn the_first_hold_does_not_refuse_a_stoppable_axis_issue_12() {
 /// shows, the stop keeps the torque that held it, and a first hold beyond
 /// the stop's command budget is refused there, inside the window.
 #[test]
-fn heavy_steep_loads_are_caught_and_refused_inside_the_window_issue_12() {
+fn heavy_steep_loads_are_caught_and_refused_inside_the_window() {
     for index in [530, 597, 777, 804, 839, 949, 983] {
         let o = plant(index);
         assert!(!o.feasibility.feasible, "#{index}: {:?}", o.feasibility);
@@ -124,7 +124,7 @@ fn heavy_steep_loads_are_caught_and_refused_inside_the_window_issue_12() {
 /// overshot its approach point 15 mm inside the window by 18 mm. It now
 /// runs within the positioning limits the loop moved the axis with before.
 #[test]
-fn the_return_of_a_light_cart_with_high_friction_ends_in_no_travel_stop_issue_12() {
+fn the_return_of_a_light_cart_with_high_friction_ends_in_no_travel_stop() {
     for index in [822, 959] {
         let o = plant(index);
         assert!(o.feasibility.feasible, "#{index}: {:?}", o.feasibility);
@@ -166,12 +166,12 @@ fn commission_sim_c(seed: u64, noise: MeasurementNoise) -> (Vec<f64>, Vec<f64>, 
     )
 }
 
-/// Issue 12: the noise is the plant's and `--seed` picks its realization:
+/// The noise is the plant's and `--seed` picks its realization:
 /// the same seed gives the same commissioning, another seed another
 /// record; without noise the seed changes nothing (the record is
 /// noise-free) and the actual torque is the command, delayed.
 #[test]
-fn the_seed_picks_the_noise_realization_issue_12() {
+fn the_seed_picks_the_noise_realization() {
     let noisy = MeasurementNoise {
         torque_nm: 5e-3,
         encoder_counts: 0.3,
@@ -190,7 +190,7 @@ fn the_seed_picks_the_noise_realization_issue_12() {
 /// The plant file's `[noise]` reaches the simulator; a configured noise
 /// replaces it; zero noise measures the delayed command exactly.
 #[test]
-fn the_plant_file_carries_the_noise_issue_12() {
+fn the_plant_file_carries_the_noise() {
     let text = toml::to_string(&rigs::builtin("sim-a", None).unwrap()).unwrap();
     assert!(text.contains("[noise]"), "{text}");
     let with = text.replace("encoder_counts = 0.0", "encoder_counts = 0.25");
@@ -222,7 +222,7 @@ fn the_plant_file_carries_the_noise_issue_12() {
 /// after holding its load. The runs now accelerate with what the torque
 /// budget allows (1.4 m/s^2 here).
 #[test]
-fn the_friction_runs_accelerate_within_the_torque_left_issue_12() {
+fn the_friction_runs_accelerate_within_the_torque_left() {
     let o = plant(155);
     assert!(
         o.kind != OutcomeKind::Failed,
@@ -239,7 +239,7 @@ fn the_friction_runs_accelerate_within_the_torque_left_issue_12() {
 /// The following-error limit now guards only the delivered controller's
 /// move (nonlinear feedforward); the comparison variants run to the end.
 #[test]
-fn a_slow_loop_s_comparison_moves_do_not_stop_the_commissioning_issue_12() {
+fn a_slow_loop_s_comparison_moves_do_not_stop_the_commissioning() {
     let o = plant(248);
     assert!(
         o.kind != OutcomeKind::Failed,

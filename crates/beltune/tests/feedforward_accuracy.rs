@@ -1,4 +1,4 @@
-//! Issue 12, the max cart error of the nonlinear-feedforward validation move
+//! The max cart error of the nonlinear-feedforward validation move
 //! (thesis chapter 5: below 1 mm): plants of the seeded study (seed 12)
 //! whose feedforward inertia came from an FRF fit that was far too heavy.
 
@@ -41,7 +41,7 @@ const INERTIA_TOLERANCE: f64 = 0.02;
 /// the friction-aware fit of stage 5 (the momentum balance where that fit is
 /// not used): the FRF fit stays wrong on these plants, the feedforward does not.
 #[test]
-fn feedforward_inertia_is_the_rigid_body_s_not_the_frf_fit_s_issue_12() {
+fn feedforward_inertia_is_the_rigid_body_s_not_the_frf_fit_s() {
     for index in [270, 751] {
         let (g, run) = commission_study_plant(index);
         let p = &g.params;
@@ -67,7 +67,7 @@ fn feedforward_inertia_is_the_rigid_body_s_not_the_frf_fit_s_issue_12() {
 }
 
 /// Accepted error of the holding torque, N m: a tenth of what the slow
-/// position loop turned into a millimetre of lag (0.015 N m, issue 12).
+/// position loop turned into a millimetre of lag (0.015 N m).
 const HOLDING_TOLERANCE_NM: f64 = 1.5e-3;
 /// The thesis' limit of the static error (chapter 5), m.
 const STATIC_ERROR_M: f64 = 100e-6;
@@ -84,7 +84,7 @@ const STATIC_ERROR_M: f64 = 100e-6;
 /// stretch. The move starts where the cart rests (it jumped by the static
 /// stretch at its first sample).
 #[test]
-fn the_holding_torque_comes_from_the_friction_runs_issue_12() {
+fn the_holding_torque_comes_from_the_friction_runs() {
     for index in [353, 129] {
         let (g, run) = commission_study_plant(index);
         let p = &g.params;
