@@ -482,7 +482,7 @@ int32_t bt_setpoint_convert(const BtSetpointConversion *conv,
  * The motor setpoint of a cart sample into `out` with the cart's Coulomb
  * lead held in the direction `hold` (+1 or -1; 0: as
  * [`bt_setpoint_convert`]; NaN is refused): for the final approach of a
- * move (issue 12), `hold` is the move's direction from the middle of the
+ * move, `hold` is the move's direction from the middle of the
  * main move on
  * (`beltune_rt::trajectory::Approach::lead_hold`; the exported
  * `FINAL_APPROACH_DISTANCE_M` and `FINAL_APPROACH_SPEED_M_S` give the

@@ -96,3 +96,50 @@ fn the_seeded_ci_sample_has_no_defects_and_keeps_its_margins() {
         "{successes} successes of {PLANTS}"
     );
 }
+
+/// The seeds of docs/robustness.md's table.
+const PAGE_SEEDS: [u64; 2] = [12, 13];
+/// Plants per seed of the full study.
+const PAGE_PLANTS: u64 = 1000;
+
+/// The counts of one seed as docs/robustness.md's table row writes them:
+/// `| seed | feasible (A.8-capable) | successes | correct refusals | defects | travel violations |`.
+fn page_row(seed: u64, outcomes: &[beltune::study::Outcome]) -> String {
+    let count =
+        |f: &dyn Fn(&beltune::study::Outcome) -> bool| outcomes.iter().filter(|o| f(o)).count();
+    format!(
+        "| {seed} | {} ({}) | {} | {} | {} | {} |",
+        count(&|o| o.feasibility.feasible),
+        count(&|o| o.feasibility.table_a8_feasible),
+        count(&|o| o.class == Class::Success),
+        count(&|o| o.class == Class::CorrectRefusal),
+        count(&|o| o.class == Class::Defect),
+        count(&|o| o.travel_violation),
+    )
+}
+
+/// The full study of the documentation, seed by seed: the table of
+/// docs/robustness.md is what the study measures today. About 5 minutes per
+/// seed on two cores in release: `cargo test -p beltune --release --test
+/// montecarlo -- --ignored`.
+#[test]
+#[ignore = "the full study: 1000 plants per seed, minutes in release"]
+fn the_robustness_page_shows_what_the_study_measures() {
+    let page = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/robustness.md"),
+    )
+    .unwrap();
+    let cfg = CommissioningConfig::default();
+    let ranges = Ranges::default();
+    for seed in PAGE_SEEDS {
+        let outcomes: Vec<_> = (0..PAGE_PLANTS)
+            .into_par_iter()
+            .map(|i| run_plant(seed, i, &ranges, &cfg).unwrap())
+            .collect();
+        let row = page_row(seed, &outcomes);
+        assert!(
+            page.lines().any(|l| l.trim() == row),
+            "docs/robustness.md lacks the row `{row}` that seed {seed} gives today"
+        );
+    }
+}

@@ -1,5 +1,5 @@
 //! The commissioning stages, one file per stage, in the order
-//! [`super::commission::commission`] runs them. Each stage takes the
+//! [`super::commission`] runs them. Each stage takes the
 //! [`Stages`] context (the runner that drives the axis, the log, the
 //! computation time), does its experiment or computation, and returns its
 //! result as a named struct; none reaches back to an earlier stage.
@@ -10,9 +10,9 @@
 //! | 2. take the axis (first hold) | [`take_axis`] |
 //! | 3. holding torque and friction where the axis was taken, the bootstrap fitted to the friction, the move to the worst-case position | [`holding_torque`], [`take_axis::move_to_worst_case`] |
 //! | 4. excitation amplitude | [`amplitude`] |
-//! | 5. open-loop identification | [`identification`] |
+//! | 5. open-loop identification; 5b, 5c: the belt stiffness at the validation target and near the start | [`identification`] |
 //! | 6. controller design | [`design`] |
-//! | 7. friction runs, the rigid inertia from their momentum balance | [`friction`], [`momentum`] |
+//! | 7. friction runs, the rigid inertia from their momentum balance; 7b: the delivered design on the measured friction | [`friction`], [`momentum`], [`design::delivered_design`] |
 //! | 8. validation moves | [`validation_moves`] |
 
 pub mod amplitude;
