@@ -6,7 +6,9 @@
 
 use beltune::axis::Axis;
 use beltune::commission::NoProgress;
-use beltune::commission::{commission, Commissioning, CommissioningConfig, DataSheet};
+use beltune::commission::{
+    commission, commission_simulated, Commissioning, CommissioningConfig, DataSheet,
+};
 use beltune::model::rigs::{self, Plant};
 use beltune::sim::{SimAxis, SimConfig};
 use beltune::Error;
@@ -36,20 +38,10 @@ fn run(payload_kg: Option<f64>, tilt_deg: Option<f64>) -> (Plant, Commissioning)
     if let (Some(t), Plant::Physical(p)) = (tilt_deg, &mut plant) {
         p.tilt_rad = t.to_radians();
     }
-    let start = 0.05;
-    let mut axis = SimAxis::new(
+    let run = commission_simulated(
         &plant,
-        SimConfig {
-            seed: 1,
-            initial_cart_position_m: Some(start),
-            ..SimConfig::default()
-        },
-    )
-    .unwrap();
-    let ds = DataSheet::for_plant(&plant, start, None);
-    let run = commission(
-        &mut axis,
-        &ds,
+        SimConfig::default(),
+        None,
         &CommissioningConfig::default(),
         &mut NoProgress,
     )

@@ -3,26 +3,16 @@
 //! verdict of the result.
 
 use beltune::commission::NoProgress;
-use beltune::commission::{commission, CommissioningConfig, DataSheet};
+use beltune::commission::{commission, commission_simulated, CommissioningConfig, DataSheet};
 use beltune::model::rigs;
 use beltune::sim::{SimAxis, SimConfig};
 
 fn commission_builtin(name: &str, payload_kg: Option<f64>) -> beltune::commission::Commissioning {
     let plant = rigs::builtin(name, payload_kg).unwrap();
-    let start = 0.05;
-    let mut axis = SimAxis::new(
+    commission_simulated(
         &plant,
-        SimConfig {
-            seed: 1,
-            initial_cart_position_m: Some(start),
-            ..SimConfig::default()
-        },
-    )
-    .unwrap();
-    let ds = DataSheet::for_plant(&plant, start, None);
-    commission(
-        &mut axis,
-        &ds,
+        SimConfig::default(),
+        None,
         &CommissioningConfig::default(),
         &mut NoProgress,
     )

@@ -4,7 +4,7 @@
 //! plant parameter.
 
 use beltune::commission::NoProgress;
-use beltune::commission::{commission, CommissioningConfig, DataSheet};
+use beltune::commission::{commission_simulated, CommissioningConfig};
 use beltune::model::{rigs, MeasurementNoise};
 use beltune::sim::{SimAxis, SimConfig};
 use beltune::study::{run_plant, Class, Outcome, OutcomeKind, Ranges};
@@ -135,21 +135,14 @@ fn the_return_of_a_light_cart_with_high_friction_ends_in_no_travel_stop() {
 
 fn commission_sim_c(seed: u64, noise: MeasurementNoise) -> (Vec<f64>, Vec<f64>, f64) {
     let plant = rigs::builtin("sim-c", None).unwrap();
-    let start = 0.05;
-    let mut axis = SimAxis::new(
+    let run = commission_simulated(
         &plant,
         SimConfig {
             seed,
             noise: Some(noise),
-            initial_cart_position_m: Some(start),
             ..SimConfig::default()
         },
-    )
-    .unwrap();
-    let ds = DataSheet::for_plant(&plant, start, None);
-    let run = commission(
-        &mut axis,
-        &ds,
+        None,
         &CommissioningConfig::default(),
         &mut NoProgress,
     )

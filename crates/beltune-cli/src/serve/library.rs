@@ -18,7 +18,7 @@ use super::tuner::{ModelSummary, SavedFile, TuneError, Tuner};
 use beltune::commission::validation::{
     simulate_validation_move, FeedforwardVariant, MoveResult, MoveSpec,
 };
-use beltune::commission::{commission, Commissioning, CommissioningConfig, DataSheet, NoProgress};
+use beltune::commission::{commission_simulated, Commissioning, CommissioningConfig, NoProgress};
 use beltune::design::robust::{design_identified, DesignRule, RobustDesign};
 use beltune::design::{
     ControllerDesign, DesignInput, DesignKnobs, Dynamics, Prefilter,
@@ -33,7 +33,7 @@ use beltune::record::provenance::Provenance;
 use beltune::report::folder::{ResultFolder, ResultSet, TunedDesign};
 use beltune::report::plot_data;
 use beltune::report::BodeCurve;
-use beltune::sim::{SimAxis, SimConfig, Truth};
+use beltune::sim::{SimConfig, Truth};
 use beltune::verdict::{judge, MoveInput, ValidatedOn, VerdictInput};
 use std::time::Instant;
 
@@ -113,15 +113,18 @@ pub fn load_commissioning(dir: &Path) -> anyhow::Result<DesignModel> {
 /// [`BUILTIN_START_POSITION_M`], default knobs. Deterministic.
 pub fn builtin_commissioning() -> beltune::Result<(Plant, Commissioning)> {
     let plant = rigs::builtin("egc70", None)?;
-    let ds = DataSheet::for_plant(&plant, BUILTIN_START_POSITION_M, None);
-    let cfg = CommissioningConfig::default();
     let sim = SimConfig {
         seed: BUILTIN_SEED,
         initial_cart_position_m: Some(BUILTIN_START_POSITION_M),
         ..SimConfig::default()
     };
-    let mut axis = SimAxis::new(&plant, sim)?;
-    let run = commission(&mut axis, &ds, &cfg, &mut NoProgress)?;
+    let run = commission_simulated(
+        &plant,
+        sim,
+        None,
+        &CommissioningConfig::default(),
+        &mut NoProgress,
+    )?;
     Ok((plant, run))
 }
 

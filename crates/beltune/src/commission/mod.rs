@@ -271,6 +271,29 @@ pub fn commission(
     Ok(run)
 }
 
+/// Commission `plant` on the simulator, as `beltune commission` does: the
+/// data sheet the plant gives ([`DataSheet::for_plant`], inside
+/// `travel_window_m` if given), the cart starting at
+/// `sim.initial_cart_position_m` (0.05 m when not set).
+pub fn commission_simulated(
+    plant: &crate::model::Plant,
+    sim: crate::sim::SimConfig,
+    travel_window_m: Option<(f64, f64)>,
+    cfg: &CommissioningConfig,
+    progress: &mut dyn Progress,
+) -> Result<Commissioning> {
+    let start = sim.initial_cart_position_m.unwrap_or(0.05);
+    let ds = DataSheet::for_plant(plant, start, travel_window_m);
+    let mut axis = crate::sim::SimAxis::new(
+        plant,
+        crate::sim::SimConfig {
+            initial_cart_position_m: Some(start),
+            ..sim
+        },
+    )?;
+    commission(&mut axis, &ds, cfg, progress)
+}
+
 /// The verdict on a run ([`crate::verdict::judge`]): its delivered
 /// controller's validation move (nonlinear feedforward) against the limits of
 /// `cfg`, and the margins it guarantees.

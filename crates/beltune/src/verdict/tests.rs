@@ -29,22 +29,44 @@ fn margins(pm_deg: f64) -> GuaranteedMargins {
     }
 }
 
-fn judged(m: &MoveSummary, pm_deg: f64) -> Verdict {
+/// The verdict on the thesis design with `limits`, the move `m` judged on
+/// `on` (none: no move), a guaranteed margin of 45 deg.
+fn judge_with(
+    m: Option<&MoveSummary>,
+    on: ValidatedOn,
+    limits: &Limits,
+    identified: Option<&IdentifiedModel>,
+) -> Verdict {
+    judge_margin(m, on, limits, identified, 45.0)
+}
+
+/// [`judge_with`] with a guaranteed margin of `pm_deg`.
+fn judge_margin(
+    m: Option<&MoveSummary>,
+    on: ValidatedOn,
+    limits: &Limits,
+    identified: Option<&IdentifiedModel>,
+    pm_deg: f64,
+) -> Verdict {
     let d = thesis_design();
     let g = margins(pm_deg);
     judge(&VerdictInput {
-        limits: &Limits::default(),
-        validation: Some(MoveInput {
-            summary: m,
+        limits,
+        validation: m.map(|summary| MoveInput {
+            summary,
             record_after_move_s: 1.0,
             torque_max_nm: 3.1,
-            on: ValidatedOn::Axis,
+            on,
         }),
         guaranteed: Some(&g),
         design: &d,
-        identified: None,
+        identified,
         controller_file: "controller.toml",
     })
+}
+
+fn judged(m: &MoveSummary, pm_deg: f64) -> Verdict {
+    judge_margin(Some(m), ValidatedOn::Axis, &Limits::default(), None, pm_deg)
 }
 
 fn failed(v: &Verdict) -> Vec<CheckName> {
@@ -173,16 +195,7 @@ fn the_check_texts_read_as_the_terminal_shows_them() {
 
 #[test]
 fn without_a_move_the_verdict_is_not_validated() {
-    let d = thesis_design();
-    let g = margins(45.0);
-    let v = judge(&VerdictInput {
-        limits: &Limits::default(),
-        validation: None,
-        guaranteed: Some(&g),
-        design: &d,
-        identified: None,
-        controller_file: "controller.toml",
-    });
+    let v = judge_with(None, ValidatedOn::None, &Limits::default(), None);
     assert!(!v.passed && v.limits_met(), "{v:?}");
     assert_eq!(v.word(), "NOT VALIDATED");
     assert_eq!(v.validated_on, ValidatedOn::None);
@@ -191,48 +204,23 @@ fn without_a_move_the_verdict_is_not_validated() {
 
 #[test]
 fn a_simulated_move_does_not_say_load_into_the_drive() {
-    let d = thesis_design();
-    let g = margins(45.0);
-    let m = good_move();
-    let v = judge(&VerdictInput {
-        limits: &Limits::default(),
-        validation: Some(MoveInput {
-            summary: &m,
-            record_after_move_s: 1.0,
-            torque_max_nm: 3.1,
-            on: ValidatedOn::Simulation,
-        }),
-        guaranteed: Some(&g),
-        design: &d,
-        identified: None,
-        controller_file: "controller.toml",
-    });
+    let v = judge_with(
+        Some(&good_move()),
+        ValidatedOn::Simulation,
+        &Limits::default(),
+        None,
+    );
     assert!(v.passed);
     assert!(v.next_step.contains("simulated"), "{}", v.next_step);
 }
 
 #[test]
 fn tighter_limits_from_the_user_decide() {
-    let d = thesis_design();
-    let g = margins(45.0);
-    let m = good_move();
     let limits = Limits {
         max_tracking_error_m: 2e-5,
         ..Limits::default()
     };
-    let v = judge(&VerdictInput {
-        limits: &limits,
-        validation: Some(MoveInput {
-            summary: &m,
-            record_after_move_s: 1.0,
-            torque_max_nm: 3.1,
-            on: ValidatedOn::Axis,
-        }),
-        guaranteed: Some(&g),
-        design: &d,
-        identified: None,
-        controller_file: "controller.toml",
-    });
+    let v = judge_with(Some(&good_move()), ValidatedOn::Axis, &limits, None);
     assert_eq!(failed(&v), [CheckName::MaxTrackingError]);
     assert_eq!(
         v.failures(),
@@ -249,22 +237,12 @@ fn warnings_name_their_reason_and_do_not_fail() {
         "mean_coherence": 0.5, "fit_rms_db": 5.0
     }))
     .unwrap();
-    let d = thesis_design();
-    let g = margins(45.0);
-    let m = good_move();
-    let v = judge(&VerdictInput {
-        limits: &Limits::default(),
-        validation: Some(MoveInput {
-            summary: &m,
-            record_after_move_s: 1.0,
-            torque_max_nm: 3.1,
-            on: ValidatedOn::Axis,
-        }),
-        guaranteed: Some(&g),
-        design: &d,
-        identified: Some(&id),
-        controller_file: "controller.toml",
-    });
+    let v = judge_with(
+        Some(&good_move()),
+        ValidatedOn::Axis,
+        &Limits::default(),
+        Some(&id),
+    );
     let topics: Vec<&str> = v.warnings.iter().map(|w| w.topic.as_str()).collect();
     assert_eq!(topics, ["coherence", "fit residual"]);
     assert!(v.passed);
