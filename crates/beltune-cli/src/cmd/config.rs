@@ -79,7 +79,8 @@ pub fn expand(argv: Vec<OsString>, cli: &Command) -> anyhow::Result<Vec<OsString
 /// a key appears once).
 pub fn file_flags(path: &Path, sub: &Command) -> anyhow::Result<Vec<String>> {
     let file = path.display();
-    let text = std::fs::read_to_string(path)
+    // a regular file of at most MAX_TEXT_BYTES: `/dev/zero` or a FIFO is refused at once
+    let text = beltune::io::read_to_string_capped(path, beltune::io::MAX_TEXT_BYTES)
         .map_err(|e| bad(format!("{file}: cannot read the config file: {e}")))?;
     let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
         let line = e

@@ -202,6 +202,27 @@ pub fn metadata_path(csv: &Path) -> PathBuf {
     csv.with_extension("json")
 }
 
+/// Error unless `path` is new or an excitation metadata file beltune wrote
+/// (`kind` and `commission_args` at the top): `--out R/commissioning.csv`
+/// must not replace `R/commissioning.json` with the excitation's metadata.
+fn check_replaceable_metadata(path: &Path) -> anyhow::Result<()> {
+    if std::fs::symlink_metadata(path).is_err() {
+        return Ok(());
+    }
+    let ours = beltune::io::read_to_string_capped(path, beltune::io::MAX_TEXT_BYTES)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|v| v.get("kind").is_some() && v.get("commission_args").is_some());
+    if ours {
+        return Ok(());
+    }
+    Err(bad(format!(
+        "{} exists and is not excitation metadata: the metadata of --out would replace it; \
+         choose another --out name",
+        path.display()
+    )))
+}
+
 /// The CSV text and the metadata.
 pub fn generate(a: &Args) -> anyhow::Result<(String, Metadata)> {
     if !(a.ts.is_finite() && (1e-6..=1.0).contains(&a.ts)) {
@@ -263,6 +284,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "--out must not end in .json (the metadata file takes that name)",
         ));
     }
+    check_replaceable_metadata(&meta_path)?;
     let mut json = serde_json::to_string_pretty(&meta)?;
     json.push('\n');
     super::util::write_atomic(&args.out, csv.as_bytes())?;

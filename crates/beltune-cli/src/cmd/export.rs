@@ -31,6 +31,9 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(out) = &args.out {
+        super::util::check_not_an_input("--out", out, &[&args.controller])?;
+    }
     let file = ControllerFile::load(&args.controller)?;
     let lang = match args.lang {
         LangArg::Rust => Lang::Rust,

@@ -99,6 +99,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             super::util::check_not_an_input(flag, out, &[&args.csv])?;
         }
     }
+    if let (Some(json), Some(frf)) = (&args.json, &args.frf_csv) {
+        if super::util::same_file(json, frf) {
+            return Err(anyhow::Error::new(crate::exit::Failure::new(
+                crate::exit::ExitStatus::BadInput,
+                format!(
+                    "--json and --frf-csv name the same file {}: one would replace the other",
+                    json.display()
+                ),
+            )));
+        }
+    }
     if let Some(a) = &args.actual_torque {
         for (flag, other) in [
             ("--time", &args.time),
@@ -129,15 +140,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
         }
     }
-    let torque_max = match args.torque_limit {
-        Some(t) if !(t.is_finite() && t > 0.0) => {
-            return Err(anyhow::Error::new(crate::exit::Failure::new(
-                crate::exit::ExitStatus::BadInput,
-                format!("--torque-limit {t}: must be a positive number"),
-            )))
-        }
-        t => t,
-    };
+    if let Some(t) = args.torque_limit {
+        super::util::check_torque_limit_flag("--torque-limit", t)?;
+    }
+    let torque_max = args.torque_limit;
     let band = match (args.min_freq_hz, args.max_freq_hz) {
         (None, None) => None,
         (lo, hi) => Some((lo.unwrap_or(0.0), hi.unwrap_or(f64::MAX))),

@@ -1,4 +1,4 @@
-//! `beltune montecarlo`: the issue-12 robustness study. Generates `--plants`
+//! `beltune montecarlo`: the robustness study (docs/robustness.md). Generates `--plants`
 //! seeded random axes from egc70's data sheet, commissions each in
 //! simulation (in parallel, rayon), prints the table with every failure
 //! classified (correct refusal of an infeasible plant vs defect), and writes
@@ -23,9 +23,9 @@ pub struct Args {
     /// First plant index (to re-run a single plant: --first 824 --plants 1).
     #[arg(long, default_value_t = 0)]
     pub first: u64,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
+    /// Worker threads, 1 ..= 256 (default: all cores; never more than plants).
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=MAX_THREADS as i64))]
+    pub threads: Option<u16>,
     /// Write one JSON line per plant to this file.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -38,18 +38,38 @@ pub struct Args {
     pub thesis_design: bool,
 }
 
+/// Most worker threads (`--threads`): beyond the cores they only cost memory.
+pub const MAX_THREADS: u16 = 256;
+
+fn bad(msg: impl Into<String>) -> anyhow::Error {
+    anyhow::Error::new(crate::exit::Failure::new(
+        crate::exit::ExitStatus::BadInput,
+        msg,
+    ))
+}
+
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if args.plants == 0 {
-        return Err(anyhow::Error::new(crate::exit::Failure::new(
-            crate::exit::ExitStatus::BadInput,
-            "--plants must be at least 1",
+        return Err(bad("--plants must be at least 1"));
+    }
+    // the plant indices `first .. first + plants` must exist
+    let Some(end) = args.first.checked_add(args.plants) else {
+        return Err(bad(format!(
+            "--first {} with --plants {} runs past the last plant index {}",
+            args.first,
+            args.plants,
+            u64::MAX
         )));
+    };
+    // the output is checked before the study runs, not after
+    if let Some(path) = &args.out {
+        super::util::check_writable_file("--out", path)?;
     }
     let pool = {
         let mut b = rayon::ThreadPoolBuilder::new();
         if let Some(n) = args.threads {
-            b = b.num_threads(n);
+            b = b.num_threads(u64::from(n).min(args.plants) as usize);
         }
         b.build()?
     };
@@ -72,7 +92,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let first = args.first;
     let results: Vec<beltune::Result<Outcome>> = pool.install(|| {
-        (first..first + args.plants)
+        (first..end)
             .into_par_iter()
             .map(|i| {
                 let r = run_plant(args.seed, i, &ranges, &cfg);

@@ -19,14 +19,21 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> anyhow::Result<()> {
     beltune::io::write_atomic(path, contents).with_context(|| format!("writing {}", path.display()))
 }
 
+/// Whether `a` and `b` name the same file: the same path as written (before
+/// either exists), or the same file once resolved.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    let absolute = |p: &Path| std::path::absolute(p).ok();
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => absolute(a).is_some_and(|x| Some(x) == absolute(b)),
+    }
+}
+
 /// Error (bad input, exit status 2) if the output `out` names the same file
 /// as one of `inputs`: writing it would destroy the input.
 pub fn check_not_an_input(flag: &str, out: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
-    let Ok(o) = std::fs::canonicalize(out) else {
-        return Ok(()); // does not exist yet: cannot be an input
-    };
     for input in inputs {
-        if std::fs::canonicalize(input).is_ok_and(|i| i == o) {
+        if same_file(out, input) {
             return Err(anyhow::Error::new(crate::exit::Failure::new(
                 crate::exit::ExitStatus::BadInput,
                 format!(
@@ -36,6 +43,49 @@ pub fn check_not_an_input(flag: &str, out: &Path, inputs: &[&Path]) -> anyhow::R
                 ),
             )));
         }
+    }
+    Ok(())
+}
+
+/// A drive's torque limit given as `flag` (N m, or A for a current record):
+/// the library's plausibility range
+/// ([`beltune::model::params::check_torque_limit`]), or one line naming the flag.
+pub fn check_torque_limit_flag(flag: &str, torque_limit: f64) -> anyhow::Result<()> {
+    use beltune::model::params::bounds;
+    beltune::model::params::check_torque_limit(flag, torque_limit).map_err(|_| {
+        anyhow::Error::new(crate::exit::Failure::new(
+            crate::exit::ExitStatus::BadInput,
+            format!(
+                "{flag} {} is out of range [{}, {}]",
+                beltune::error::short_number(torque_limit),
+                beltune::error::short_number(bounds::TORQUE_LIMIT_MIN_NM),
+                beltune::error::short_number(bounds::TORQUE_MAX_NM)
+            ),
+        ))
+    })
+}
+
+/// Error (bad input) unless `path` can take an output file: not a folder,
+/// in a folder that exists. Checked before the work that produces the file.
+pub fn check_writable_file(flag: &str, path: &Path) -> anyhow::Result<()> {
+    let bad = |why: String| {
+        anyhow::Error::new(crate::exit::Failure::new(
+            crate::exit::ExitStatus::BadInput,
+            format!("{flag} {}: {why}", path.display()),
+        ))
+    };
+    if path.is_dir() {
+        return Err(bad("is a folder; name a file".into()));
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(bad(format!(
+            "the folder {} does not exist",
+            parent.display()
+        )));
     }
     Ok(())
 }

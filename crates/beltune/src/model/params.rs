@@ -483,12 +483,27 @@ pub mod bounds {
     pub const DAMPING_MAX_N_S_PER_M: f64 = 1e6;
     /// Largest torque (friction, torque limit), N m.
     pub const TORQUE_MAX_NM: f64 = 1e4;
+    /// Smallest torque limit of a drive, N m (a micro drive has about 1e-3).
+    pub const TORQUE_LIMIT_MIN_NM: f64 = 1e-6;
     /// Largest force (cart friction), N.
     pub const FORCE_MAX_N: f64 = 1e6;
     /// Shortest sampling time, s.
     pub const SAMPLE_TIME_MIN_S: f64 = 1e-6;
     /// Longest sampling time, s.
     pub const SAMPLE_TIME_MAX_S: f64 = 0.1;
+}
+
+/// A drive's torque limit within [`bounds::TORQUE_LIMIT_MIN_NM`,
+/// `bounds::TORQUE_MAX_NM`] (in the unit of the record: N m, or A for a
+/// current record); `name` is how the caller's input spells it.
+pub fn check_torque_limit(name: &str, torque_max: f64) -> Result<()> {
+    crate::error::require_range(
+        name,
+        torque_max,
+        bounds::TORQUE_LIMIT_MIN_NM,
+        bounds::TORQUE_MAX_NM,
+    )
+    .map(|_| ())
 }
 
 /// A drive sampling time within [`bounds::SAMPLE_TIME_MIN_S`, `bounds::SAMPLE_TIME_MAX_S`].

@@ -25,6 +25,13 @@ use beltune_rt::control::{
 use beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};
 use serde::{Deserialize, Serialize};
 
+/// Largest gain or coefficient a plausible `controller.toml` holds (in SI or
+/// current units): far beyond any axis, small enough that every product of
+/// two stays finite.
+pub const MAX_GAIN: f64 = 1e9;
+/// Largest magnitude of a filter coefficient or a compliance term.
+pub const MAX_COEFF: f64 = 1e9;
+
 /// `controller.toml`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -428,6 +435,11 @@ impl ControllerFile {
         };
         let t: toml::Value =
             toml::from_str(text).map_err(|e| perr(e.to_string().replace('\n', " ")))?;
+        if let Some((key, x)) = non_finite(&t, "") {
+            return Err(perr(format!(
+                "`{key}` = {x}: every number of a controller must be finite"
+            )));
+        }
         let mut v = serde_json::to_value(t).map_err(|e| perr(e.to_string()))?;
         match v.get("schema_version").and_then(|s| s.as_u64()) {
             Some(s) if s == u64::from(SCHEMA_VERSION) => {}
@@ -442,10 +454,28 @@ impl ControllerFile {
                 ))
             }
         }
-        if v.get("units").and_then(|u| u.as_str()) == Some("current") {
+        let current = v.get("units").and_then(|u| u.as_str()) == Some("current");
+        if current {
             relabel_keys(&mut v, &torque_key);
         }
         let file: ControllerFile = serde_json::from_value(v).map_err(|e| perr(e.to_string()))?;
+        // the key as the file spells it (current units: `torque_max_a`)
+        let spelled = |key: &str| match current {
+            true => crate::units::current_key(key).unwrap_or_else(|| key.to_string()),
+            false => key.to_string(),
+        };
+        file.check_plausible().map_err(|e| match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                reason,
+            } => perr(format!(
+                "`{}` = {}: {reason}",
+                spelled(&name),
+                crate::error::short_number(value)
+            )),
+            e => perr(e.to_string()),
+        })?;
         file.cascade_config()
             .map_err(|e| perr(format!("not a valid controller: {e}")))?;
         file.setpoint_conversion()
@@ -453,10 +483,183 @@ impl ControllerFile {
         Ok(file)
     }
 
+    /// The plausibility checks a design's inputs pass
+    /// ([`crate::design::DesignInput::validate`], [`crate::model::TwoMassParams::validate`]),
+    /// on what a file gives the drive: a hand-edited or foreign
+    /// `controller.toml` is refused before `export` or a drive uses it.
+    /// Errors name the key (`gains.k_v`).
+    pub fn check_plausible(&self) -> Result<()> {
+        use crate::error::require_range;
+        use crate::model::params::bounds;
+        crate::model::params::check_sample_time(self.ts_s)?;
+        crate::model::params::check_torque_limit("torque_max_nm", self.torque_max_nm)?;
+        let t = self.torque_max_nm;
+        require_range("torque_offset_nm", self.torque_offset_nm, -t, t).map_err(|_| {
+            Error::invalid(
+                "torque_offset_nm",
+                self.torque_offset_nm,
+                "must lie within the torque limit",
+            )
+        })?;
+        let g = &self.gains;
+        require_range("gains.k_pp_per_s", g.k_pp_per_s, 0.0, MAX_GAIN)?;
+        require_range("gains.k_p_nm_s_per_rad", g.k_p_nm_s_per_rad, 0.0, MAX_GAIN)?;
+        require_range("gains.k_i_nm_per_rad", g.k_i_nm_per_rad, 0.0, MAX_GAIN)?;
+        require_range("gains.k_v", g.k_v, 0.0, 1.0)?;
+        for (i, sec) in self.prefilter.sections.iter().enumerate() {
+            for c in sec {
+                require_range(
+                    &format!("prefilter.sections[{i}]"),
+                    *c,
+                    -MAX_COEFF,
+                    MAX_COEFF,
+                )?;
+            }
+        }
+        require_range(
+            "velocity_filter.t_r_s",
+            self.velocity_filter.t_r_s,
+            1e-6,
+            1.0,
+        )?;
+        let f = &self.feedforward;
+        require_range("feedforward.inertia_kg_m2", f.inertia_kg_m2, 0.0, MAX_GAIN)?;
+        require_range(
+            "feedforward.viscous_nm_s_per_rad",
+            f.viscous_nm_s_per_rad,
+            0.0,
+            MAX_GAIN,
+        )?;
+        require_range(
+            "feedforward.linear_viscous_nm_s_per_rad",
+            f.linear_viscous_nm_s_per_rad,
+            0.0,
+            MAX_GAIN,
+        )?;
+        require_range("feedforward.coulomb_nm", f.coulomb_nm, 0.0, t)?;
+        require_range(
+            "feedforward.coulomb_deadband_rad_s",
+            f.coulomb_deadband_rad_s,
+            0.0,
+            MAX_GAIN,
+        )?;
+        require_range(
+            "feedforward.coulomb_breakaway_rad",
+            f.coulomb_breakaway_rad,
+            0.0,
+            MAX_GAIN,
+        )?;
+        require_range(
+            "feedforward.dead_time_s",
+            f.dead_time_s,
+            0.0,
+            crate::design::MAX_DEAD_TIME_S,
+        )?;
+        let samples = f.dead_time_s / self.ts_s;
+        if (f.preview_samples as f64 - samples).abs() > 1.0 {
+            return Err(Error::invalid(
+                "feedforward.preview_samples",
+                f.preview_samples as f64,
+                format!(
+                    "must be the dead time in samples, dead_time_s / ts_s = {}",
+                    crate::error::short_number(samples)
+                ),
+            ));
+        }
+        let p = &self.setpoint;
+        require_range("setpoint.i_t_m_per_rad", p.i_t_m_per_rad, 1e-6, 1e3)?;
+        require_range("setpoint.m_c_kg", p.m_c_kg, 0.0, 1e6)?;
+        require_range("setpoint.c_n_per_m", p.c_n_per_m, 1e-6, 1e12)?;
+        require_range(
+            "setpoint.static_stretch_m",
+            p.static_stretch_m,
+            -bounds::LENGTH_MAX_M,
+            bounds::LENGTH_MAX_M,
+        )?;
+        require_range(
+            "setpoint.stiffness_position_m",
+            p.stiffness_position_m,
+            -bounds::LENGTH_MAX_M,
+            bounds::LENGTH_MAX_M,
+        )?;
+        require_range(
+            "setpoint.compliance_slope_per_n",
+            p.compliance_slope_per_n,
+            -MAX_COEFF,
+            MAX_COEFF,
+        )?;
+        require_range(
+            "setpoint.compliance_curvature_per_n_m",
+            p.compliance_curvature_per_n_m,
+            -MAX_COEFF,
+            MAX_COEFF,
+        )?;
+        if let Some(force) = p.static_force_n {
+            require_range(
+                "setpoint.static_force_n",
+                force,
+                -bounds::FORCE_MAX_N,
+                bounds::FORCE_MAX_N,
+            )?;
+        }
+        require_range(
+            "setpoint.cart_viscous_n_s_per_m",
+            p.cart_viscous_n_s_per_m,
+            0.0,
+            bounds::DAMPING_MAX_N_S_PER_M,
+        )?;
+        require_range(
+            "setpoint.cart_coulomb_n",
+            p.cart_coulomb_n,
+            0.0,
+            bounds::FORCE_MAX_N,
+        )?;
+        require_range(
+            "setpoint.coulomb_velocity_m_s",
+            p.coulomb_velocity_m_s,
+            1e-9,
+            10.0,
+        )?;
+        require_range(
+            "setpoint.final_approach_distance_m",
+            p.final_approach_distance_m,
+            0.0,
+            1.0,
+        )?;
+        require_range(
+            "setpoint.final_approach_speed_m_s",
+            p.final_approach_speed_m_s,
+            1e-9,
+            1.0,
+        )?;
+        Ok(())
+    }
+
     /// Read and parse a file.
     pub fn load(path: &std::path::Path) -> Result<Self> {
         let text = crate::io::read_to_string_capped(path, crate::io::MAX_TEXT_BYTES)?;
         ControllerFile::parse(&text, &path.display().to_string())
+    }
+}
+
+/// The first key (dotted path) whose value is a non-finite float (TOML has
+/// `nan` and `inf`, JSON has not: converted, they would read as absent).
+fn non_finite(v: &toml::Value, at: &str) -> Option<(String, f64)> {
+    match v {
+        toml::Value::Float(x) if !x.is_finite() => Some((at.to_string(), *x)),
+        toml::Value::Table(t) => t.iter().find_map(|(k, x)| {
+            let key = if at.is_empty() {
+                k.clone()
+            } else {
+                format!("{at}.{k}")
+            };
+            non_finite(x, &key)
+        }),
+        toml::Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .find_map(|(i, x)| non_finite(x, &format!("{at}[{i}]"))),
+        _ => None,
     }
 }
 
@@ -763,5 +966,68 @@ mod tests {
         unstable.prefilter.sections[0][4] = 1.5;
         let e = ControllerFile::parse(&unstable.to_toml().unwrap(), "c.toml").unwrap_err();
         assert!(e.to_string().contains("prefilter"), "{e}");
+    }
+
+    /// `export` and a drive read only plausible controllers: every absurd
+    /// value a hostile or careless edit can put into a `controller.toml` is
+    /// refused in one line naming its key, as a design's inputs are.
+    #[test]
+    fn an_implausible_controller_file_is_refused_naming_its_key() {
+        let des = designed(PrefilterKind::Butterworth);
+        let file = ControllerFile::from_design(
+            &des,
+            &friction(),
+            None,
+            3.1,
+            ModelUnits::Torque,
+            Provenance::now(vec![], None),
+        )
+        .unwrap();
+        let text = file.to_toml().unwrap();
+        ControllerFile::parse(&text, "c.toml").expect("the commissioned file is plausible");
+        let set = |key: &str, value: &str| -> String {
+            let mut done = false;
+            let out: String = text
+                .lines()
+                .map(|l| {
+                    if !done && l.split(" = ").next() == Some(key) {
+                        done = true;
+                        format!("{key} = {value}\n")
+                    } else {
+                        format!("{l}\n")
+                    }
+                })
+                .collect();
+            assert!(done, "no key {key}");
+            out
+        };
+        for (key, value, named) in [
+            ("ts_s", "5e-324", "ts_s"),
+            ("ts_s", "1.0", "ts_s"),
+            ("ts_s", "1e308", "ts_s"),
+            ("torque_max_nm", "1e308", "torque_max_nm"),
+            ("torque_max_nm", "1e-300", "torque_max_nm"),
+            ("torque_offset_nm", "5.0", "torque_offset_nm"),
+            ("k_p_nm_s_per_rad", "1e308", "gains.k_p_nm_s_per_rad"),
+            ("k_v", "-1e308", "gains.k_v"),
+            ("i_t_m_per_rad", "5e-324", "setpoint.i_t_m_per_rad"),
+            ("c_n_per_m", "1e-300", "setpoint.c_n_per_m"),
+            ("preview_samples", "9223372036854775807", "preview_samples"),
+            ("dead_time_s", "-1.0", "feedforward.dead_time_s"),
+            ("k_i_nm_per_rad", "nan", "k_i_nm_per_rad"),
+            ("ts_s", "inf", "ts_s"),
+            ("coulomb_breakaway_rad", "nan", "coulomb_breakaway_rad"),
+        ] {
+            let e = ControllerFile::parse(&set(key, value), "c.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(named), "{key} = {value}: {e}");
+            assert!(e.len() < 300 && !e.contains('\n'), "one short line: {e}");
+        }
+        let extra = text.replace("[provenance]\n", "[provenance]\ninjected = \"x\"\n");
+        let e = ControllerFile::parse(&extra, "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("injected"), "{e}");
     }
 }

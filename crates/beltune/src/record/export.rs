@@ -218,6 +218,27 @@ impl Syntax {
     }
 }
 
+/// `text` made safe for a `//` line comment of generated C or Rust source:
+/// the one place where text from a file (the provenance of a
+/// `controller.toml`, which a user may edit, holding a command line with any
+/// characters) reaches generated source. Printable ASCII stays as it is but
+/// for `\\` (a C line comment ending in a backslash continues onto the next
+/// line), `?` (the trigraph `??/` is a backslash) and `%`; every other byte
+/// (line breaks, NUL, control characters, non-ASCII) is written `%XX`, its
+/// UTF-8 bytes in hex, like a URL. The result is one line that cannot end a
+/// comment or continue it.
+pub fn comment_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for b in text.bytes() {
+        if (0x20..0x7f).contains(&b) && !matches!(b, b'\\' | b'?' | b'%') {
+            out.push(b as char);
+        } else {
+            let _ = write!(out, "%{b:02X}");
+        }
+    }
+    out
+}
+
 fn header_lines(file: &ControllerFile, comment: &str) -> String {
     let p = &file.provenance;
     let l = crate::units::labels(file.units);
@@ -226,9 +247,9 @@ fn header_lines(file: &ControllerFile, comment: &str) -> String {
          {comment} From a controller.toml written by beltune {} at {}: {}\n\
          {comment} Torques in {}, gains K_P in {}, K_I in {}; angles in rad, times in s.\n",
         file.schema_version,
-        p.beltune_version,
-        p.created_utc,
-        p.command_line_text(),
+        comment_text(&p.beltune_version),
+        comment_text(&p.created_utc),
+        comment_text(&p.command_line_text()),
         l.torque,
         l.torque_per_velocity,
         l.torque_per_angle

@@ -522,10 +522,10 @@ impl ModelFile {
         let checked = (|| -> Result<()> {
             file.design_input(None)?.validate()?;
             if let Some(t) = file.identified.torque_max_nm {
-                crate::error::require_positive("torque_max_nm", t)?;
+                crate::model::params::check_torque_limit("torque_max_nm", t)?;
             }
             if let Some(ts) = file.identified.ts_s {
-                crate::error::require_positive("ts_s", ts)?;
+                crate::model::params::check_sample_time(ts)?;
             }
             Ok(())
         })();

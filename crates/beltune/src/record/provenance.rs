@@ -5,8 +5,10 @@
 
 use serde::{Deserialize, Serialize};
 
-/// The provenance of one result.
+/// The provenance of one result. A file's `[provenance]` holds exactly these
+/// keys (an unknown key is an error, not ignored).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Provenance {
     /// The beltune version that wrote the result (the crate version).
     pub beltune_version: String,
@@ -31,9 +33,16 @@ impl Provenance {
         }
     }
 
-    /// Provenance of this process: its command line (`std::env::args`), now.
+    /// Provenance of this process: its command line, now. An argument that
+    /// is not UTF-8 (a path on Linux may be any bytes) is kept with its
+    /// invalid bytes replaced by U+FFFD.
     pub fn of_this_process(seed: Option<u64>) -> Self {
-        Provenance::now(std::env::args().collect(), seed)
+        Provenance::now(
+            std::env::args_os()
+                .map(|a| a.to_string_lossy().into_owned())
+                .collect(),
+            seed,
+        )
     }
 
     /// The command line as one shell-like string, arguments with spaces or

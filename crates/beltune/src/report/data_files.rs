@@ -21,6 +21,9 @@ pub const MOVES_CSV: &str = "moves.csv";
 pub const EXCITATION_CSV: &str = "excitation.csv";
 /// File name of the friction runs (velocity, mean torque).
 pub const FRICTION_CSV: &str = "friction.csv";
+/// Every data file's name, in the order of [`DataFiles::texts`].
+pub const DATA_FILE_NAMES: [&str; 5] =
+    [FRF_CSV, LOOPS_CSV, MOVES_CSV, EXCITATION_CSV, FRICTION_CSV];
 
 /// The data files of a result folder, each `None` (or empty) where absent.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -80,8 +80,11 @@ pub struct ResultSet {
 
 impl ResultSet {
     /// The files as (name, contents): `commissioning.json`, `controller.toml`,
-    /// `report.html`, then the data files.
+    /// `report.html`, then the data files. A controller that
+    /// [`ControllerFile::check_plausible`] refuses is an error, not a file.
     pub fn files(&self) -> Result<Vec<(String, Vec<u8>)>> {
+        // nothing implausible reaches a drive: the reader's checks, at the writer
+        self.controller.check_plausible()?;
         let mut files = vec![
             (
                 COMMISSIONING_FILE.to_string(),

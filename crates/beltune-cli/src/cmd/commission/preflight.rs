@@ -23,8 +23,6 @@ pub const MAX_PRBS_CLOCK: u32 = 4096;
 pub const MAX_PRBS_PERIOD_SAMPLES: u64 = 1 << 22;
 /// Largest `--skip-periods`.
 pub const MAX_SKIP_PERIODS: usize = 1000;
-/// Largest `--torque-limit` (N m or A).
-pub const MAX_TORQUE_LIMIT: f64 = 1e4;
 /// The history folder without `--out`.
 pub const HISTORY_ROOT: &str = "commissioning";
 /// Longest network interface name Linux accepts (`IFNAMSIZ` less the NUL).
@@ -216,6 +214,47 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
         ),
         ("--max-static-error", args.limits.max_static_error.is_some()),
     ];
+    // the EtherCAT flags apply to a bus only (a flag at its default value
+    // changes nothing and is not told apart)
+    let ethercat_only: [(&str, bool); 5] = match &default_args() {
+        Some(d) => [
+            ("--subdevice", args.subdevice != d.subdevice),
+            ("--cycle-us", args.cycle_us != d.cycle_us),
+            (
+                "--frame-timeout-ms",
+                args.frame_timeout_ms != d.frame_timeout_ms,
+            ),
+            ("--realtime-priority", args.realtime_priority.is_some()),
+            ("--no-dc", args.no_dc),
+        ],
+        None => [("", false); 5],
+    };
+    if args.ethercat.is_none() {
+        let given: Vec<&str> = ethercat_only.iter().filter(|f| f.1).map(|f| f.0).collect();
+        if !given.is_empty() {
+            return Err(bad(format!(
+                "{} apply only to a drive on EtherCAT (--ethercat IFACE); they would be ignored",
+                given.join(", ")
+            )));
+        }
+    } else {
+        let simulation_only: [(&str, bool); 3] = [
+            ("--seed", args.seed.is_some()),
+            ("--torque-noise", args.torque_noise.is_some()),
+            ("--encoder-noise", args.encoder_noise.is_some()),
+        ];
+        let given: Vec<&str> = simulation_only
+            .iter()
+            .filter(|f| f.1)
+            .map(|f| f.0)
+            .collect();
+        if !given.is_empty() {
+            return Err(bad(format!(
+                "{} apply only to the simulated axis; a drive on EtherCAT has its own noise",
+                given.join(", ")
+            )));
+        }
+    }
     let (given, mode, hint): (Vec<&str>, _, _) = if args.csv.is_some() {
         (
             simulated_only.iter().filter(|f| f.1).map(|f| f.0).collect(),
@@ -236,6 +275,15 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
         )));
     }
     Ok(())
+}
+
+/// The arguments of `beltune commission` without any flag: the defaults.
+fn default_args() -> Option<Args> {
+    use clap::{Args as _, FromArgMatches};
+    let matches = Args::augment_args(clap::Command::new("commission"))
+        .try_get_matches_from(["commission"])
+        .ok()?;
+    Args::from_arg_matches(&matches).ok()
 }
 
 /// A numeric flag that must be finite and within `lo..=hi` (`lo` exclusive when `open`).
@@ -356,13 +404,9 @@ fn recorded(args: &Args, csv: &std::path::Path) -> anyhow::Result<Recorded> {
     };
     check_flag("--inertia", args.inertia, 0.0, 1e3, true)?;
     check_flag("--transmission", args.transmission, 0.0, 1e3, true)?;
-    check_flag(
-        "--torque-limit",
-        args.torque_limit,
-        0.0,
-        MAX_TORQUE_LIMIT,
-        true,
-    )?;
+    if let Some(t) = args.torque_limit {
+        super::super::util::check_torque_limit_flag("--torque-limit", t)?;
+    }
     let unit = if args.current_units { "A" } else { "N m" };
     let Some(torque_limit) = args.torque_limit else {
         return Err(bad(format!(
