@@ -10,9 +10,11 @@ use beltune::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::model::rigs::{self, Plant};
 use beltune::sim::{SimAxis, SimConfig};
 use beltune_ethercat::netns::Netns;
+use common::drive::DriveProcess;
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
-use std::time::Duration;
+use std::process::Command;
+
+mod common;
 
 fn beltune() -> Command {
     Command::new(env!("CARGO_BIN_EXE_beltune"))
@@ -32,71 +34,6 @@ const WIRE_ERROR_ABS_M: f64 = 50e-6;
 /// Thesis chapter 5: the dynamic cart error limit, m.
 const MAX_TRACKING_ERROR_M: f64 = 1e-3;
 const START_M: f64 = 0.05;
-
-/// `beltune virtual-drive` as a child process inside the namespace, its
-/// stderr in a file (no pipe to fill); stopped with SIGTERM (killed if it
-/// does not stop) and reaped on drop, also when the test panics.
-struct DriveProcess {
-    child: std::process::Child,
-    log: PathBuf,
-}
-
-impl DriveProcess {
-    fn spawn(net: &Netns, log: PathBuf, extra: &[&str]) -> Result<DriveProcess, String> {
-        let err = std::fs::File::create(&log).map_err(|e| e.to_string())?;
-        let child = net
-            .command(env!("CARGO_BIN_EXE_beltune"))
-            .args(["virtual-drive", "--interface", &net.drive_if])
-            .args(["--start-position", &START_M.to_string(), "--seed", "1"])
-            .args(extra)
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(err)
-            .spawn()
-            .map_err(|e| format!("spawn: {e}"))?;
-        let mut d = DriveProcess { child, log };
-        // ready once it has said so (its socket is bound by then)
-        for _ in 0..200 {
-            if d.stderr().contains("Ctrl-C stops") {
-                return Ok(d);
-            }
-            if let Ok(Some(status)) = d.child.try_wait() {
-                return Err(format!("the drive exited ({status}): {}", d.stderr()));
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        Err(format!("the drive did not start: {}", d.stderr()))
-    }
-
-    fn stderr(&self) -> String {
-        std::fs::read_to_string(&self.log).unwrap_or_default()
-    }
-
-    /// SIGTERM, wait for the exit; its stderr.
-    fn stop(&mut self) -> String {
-        // SAFETY: signalling our own child by its pid (`ip netns exec` execs in place).
-        unsafe { libc::kill(self.child.id() as libc::pid_t, libc::SIGTERM) };
-        for _ in 0..250 {
-            if let Ok(Some(_)) = self.child.try_wait() {
-                return self.stderr();
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-        self.stderr()
-    }
-}
-
-impl Drop for DriveProcess {
-    fn drop(&mut self) {
-        if let Ok(None) = self.child.try_wait() {
-            let _ = self.child.kill();
-            let _ = self.child.wait();
-        }
-        let _ = std::fs::remove_file(&self.log);
-    }
-}
 
 fn temp_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("beltune-{name}-{}", std::process::id()));
@@ -132,7 +69,7 @@ fn a_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_pro
     let mut drive = DriveProcess::spawn(
         &net,
         std::env::temp_dir().join(format!("beltune-vd-{}.log", std::process::id())),
-        &["--no-dc"],
+        &["--start-position", &START_M.to_string(), "--no-dc"],
     )
     .unwrap_or_else(|e| panic!("virtual drive: {e}"));
     let out = beltune()

@@ -47,6 +47,28 @@ pub const DEVICE_NAME_MAX: usize = 128;
 pub const SIMULATED_FRAME_TIMEOUT_S: f64 = 50e-3;
 /// The frame storage a caller owns for one axis (about 18 KiB).
 pub type Storage = PduStorage<MAX_FRAMES, MAX_PDU_DATA>;
+/// Cycles of "disable voltage" before the bus leaves OP.
+pub const SHUTDOWN_DISABLE_CYCLES: u32 = 5;
+/// AL status reads per state while the bus is brought down.
+pub const SHUTDOWN_POLLS: u32 = 200;
+const AL_CONTROL: u16 = 0x0120;
+const AL_STATUS: u16 = 0x0130;
+const AL_STATUS_CODE: u16 = 0x0134;
+/// AL control bit 4: error indication acknowledge.
+const AL_ACK: u16 = 0x0010;
+
+/// What the drive's AL status said after [`EthercatAxis::shut_down`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BusDown {
+    /// Whether the drive answered the AL requests.
+    pub reached: bool,
+    /// AL state (0x0130 bits 0-3): 1 INIT, 2 PRE-OP, 4 SAFE-OP, 8 OP.
+    pub al_state: u8,
+    /// AL error indication (0x0130 bit 4) still latched.
+    pub error: bool,
+    /// AL status code (0x0134).
+    pub al_status_code: u16,
+}
 
 /// Moves frames between ethercrab's `PduTx`/`PduRx` and a bus.
 pub trait Transport {
@@ -681,6 +703,65 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
         Ok(state)
     }
 
+    /// Bring the bus down cleanly, whatever ended the run: the drive
+    /// switched off (CiA 402 "disable voltage" in the process data for a few
+    /// cycles while the bus is still in OP), then the AL state machine OP ->
+    /// SAFE-OP -> PRE-OP -> INIT, each request acknowledging a latched AL
+    /// error (AL control bit 4, ETG.1000.6 table 9) and waiting until the AL
+    /// status shows the state. The drive's SM watchdog then has nothing to
+    /// watch and no error stays latched. Returns what the drive's AL status
+    /// finally says. The axis is unusable afterwards.
+    pub fn shut_down(&mut self) -> BusDown {
+        self.outputs = Outputs {
+            controlword: Command::DisableVoltage.controlword(),
+            mode: MODE_CST,
+            target_torque_permille: 0,
+        };
+        self.lost = 0;
+        for _ in 0..SHUTDOWN_DISABLE_CYCLES {
+            if matches!(
+                self.cycle_raw(),
+                Err(AxisError::Timeout { .. } | AxisError::NotOperational)
+            ) {
+                break;
+            }
+        }
+        self.failed.get_or_insert(AxisError::NotOperational);
+        let n = self.cfg.subdevice;
+        let md = &self.maindevice;
+        let polls = SHUTDOWN_POLLS;
+        let steps = async {
+            let sd = match &self.group {
+                Group::Dc(g) => g.subdevice(md, n),
+                Group::NoDc(g) => g.subdevice(md, n),
+            }?;
+            let mut status = 0u16;
+            let mut code = 0u16;
+            for state in [0x04u16, 0x02, 0x01] {
+                sd.register_write(AL_CONTROL, state | AL_ACK).await?;
+                for _ in 0..polls {
+                    status = sd.register_read::<u16>(AL_STATUS).await?;
+                    if status & 0x0F == state && status & 0x10 == 0 {
+                        break;
+                    }
+                }
+                code = sd.register_read::<u16>(AL_STATUS_CODE).await?;
+            }
+            Ok((status, code))
+        };
+        let r = run(&mut self.transport, steps);
+        self.transport.end_of_cycle(self.cycle_ns, None);
+        match r {
+            Ok((status, code)) => BusDown {
+                al_state: (status & 0x0F) as u8,
+                error: status & 0x10 != 0,
+                al_status_code: code,
+                reached: true,
+            },
+            Err(_) => BusDown::default(),
+        }
+    }
+
     /// The last measurement.
     pub fn last(&self) -> DriveMeasurement {
         self.last
@@ -720,6 +801,8 @@ pub trait BusAxis: Axis {
     fn as_axis(&mut self) -> &mut dyn Axis;
     /// Exchanges and missed SYNC0 cycles ([`EthercatAxis::cycle_counts`]).
     fn cycle_counts(&self) -> (u64, u64);
+    /// Bring the bus down ([`EthercatAxis::shut_down`]).
+    fn shut_down(&mut self) -> BusDown;
 }
 
 impl<T: Transport> BusAxis for EthercatAxis<'_, T> {
@@ -737,6 +820,9 @@ impl<T: Transport> BusAxis for EthercatAxis<'_, T> {
     }
     fn cycle_counts(&self) -> (u64, u64) {
         EthercatAxis::cycle_counts(self)
+    }
+    fn shut_down(&mut self) -> BusDown {
+        EthercatAxis::shut_down(self)
     }
 }
 

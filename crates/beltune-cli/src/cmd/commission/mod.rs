@@ -378,10 +378,38 @@ fn run_on(
     }
     let mut progress = BarProgress::new(args.quiet);
     let run = commission(axis.as_axis(), &e.datasheet, cfg, &mut progress);
-    // leave the drive switched off and at rest, also after a stop
+    // leave the drive switched off and at rest, also after a stop, then
+    // bring the bus down (OP -> SAFE-OP -> PRE-OP -> INIT) so that the
+    // drive's watchdog has nothing to watch and no error stays latched
     let _ = axis.stop_drive();
     let (exchanges, missed) = axis.cycle_counts();
+    let down = axis.shut_down();
     drop(axis);
+    if !args.quiet {
+        let line = if down.reached {
+            format!(
+                "bus down: drive in AL state {}{}{}",
+                match down.al_state {
+                    1 => "INIT",
+                    2 => "PRE-OP",
+                    4 => "SAFE-OP",
+                    8 => "OP",
+                    _ => "?",
+                },
+                if down.error { ", error latched" } else { "" },
+                if down.al_status_code != 0 {
+                    format!(", AL status code {:#06x}", down.al_status_code)
+                } else {
+                    String::new()
+                }
+            )
+        } else {
+            "bus down: the drive did not answer (its watchdog removes the torque)".to_string()
+        };
+        for l in crate::progress::stage_lines(&label, &line) {
+            eprintln!("{l}");
+        }
+    }
     if args.realtime_priority.is_some() {
         // the bus is closed: the report is no real-time work
         beltune_ethercat::sched::set_normal();
