@@ -6,7 +6,8 @@
 //!
 //! CiA 301 communication objects (device type, error register, name,
 //! identity, PDO mapping and assignment, sync manager types and
-//! synchronisation 0x1C32/0x1C33), CiA 402 (ETG.6010) drive objects of
+//! synchronisation 0x1C32/0x1C33 with every ETG.1020 entry up to the
+//! delay time: SDO information is read sub-index by sub-index), CiA 402 (ETG.6010) drive objects of
 //! cyclic synchronous torque mode, and the manufacturer object 0x2110 (the
 //! load-side encoder's resolution). Free PDO mapping: every entry marked
 //! [`Pdo::Rx`] or [`Pdo::Tx`] may be mapped, in any order.
@@ -204,7 +205,23 @@ pub fn dictionary(v: &ObjectValues) -> Dictionary {
             Pdo::No,
             u8v(9),
         );
-        // sync type: 1 SM-synchronous, 2 DC SYNC0
+        // ETG.1020: sync type (1 SM-synchronous, 2 DC SYNC0), cycle time,
+        // shift time, supported sync types (free run, SM, DC SYNC0), minimum
+        // cycle time, calc and copy time, minimum delay, get cycle time, delay
+        let u32e = |x: u32| (dt::UNSIGNED32, x.to_le_bytes().to_vec());
+        let u16e = |x: u16| (dt::UNSIGNED16, x.to_le_bytes().to_vec());
+        for (sub, name, (ty, value)) in [
+            (2u8, "Cycle time", u32e(v.cycle_ns)),
+            (3, "Shift time", u32e(0)),
+            (4, "Sync modes supported", u16e(0x0007)),
+            (5, "Minimum cycle time", u32e(v.cycle_ns)),
+            (6, "Calc and copy time", u32e(v.cycle_ns / 10)),
+            (7, "Minimum delay time", u32e(0)),
+            (8, "Get cycle time", u16e(0)),
+            (9, "Delay time", u32e(0)),
+        ] {
+            od.entry(index, sub, name, ty, Ro, Pdo::No, value);
+        }
         od.entry(
             index,
             1,
@@ -214,45 +231,6 @@ pub fn dictionary(v: &ObjectValues) -> Dictionary {
             Pdo::No,
             u16v(1),
         );
-        od.entry(
-            index,
-            2,
-            "Cycle time",
-            dt::UNSIGNED32,
-            Ro,
-            Pdo::No,
-            u32v(v.cycle_ns),
-        );
-        // supported: free run, SM, DC SYNC0
-        od.entry(
-            index,
-            4,
-            "Sync modes supported",
-            dt::UNSIGNED16,
-            Ro,
-            Pdo::No,
-            u16v(0x0007),
-        );
-        od.entry(
-            index,
-            5,
-            "Minimum cycle time",
-            dt::UNSIGNED32,
-            Ro,
-            Pdo::No,
-            u32v(v.cycle_ns),
-        );
-        let calc = u32v(v.cycle_ns / 10);
-        od.entry(
-            index,
-            6,
-            "Calc and copy time",
-            dt::UNSIGNED32,
-            Ro,
-            Pdo::No,
-            calc,
-        );
-        od.entry(index, 9, "Delay time", dt::UNSIGNED32, Ro, Pdo::No, u32v(0));
     }
     // ---- manufacturer ----
     od.var(

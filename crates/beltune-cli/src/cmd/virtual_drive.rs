@@ -72,7 +72,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         distributed_clocks: !args.no_dc,
         ..DriveConfig::default()
     };
-    let mut drive = VirtualDrive::new(&plant, cfg).context("virtual drive")?;
+    // a refused setting is bad input (exit status 2), like the library's own
+    let mut drive = VirtualDrive::new(&plant, cfg).map_err(|e| match e {
+        beltune_ethercat::Error::Sim(lib) => anyhow::Error::new(lib).context("virtual drive"),
+        e @ beltune_ethercat::Error::Config { .. } => {
+            super::commission::preflight::bad(format!("virtual drive: {e}"))
+        }
+        e => anyhow::Error::new(e).context("virtual drive"),
+    })?;
     if let Some(path) = &args.esi {
         beltune::io::write_atomic(path, drive.esi().as_bytes())?;
         eprintln!(
