@@ -282,6 +282,11 @@ impl Esc {
         }
     }
 
+    /// The SII EEPROM image, bytes.
+    pub fn sii(&self) -> &[u8] {
+        &self.sii
+    }
+
     /// The AL state.
     pub fn al_state(&self) -> AlState {
         self.al_state
