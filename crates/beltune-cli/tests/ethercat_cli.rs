@@ -250,3 +250,84 @@ fn without_the_rights_for_a_raw_socket_it_says_so_in_one_line() {
         "{stderr}"
     );
 }
+
+/// Ctrl-C during a commissioning over the wire: the run stops at the next
+/// exchange, the drive is quick-stopped and switched off, the bus is brought
+/// down to INIT (the drive's watchdog never fires, no AL error stays
+/// latched), and the command ends with the safety-stop status and one line.
+#[test]
+fn ctrl_c_leaves_the_drive_switched_off_in_init_without_a_watchdog_error() {
+    let net = match Netns::create("int") {
+        Ok(n) => n,
+        Err(e) => {
+            eprintln!("SKIPPED: network namespace with a veth pair unavailable here ({e})");
+            return;
+        }
+    };
+    let out_dir = temp_dir("ethercat-ctrl-c");
+    let mut drive = DriveProcess::spawn(
+        &net,
+        std::env::temp_dir().join(format!("beltune-vd-int-{}.log", std::process::id())),
+        &["--start-position", &START_M.to_string(), "--no-dc"],
+    )
+    .unwrap_or_else(|e| panic!("virtual drive: {e}"));
+    let log = std::env::temp_dir().join(format!("beltune-int-{}.log", std::process::id()));
+    let mut child = beltune()
+        .args([
+            "commission",
+            "--ethercat",
+            &net.master_if,
+            "--cycle-us",
+            "1000",
+        ])
+        .args(["--frame-timeout-ms", "20", "--start-position"])
+        .arg(START_M.to_string())
+        .arg("--out")
+        .arg(&out_dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::fs::File::create(&log).unwrap())
+        .spawn()
+        .unwrap();
+    // wait until the axis is moving (a stage line after "take axis")
+    let started = std::time::Instant::now();
+    while !std::fs::read_to_string(&log)
+        .unwrap_or_default()
+        .contains("take axis")
+    {
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(120),
+            "no stage line: {}",
+            std::fs::read_to_string(&log).unwrap_or_default()
+        );
+        if let Ok(Some(s)) = child.try_wait() {
+            panic!(
+                "ended early ({s}): {}",
+                std::fs::read_to_string(&log).unwrap_or_default()
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    let status = child.wait().unwrap();
+    let stderr = std::fs::read_to_string(&log).unwrap_or_default();
+    let _ = std::fs::remove_file(&log);
+    let drive_log = drive.stop();
+    eprintln!("{stderr}\ndrive: {drive_log}");
+    assert_eq!(status.code(), Some(3), "safety stop status: {stderr}");
+    let last = stderr.trim_end().lines().last().unwrap_or("");
+    assert!(last.contains("stopped by the operator"), "{last}");
+    assert!(
+        stderr.contains("bus down: drive in AL state INIT"),
+        "{stderr}"
+    );
+    assert!(
+        drive_log.contains("0 watchdog expiries; AL INIT, status code 0x0000"),
+        "{drive_log}"
+    );
+    assert!(!out_dir.join("commissioning.json").exists(), "no result");
+    let diagnostic = PathBuf::from(format!("{}-safety-stop", out_dir.display()));
+    assert!(diagnostic.join("safety-stop.json").is_file(), "the diagnostic");
+    let _ = std::fs::remove_dir_all(&out_dir);
+    let _ = std::fs::remove_dir_all(&diagnostic);
+}

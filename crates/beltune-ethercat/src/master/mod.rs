@@ -24,7 +24,7 @@ use ethercrab::subdevice_group::{DcConfiguration, HasDc, NoDc, Op};
 use ethercrab::{
     DcSync, MainDevice, MainDeviceConfig, PduRx, PduStorage, PduTx, SubDeviceGroup, Timeouts,
 };
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -201,6 +201,9 @@ pub struct EthercatAxis<'sto, T: Transport> {
     last_dc_ns: Option<u64>,
     missed_sync0: u64,
     exchanges: u64,
+    /// Set by a signal handler: the next exchange fails with
+    /// [`AxisError::Interrupted`].
+    interrupt: Option<&'static AtomicBool>,
 }
 
 fn bus(what: &'static str) -> impl Fn(ethercrab::error::Error) -> Error {
@@ -454,6 +457,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
             last_dc_ns: None,
             missed_sync0: 0,
             exchanges: 0,
+            interrupt: None,
         };
         axis.expected_wkc = axis.expected_working_counter();
         axis.start()?;
@@ -647,6 +651,10 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
         if let Some(e) = self.failed {
             return Err(e);
         }
+        if self.interrupt.is_some_and(|f| f.load(Ordering::Relaxed)) {
+            self.failed = Some(AxisError::Interrupted);
+            return Err(AxisError::Interrupted);
+        }
         self.outputs = Outputs {
             controlword: Command::EnableOperation.controlword(),
             mode: MODE_CST,
@@ -762,6 +770,13 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
         }
     }
 
+    /// Fail the next exchange with [`AxisError::Interrupted`] once `flag`
+    /// is set (by a SIGINT/SIGTERM handler); the quick stop and
+    /// [`Self::shut_down`] still run.
+    pub fn set_interrupt(&mut self, flag: &'static AtomicBool) {
+        self.interrupt = Some(flag);
+    }
+
     /// The last measurement.
     pub fn last(&self) -> DriveMeasurement {
         self.last
@@ -803,6 +818,8 @@ pub trait BusAxis: Axis {
     fn cycle_counts(&self) -> (u64, u64);
     /// Bring the bus down ([`EthercatAxis::shut_down`]).
     fn shut_down(&mut self) -> BusDown;
+    /// Stop at the next exchange once `flag` is set ([`EthercatAxis::set_interrupt`]).
+    fn set_interrupt(&mut self, flag: &'static AtomicBool);
 }
 
 impl<T: Transport> BusAxis for EthercatAxis<'_, T> {
@@ -823,6 +840,9 @@ impl<T: Transport> BusAxis for EthercatAxis<'_, T> {
     }
     fn shut_down(&mut self) -> BusDown {
         EthercatAxis::shut_down(self)
+    }
+    fn set_interrupt(&mut self, flag: &'static AtomicBool) {
+        EthercatAxis::set_interrupt(self, flag)
     }
 }
 

@@ -339,6 +339,13 @@ fn run_ethercat(
     run_on(args, cfg, e, bus)
 }
 
+/// Set by SIGINT/SIGTERM while a drive on a bus is commissioned.
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+extern "C" fn on_signal(_: libc::c_int) {
+    INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
+}
+
 /// Commission the drive on `bus`.
 fn run_on(
     args: &Args,
@@ -353,6 +360,14 @@ fn run_on(
     }
     let label = bus.label;
     let mut axis = (bus.open)(e.master).with_context(|| label.clone())?;
+    // Ctrl-C or SIGTERM: the next exchange fails, the axis is quick-stopped
+    // and the bus brought down as after any failure
+    axis.set_interrupt(&INTERRUPTED);
+    // SAFETY: installing an async-signal-safe handler (an atomic store).
+    unsafe {
+        libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
+        libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
+    }
     let id = axis.identity().clone();
     let sc = axis.scaling();
     if !args.quiet {
