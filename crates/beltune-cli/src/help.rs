@@ -152,6 +152,7 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
             "cycle_us",
             "frame_timeout_ms",
             "realtime_priority",
+            "dc",
             "no_dc",
         ],
     ),

@@ -520,6 +520,12 @@ impl Application for Firmware {
         self.sync_mode_dc()
     }
 
+    fn free_run_cycle_ns(&self) -> Option<u32> {
+        // with the power stage off the axis coasts (and is measured) whether
+        // or not the master sends; with torque the cycle follows the master
+        (!self.state.torque_enabled()).then_some(self.cycle_ns)
+    }
+
     fn accepts_sync0_cycle(&self, cycle_ns: u32) -> bool {
         // the drive runs its loops at its own cycle only
         cycle_ns == self.cycle_ns
@@ -527,6 +533,10 @@ impl Application for Firmware {
 
     fn watchdog_expired(&mut self) {
         self.fault(ERROR_WATCHDOG);
+        // the fault reaction (remove the torque) is done at once: "fault"
+        // (transition 14) without waiting for a cycle, which may not come
+        // without SYNC0
+        self.state = State::Fault;
         self.last_torque_nm = 0.0;
         self.publish();
     }

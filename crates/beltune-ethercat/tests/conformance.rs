@@ -227,6 +227,7 @@ fn a_sync0_cycle_other_than_the_drives_is_refused() {
         &storage,
         MasterConfig {
             cycle_s: 2e-3,
+            use_dc: true,
             ..MasterConfig::default()
         },
         |tx, rx| Ok(InProcess::new(tx, rx, d)),

@@ -152,6 +152,11 @@ pub trait Application {
     /// Write the current inputs into `inputs` without running a cycle (the
     /// SM watchdog just expired: the master's next read must see the fault).
     fn refresh_inputs(&mut self, _inputs: &mut [u8]) {}
+    /// Without SYNC0: the cycle on which the application runs by itself
+    /// when no process data comes (`None`: only on process data).
+    fn free_run_cycle_ns(&self) -> Option<u32> {
+        None
+    }
 }
 
 /// Counters for tests and diagnostics.
@@ -197,6 +202,8 @@ pub struct Esc {
     last_output_ns: u64,
     watchdog_expired: bool,
     next_sync0_ns: Option<u64>,
+    /// Local time of the last application cycle, ns.
+    last_cycle_ns: u64,
     cycle_due: bool,
     fresh_outputs: bool,
     stats: EscStats,
@@ -264,6 +271,7 @@ impl Esc {
             last_output_ns: 0,
             watchdog_expired: false,
             next_sync0_ns: None,
+            last_cycle_ns: 0,
             cycle_due: false,
             fresh_outputs: false,
             stats: EscStats::default(),
@@ -472,6 +480,7 @@ impl Esc {
             self.next_sync0_ns = Some(next_t);
         } else {
             self.next_sync0_ns = None;
+            self.free_run(t_ns, app);
         }
         self.time_ns = t_ns;
         self.check_watchdog(app);
@@ -504,10 +513,37 @@ impl Esc {
         }
     }
 
+    /// Without SYNC0 and without process data for two of the application's
+    /// free-run cycles, the application runs on its own clock (the axis
+    /// moves whether or not the master sends): at most
+    /// [`MAX_SYNC0_PER_ADVANCE`] cycles per advance, older ones skipped.
+    fn free_run(&mut self, t_ns: u64, app: &mut dyn Application) {
+        let Some(c) = app.free_run_cycle_ns().map(u64::from).filter(|c| *c > 0) else {
+            return;
+        };
+        if self.al_state < AlState::SafeOp {
+            return;
+        }
+        if self.last_cycle_ns + 2 * c > t_ns {
+            return;
+        }
+        let due = (t_ns - self.last_cycle_ns) / c - 1;
+        if due > MAX_SYNC0_PER_ADVANCE {
+            self.last_cycle_ns += (due - MAX_SYNC0_PER_ADVANCE) * c;
+        }
+        while self.last_cycle_ns + 2 * c <= t_ns {
+            self.time_ns = self.last_cycle_ns + c;
+            self.check_watchdog(app);
+            self.fresh_outputs = true; // not a late master: no cycle without new outputs
+            self.run_cycle(app);
+        }
+    }
+
     fn run_cycle(&mut self, app: &mut dyn Application) {
         if self.al_state < AlState::SafeOp {
             return;
         }
+        self.last_cycle_ns = self.time_ns;
         let sm3 = self.sync_manager(3);
         let (s, n) = (usize::from(sm3.start), usize::from(sm3.len));
         if s + n > MEMORY_SIZE {
@@ -909,6 +945,10 @@ impl Esc {
         match check.and_then(|_| app.al_change(from, to, &sms)) {
             Ok(()) => {
                 self.al_state = to;
+                if from < AlState::SafeOp {
+                    // free-run cycles count from here
+                    self.last_cycle_ns = self.time_ns;
+                }
                 if to == AlState::Op {
                     self.last_output_ns = self.time_ns;
                     self.watchdog_expired = false;

@@ -162,8 +162,15 @@ pub struct Args {
     /// miss cycles (the computation threads keep normal scheduling).
     #[arg(long, value_name = "PRIO", requires = "ethercat")]
     pub realtime_priority: Option<u8>,
-    /// EtherCAT: do not use distributed clocks even where the drive offers
-    /// them (SM-synchronous: the drive runs a cycle per process-data frame).
+    /// EtherCAT: use distributed clocks (SYNC0) where the drive offers them.
+    /// Needs a master that keeps real time (PREEMPT_RT, an isolated core,
+    /// --realtime-priority): each missed SYNC0 makes the drive apply the
+    /// previous torque again. Default: SM-synchronous (a drive cycle per
+    /// process-data frame), which commissions within the limits on a PC.
+    #[arg(long, requires = "ethercat", conflicts_with = "no_dc")]
+    pub dc: bool,
+    /// EtherCAT: SM-synchronous, no distributed clocks (the default; kept
+    /// for scripts that say so).
     #[arg(long, requires = "ethercat")]
     pub no_dc: bool,
     /// No progress bars or stage lines (the summary is still printed).
@@ -380,7 +387,7 @@ fn run_on(
             id.product_code,
             id.revision,
             id.serial,
-            if id.dc { "SYNC0" } else { "no distributed clocks" },
+            if id.dc { "SYNC0" } else { "SM-synchronous" },
             sc.rated_torque_nm,
             sc.torque_limit_nm(),
             sc.encoder_increments,
@@ -398,6 +405,7 @@ fn run_on(
     // drive's watchdog has nothing to watch and no error stays latched
     let _ = axis.stop_drive();
     let (exchanges, missed) = axis.cycle_counts();
+    let jitter = axis.jitter();
     let down = axis.shut_down();
     drop(axis);
     if !args.quiet {
@@ -429,11 +437,26 @@ fn run_on(
         // the bus is closed: the report is no real-time work
         beltune_ethercat::sched::set_normal();
     }
-    if !args.quiet && id.dc {
-        // a late exchange makes the drive apply the previous torque again
-        let line = format!(
-            "{exchanges} exchanges, {missed} SYNC0 cycles missed by the master (host scheduling)"
+    if !args.quiet {
+        // the master's measured cycle; with SYNC0 a late exchange makes the
+        // drive apply the previous torque again
+        let mut line = format!(
+            "{exchanges} exchanges ({})",
+            if id.dc { "SYNC0" } else { "SM-synchronous" }
         );
+        if let Some(j) = jitter.filter(|j| j.periods > 0) {
+            line.push_str(&format!(
+                ", cycle jitter rms {:.0} us, max {:.0} us, {} cycles longer than 1.5 periods",
+                j.rms_s() * 1e6,
+                j.max_s * 1e6,
+                j.late
+            ));
+        }
+        if id.dc {
+            line.push_str(&format!(
+                ", {missed} SYNC0 cycles missed by the master (host scheduling)"
+            ));
+        }
         for l in crate::progress::stage_lines(&label, &line) {
             eprintln!("{l}");
         }

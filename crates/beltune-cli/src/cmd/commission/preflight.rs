@@ -338,7 +338,7 @@ fn ethercat(args: &Args, interface: &str, datasheet: DataSheet) -> anyhow::Resul
             subdevice: args.subdevice,
             cycle_s: f64::from(args.cycle_us) * 1e-6,
             frame_timeout_s: args.frame_timeout_ms * 1e-3,
-            use_dc: !args.no_dc,
+            use_dc: args.dc && !args.no_dc,
             ..MasterConfig::default()
         },
     })
