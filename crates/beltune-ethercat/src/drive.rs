@@ -28,7 +28,7 @@
 //! for an RxPDO without it). The objects behind the inputs are current from
 //! power-up on (0x6041 reads "switch on disabled" in PRE-OP).
 
-use crate::cia402::{self, Command, State, MODE_CST};
+use crate::cia402::{self, Command, State, MODE_CSP, MODE_CST};
 use crate::esc::{al_code, coe, AlState, Application, Esc, SyncManager};
 use crate::objects::{self, ObjectValues, ERROR_REGISTER, TORQUE_OFFSET};
 use crate::od::Dictionary;
@@ -38,6 +38,7 @@ use crate::Error;
 use beltune::axis::Axis as _;
 use beltune::model::rigs::Plant;
 use beltune::sim::{SimAxis, SimConfig};
+use beltune_rt::control::{CascadeController, MotionSample, Setpoint};
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::Arc;
@@ -164,7 +165,19 @@ pub struct Firmware {
     emergency_counter: u8,
     /// The dictionary as it is at power-up (the ESI's default values).
     power_up: Dictionary,
+    /// Motor encoder counts of the last cycle.
+    motor_counts: i64,
+    /// The drive's own loops in CSP, with their preview in cycles.
+    loops: Option<(CascadeController<f32>, usize)>,
+    /// CSP setpoints of the last `preview + 1` cycles, oldest first.
+    csp_setpoints: std::collections::VecDeque<MotionSample<f64>>,
+    csp_last_velocity_rad_s: f64,
+    following_error_inc: i32,
 }
+
+/// Error code when the loop parameters do not make a controller (CiA 402:
+/// parameter error).
+pub const ERROR_PARAMETER: u16 = 0x6320;
 
 /// The virtual drive: ESC and firmware.
 pub struct VirtualDrive {
@@ -275,6 +288,11 @@ impl VirtualDrive {
             emergencies: Default::default(),
             emergency_counter: 0,
             power_up: Dictionary::new(),
+            motor_counts: 0,
+            loops: None,
+            csp_setpoints: Default::default(),
+            csp_last_velocity_rad_s: 0.0,
+            following_error_inc: 0,
         };
         firmware.load_position_inc = firmware.load_increments(firmware.sim.cart_position_m());
         firmware.publish();
@@ -317,6 +335,11 @@ impl Firmware {
     /// The CiA 402 state.
     pub fn state(&self) -> State {
         self.state
+    }
+
+    /// The mode of operation the drive runs (0x6061).
+    pub fn mode_display(&self) -> i8 {
+        self.mode_display
     }
 
     /// The error code 0x603F.
@@ -399,10 +422,82 @@ impl Firmware {
         ) {
             sw |= cia402::SW_VOLTAGE_ENABLED;
         }
-        if self.state == State::OperationEnabled && self.mode_display == MODE_CST {
+        if self.state == State::OperationEnabled
+            && (self.mode_display == MODE_CST || self.mode_display == MODE_CSP)
+        {
             sw |= cia402::SW_FOLLOWS_TARGET;
         }
         sw
+    }
+
+    /// Enter CSP: the loops from the manufacturer objects, started
+    /// bumplessly at the present angle. Error code if they make no controller.
+    fn start_loops(&mut self) -> Result<(), u16> {
+        let od = &self.od;
+        let (c, preview) =
+            crate::loops::config_from(self.cfg.cycle_s, |i, s| od.get(i, s).map(<[u8]>::to_vec))
+                .ok_or(ERROR_PARAMETER)?;
+        let mut ctrl = CascadeController::new(c.cast::<f32>()).map_err(|_| ERROR_PARAMETER)?;
+        let phi = self.motor_angle_rad();
+        ctrl.reset_to(phi as f32);
+        self.loops = Some((ctrl, preview));
+        self.csp_setpoints.clear();
+        let hold = MotionSample {
+            angle_rad: phi,
+            velocity_rad_s: 0.0,
+            acceleration_rad_s2: 0.0,
+        };
+        self.csp_setpoints
+            .extend(std::iter::repeat_n(hold, preview + 1));
+        self.csp_last_velocity_rad_s = 0.0;
+        Ok(())
+    }
+
+    fn motor_angle_rad(&self) -> f64 {
+        self.motor_counts as f64 * self.sim.info().motor_rad_per_count
+    }
+
+    /// One cycle of the drive's loops: the setpoint of this cycle (target
+    /// position 0x607A and velocity offset 0x60B1, increments; acceleration
+    /// from the velocity's change) is the feedforward's preview, the one
+    /// `preview` cycles before is the loops' (the master sends the
+    /// trajectory `n_T` cycles ahead); the torque command, N m.
+    fn loops_torque(&mut self) -> f64 {
+        let q = self.sim.info().motor_rad_per_count;
+        let phi = self.motor_angle_rad();
+        let target = self
+            .od
+            .get_uint(crate::objects::TARGET_POSITION, 0)
+            .unwrap_or(0) as u32 as i32;
+        let velocity = self
+            .od
+            .get_uint(crate::objects::VELOCITY_OFFSET, 0)
+            .unwrap_or(0) as u32 as i32;
+        let omega = f64::from(velocity) * q;
+        let ahead = MotionSample {
+            angle_rad: phi + f64::from(target.wrapping_sub(self.position_inc)) * q,
+            velocity_rad_s: omega,
+            acceleration_rad_s2: (omega - self.csp_last_velocity_rad_s) / self.cfg.cycle_s,
+        };
+        self.csp_last_velocity_rad_s = omega;
+        let Some((ctrl, preview)) = self.loops.as_mut() else {
+            return 0.0;
+        };
+        self.csp_setpoints.push_back(ahead);
+        while self.csp_setpoints.len() > *preview + 1 {
+            self.csp_setpoints.pop_front();
+        }
+        let now = self.csp_setpoints.front().copied().unwrap_or(ahead);
+        let f = |m: MotionSample<f64>| MotionSample {
+            angle_rad: m.angle_rad as f32,
+            velocity_rad_s: m.velocity_rad_s as f32,
+            acceleration_rad_s2: m.acceleration_rad_s2 as f32,
+        };
+        let out = ctrl.step(&Setpoint::with_preview(f(now), f(ahead)), phi as f32);
+        self.following_error_inc = ((now.angle_rad - phi) / q)
+            .round()
+            .clamp(i32::MIN as f64, i32::MAX as f64) as i32;
+        f64::from(out.torque_nm)
     }
 
     /// The objects behind the inputs, from the drive's present state.
@@ -422,6 +517,11 @@ impl Firmware {
             .set(pdo::VELOCITY_ACTUAL, 0, &self.velocity_inc_s.to_le_bytes());
         self.od
             .set(pdo::TORQUE_ACTUAL, 0, &self.torque_permille.to_le_bytes());
+        self.od.set(
+            crate::objects::FOLLOWING_ERROR,
+            0,
+            &self.following_error_inc.to_le_bytes(),
+        );
         if let Some(l) = self.load_position_inc {
             self.od
                 .set(pdo::ADDITIONAL_POSITION_ACTUAL, 1, &l.to_le_bytes());
@@ -582,8 +682,19 @@ impl Application for Firmware {
             self.emergency(0);
         }
         self.prev_cw = cw;
-        if mode == MODE_CST {
-            self.mode_display = MODE_CST;
+        let enabled_now = self.state == State::OperationEnabled;
+        if mode == MODE_CST || mode == MODE_CSP {
+            // the cyclic synchronous modes switch at any time (CiA 402);
+            // CSP starts its loops when it is entered with the power on
+            let entering = mode == MODE_CSP
+                && enabled_now
+                && (self.mode_display != MODE_CSP || before != State::OperationEnabled);
+            if entering {
+                if let Err(code) = self.start_loops() {
+                    self.fault(code);
+                }
+            }
+            self.mode_display = mode;
         } else if !self.state.torque_enabled() {
             self.mode_display = mode.max(0);
         }
@@ -592,6 +703,9 @@ impl Application for Firmware {
         let torque = match self.state {
             State::OperationEnabled if self.mode_display == MODE_CST => {
                 self.scaling.permille_to_nm(target).clamp(-lim, lim)
+            }
+            State::OperationEnabled if self.mode_display == MODE_CSP => {
+                self.loops_torque().clamp(-lim, lim)
             }
             State::QuickStopActive => {
                 if omega.abs() < self.cfg.quick_stop_done_rad_s {
@@ -605,6 +719,7 @@ impl Application for Firmware {
         };
         self.last_torque_nm = torque;
         let m = self.sim.step(torque);
+        self.motor_counts = m.motor_counts;
         let q = self.sim.info().motor_rad_per_count;
         self.position_inc =
             i64::from(self.cfg.initial_position_inc).wrapping_add(m.motor_counts) as i32;

@@ -16,6 +16,7 @@ pub mod drive;
 pub mod error;
 pub mod esc;
 pub mod esi;
+pub mod loops;
 pub mod master;
 #[cfg(feature = "test-util")]
 pub mod netns;

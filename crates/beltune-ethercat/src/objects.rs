@@ -15,6 +15,7 @@
 use crate::cia402;
 use crate::esc::sdo_info::{OBJECT_CODE_ARRAY, OBJECT_CODE_RECORD};
 use crate::esc::sii::{Identity, SiiContent, SiiPdo, SiiSyncManager};
+use crate::loops;
 use crate::od::{data_type as dt, Access, Dictionary, Pdo};
 use crate::pdo::{self, MappingEntry};
 use crate::scaling::{self, Scaling};
@@ -33,6 +34,12 @@ pub const ERROR_REGISTER: u16 = 0x1001;
 /// Torque offset (CiA 402, INTEGER16, per mille of the rated torque), added
 /// to the target torque in CST.
 pub const TORQUE_OFFSET: u16 = 0x60B2;
+/// Target position (CiA 402, INTEGER32, increments): CSP's setpoint.
+pub const TARGET_POSITION: u16 = 0x607A;
+/// Velocity offset (CiA 402, INTEGER32, increments/s): CSP's velocity setpoint.
+pub const VELOCITY_OFFSET: u16 = 0x60B1;
+/// Following error actual value (CiA 402, INTEGER32, increments).
+pub const FOLLOWING_ERROR: u16 = 0x60F4;
 /// Device type 0x1000: CiA 402 (402 = 0x0192), servo drive (0x0002 in the
 /// high word).
 pub const DEVICE_TYPE: u32 = 0x0002_0192;
@@ -434,16 +441,100 @@ pub fn dictionary(v: &ObjectValues) -> Dictionary {
         u32v(0),
     );
     let modes = cia402::SUPPORTED_DRIVE_MODES;
-    // CST only (bit 9)
+    // CSP (bit 7, the drive's own loops) and CST (bit 9)
+    let supported = (1 << 7) | (1 << 9);
     od.var(
         modes,
         "Supported drive modes",
         dt::UNSIGNED32,
         Ro,
         Pdo::No,
-        u32v(1 << 9),
+        u32v(supported),
     );
+    let target = TARGET_POSITION;
+    od.var(
+        target,
+        "Target position",
+        dt::INTEGER32,
+        Rw,
+        Pdo::Rx,
+        u32v(0),
+    );
+    let offset = VELOCITY_OFFSET;
+    od.var(
+        offset,
+        "Velocity offset",
+        dt::INTEGER32,
+        Rw,
+        Pdo::Rx,
+        u32v(0),
+    );
+    let following = FOLLOWING_ERROR;
+    od.var(
+        following,
+        "Following error actual value",
+        dt::INTEGER32,
+        Ro,
+        Pdo::Tx,
+        u32v(0),
+    );
+    loop_objects(&mut od);
     od
+}
+
+/// The manufacturer objects of the drive's own loops ([`crate::loops`]):
+/// REAL32 parameters and UNSIGNED8 bit sets, writable in any state (the
+/// drive builds its controller from them when it enters CSP).
+fn loop_objects(od: &mut Dictionary) {
+    use Access::*;
+    for (index, name, code) in [
+        (loops::POSITION_LOOP, "Position loop", OBJECT_CODE_RECORD),
+        (loops::VELOCITY_LOOP, "Velocity loop", OBJECT_CODE_RECORD),
+        (loops::PREFILTER, "Prefilter", OBJECT_CODE_ARRAY),
+        (loops::FEEDFORWARD, "Feedforward", OBJECT_CODE_RECORD),
+        (loops::OPTIONS, "Loop options", OBJECT_CODE_RECORD),
+    ] {
+        od.object(index, name, code);
+    }
+    let mut highest = std::collections::BTreeMap::<u16, u8>::new();
+    for p in &loops::PARAMETERS {
+        let zero = 0f32.to_le_bytes().to_vec();
+        od.entry(p.index, p.sub, p.name, dt::REAL32, Rw, Pdo::No, zero);
+        let n = highest.entry(p.index).or_default();
+        *n = (*n).max(p.sub);
+    }
+    for (index, sub, name) in [
+        (
+            loops::FEEDFORWARD,
+            loops::TERMS_SUB,
+            "Terms (bits: inertia, viscous, Coulomb)",
+        ),
+        (
+            loops::OPTIONS,
+            loops::OPTIONS_SUB,
+            "Options (bits: filtered desired velocity, preview, conditional integration)",
+        ),
+        (
+            loops::OPTIONS,
+            loops::PREVIEW_SUB,
+            "Feedforward preview [cycles]",
+        ),
+    ] {
+        od.entry(index, sub, name, dt::UNSIGNED8, Rw, Pdo::No, vec![0]);
+        let n = highest.entry(index).or_default();
+        *n = (*n).max(sub);
+    }
+    for (index, n) in highest {
+        od.entry(
+            index,
+            0,
+            "Number of entries",
+            dt::UNSIGNED8,
+            Ro,
+            Pdo::No,
+            vec![n],
+        );
+    }
 }
 
 /// The SII content of the drive with mailboxes of `mailbox` bytes: sync

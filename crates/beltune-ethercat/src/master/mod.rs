@@ -10,6 +10,7 @@
 //! (`async_io::block_on`, together with the transport's I/O): the axis is
 //! synchronous, one call per cycle.
 
+pub mod drive_loops;
 pub mod inprocess;
 pub mod wire;
 
@@ -211,6 +212,9 @@ pub struct DriveIdentity {
     pub subdevices: usize,
     /// Whether SYNC0 is used.
     pub dc: bool,
+    /// Whether the drive offers cyclic synchronous position (its own loops)
+    /// and its outputs are mapped.
+    pub csp: bool,
 }
 
 /// One measurement of a cycle in SI units.
@@ -394,7 +398,15 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
                     None
                 };
                 let scaling = Scaling::from_objects(rated, max_t, inc, revs, load_res)?;
-                let codec = Codec::standard(load_res.is_some());
+                // CSP (bit 7): the target position and velocity offset are
+                // mapped too, so that the drive's own loops can take over
+                // without a new mapping (which needs PRE-OP)
+                let csp = modes & (1 << 7) != 0;
+                let codec = if csp {
+                    Codec::with_csp(load_res.is_some())
+                } else {
+                    Codec::standard(load_res.is_some())
+                };
                 // PDO mapping by SDO (CiA 301: assignment off, mapping off, entries, on)
                 let mapping = |e: ethercrab::error::Error| {
                     unsupported(format!(
@@ -441,6 +453,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
                         serial: id.serial,
                         subdevices: found,
                         dc,
+                        csp,
                     },
                     scaling,
                     codec,
@@ -494,6 +507,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
                 controlword: Command::DisableVoltage.controlword(),
                 mode: MODE_CST,
                 target_torque_permille: 0,
+                ..Outputs::default()
             },
             position: Unwrap32::new(),
             load: Unwrap32::new(),
@@ -706,6 +720,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
             controlword: Command::EnableOperation.controlword(),
             mode: MODE_CST,
             target_torque_permille: self.scaling.nm_to_permille(torque_nm),
+            ..Outputs::default()
         };
         let r =
             self.cycle_raw()
@@ -733,6 +748,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
             controlword: Command::QuickStop.controlword(),
             mode: MODE_CST,
             target_torque_permille: 0,
+            ..Outputs::default()
         };
         let mut state = State::QuickStopActive;
         self.lost = 0;
@@ -771,6 +787,7 @@ impl<'sto, T: Transport> EthercatAxis<'sto, T> {
             controlword: Command::DisableVoltage.controlword(),
             mode: MODE_CST,
             target_torque_permille: 0,
+            ..Outputs::default()
         };
         self.lost = 0;
         for _ in 0..SHUTDOWN_DISABLE_CYCLES {
