@@ -96,6 +96,35 @@ fn a_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_pro
         "commission over the wire failed: {stderr}\ndrive: {drive_log}"
     );
     assert!(stderr.contains("SM-synchronous"), "the default: {stderr}");
+    // the controller in the drive: written, read back, its own loops (CSP)
+    // run the validation move within the thesis' limits
+    let flat = stderr.split_whitespace().collect::<Vec<_>>().join(" ");
+    let csp = flat
+        .split_once("closed by the drive (CSP): ")
+        .unwrap_or_else(|| panic!("the drive's loops: {flat}"))
+        .1;
+    let number_after = |text: &str, key: &str| -> f64 {
+        let rest = text
+            .split_once(key)
+            .unwrap_or_else(|| panic!("`{key}` in {text}"))
+            .1;
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let csp_error_mm = number_after(csp, "max cart error ");
+    let csp_static_um = number_after(csp, "static ");
+    eprintln!("wire, the drive's loops: {csp_error_mm:.3} mm, {csp_static_um:.1} um");
+    assert!(
+        flat.contains("parameters written by SDO and read back"),
+        "{flat}"
+    );
+    assert!(
+        csp_error_mm < MAX_TRACKING_ERROR_M * 1e3,
+        "CSP: {csp_error_mm} mm"
+    );
+    assert!(
+        csp_static_um < STATIC_ERROR_M * 1e6,
+        "CSP: {csp_static_um} um"
+    );
     assert!(
         stderr.contains("cycle jitter rms"),
         "jitter measured: {stderr}"

@@ -159,7 +159,7 @@ fn check(j: &Value, drive_log: &str, dc: bool) {
     let a = &j["aborts"];
     assert_eq!(u(&a["write_6041_read_only"]), ABORT_READ_ONLY);
     assert_eq!(u(&a["write_6060_two_bytes"]), ABORT_LENGTH_TOO_HIGH);
-    assert_eq!(u(&a["read_2000_absent"]), ABORT_NO_OBJECT);
+    assert_eq!(u(&a["read_5fff_absent"]), ABORT_NO_OBJECT);
     assert_eq!(u(&a["read_1018_sub_9"]), ABORT_NO_SUB_INDEX);
     assert_eq!(u(&a["write_1c12_00_two"]), ABORT_VALUE_TOO_HIGH);
     assert_eq!(u(&a["map_1000_into_1600"]), ABORT_NOT_MAPPABLE);

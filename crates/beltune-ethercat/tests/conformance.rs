@@ -77,7 +77,7 @@ fn refused_sdo_requests_reach_the_master_as_aborts_and_change_nothing() {
         sdo(&mut d, &download(0x6060, 0, &[10, 0]), pre),
         Err(abort::LENGTH_TOO_HIGH)
     );
-    assert_eq!(sdo(&mut d, &upload(0x2000, 0), pre), Err(abort::NO_OBJECT));
+    assert_eq!(sdo(&mut d, &upload(0x5FFF, 0), pre), Err(abort::NO_OBJECT));
     assert_eq!(
         sdo(&mut d, &download(0x1C12, 0, &[2]), pre),
         Err(abort::VALUE_TOO_HIGH)

@@ -62,7 +62,7 @@ out["position_preop"] = u("<i", s.sdo_read(0x6064, 0))
 out["aborts"] = {
     "write_6041_read_only": abort_of(lambda: s.sdo_write(0x6041, 0, b"\x00\x00")),
     "write_6060_two_bytes": abort_of(lambda: s.sdo_write(0x6060, 0, b"\x0a\x00")),
-    "read_2000_absent": abort_of(lambda: s.sdo_read(0x2000, 0)),
+    "read_5fff_absent": abort_of(lambda: s.sdo_read(0x5FFF, 0)),
     "read_1018_sub_9": abort_of(lambda: s.sdo_read(0x1018, 9)),
     "write_1c12_00_two": abort_of(lambda: s.sdo_write(0x1C12, 0, b"\x02")),
 }

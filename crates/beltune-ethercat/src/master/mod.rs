@@ -886,6 +886,13 @@ pub trait BusAxis: Axis {
     fn set_interrupt(&mut self, flag: &'static AtomicBool);
     /// The measured cycle timing ([`Transport::jitter`]).
     fn jitter(&self) -> Option<CycleJitter>;
+    /// The run's validation move again with the drive's own loops
+    /// ([`drive_loops::validate_with_drive_loops`]).
+    fn validate_with_drive_loops(
+        &mut self,
+        run: &beltune::commission::Commissioning,
+        cfg: &beltune::commission::CommissioningConfig,
+    ) -> Result<drive_loops::LoopsValidation, Error>;
 }
 
 impl<T: Transport> BusAxis for EthercatAxis<'_, T> {
@@ -912,6 +919,13 @@ impl<T: Transport> BusAxis for EthercatAxis<'_, T> {
     }
     fn jitter(&self) -> Option<CycleJitter> {
         self.transport.jitter()
+    }
+    fn validate_with_drive_loops(
+        &mut self,
+        run: &beltune::commission::Commissioning,
+        cfg: &beltune::commission::CommissioningConfig,
+    ) -> Result<drive_loops::LoopsValidation, Error> {
+        drive_loops::validate_with_drive_loops(self, run, cfg)
     }
 }
 

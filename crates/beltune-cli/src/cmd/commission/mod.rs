@@ -260,12 +260,20 @@ pub fn run_on_bus(args: Args, bus: Bus<'_>) -> anyhow::Result<()> {
 fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
     let plan = preflight::plan(&args)?;
     let started = Instant::now();
-    let set = match plan.mode {
-        Mode::Simulated(s) => run_simulated(&args, &plan.cfg, *s)?,
+    let (set, in_drive_failure) = match plan.mode {
+        Mode::Simulated(s) => (run_simulated(&args, &plan.cfg, *s)?, None),
         Mode::Ethercat(e) => run_ethercat(&args, &plan.cfg, e, bus)?,
-        Mode::Recorded(r) => run_recorded(&args, &plan.cfg, r)?,
+        Mode::Recorded(r) => (run_recorded(&args, &plan.cfg, r)?, None),
     };
-    deliver(&set, &plan.target, &args, started)
+    deliver(&set, &plan.target, &args, started)?;
+    match in_drive_failure {
+        // the result set is written; the drive's own loops missed the limits
+        Some(failures) => Err(anyhow::Error::new(Failure::new(
+            ExitStatus::LimitsNotMet,
+            format!("the controller in the drive (CSP) misses its limits: {failures}"),
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// Write the result set, print the summary of the record it holds, and end
@@ -326,7 +334,7 @@ fn run_ethercat(
     cfg: &CommissioningConfig,
     e: preflight::Ethercat,
     bus: Option<Bus<'_>>,
-) -> anyhow::Result<ResultSet> {
+) -> anyhow::Result<(ResultSet, Option<String>)> {
     use beltune_ethercat::master::wire::RawSocket;
     use beltune_ethercat::master::{EthercatAxis, Storage};
     if let Some(bus) = bus {
@@ -353,13 +361,15 @@ extern "C" fn on_signal(_: libc::c_int) {
     INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
 }
 
-/// Commission the drive on `bus`.
+/// Commission the drive on `bus`; where the drive offers CSP, the delivered
+/// controller then goes into the drive and the validation move is run again
+/// with the drive's own loops (the failures of its verdict, if any).
 fn run_on(
     args: &Args,
     cfg: &CommissioningConfig,
     e: preflight::Ethercat,
     bus: Bus<'_>,
-) -> anyhow::Result<ResultSet> {
+) -> anyhow::Result<(ResultSet, Option<String>)> {
     if let Some(p) = args.realtime_priority {
         // this thread runs the bus; the computation threads it starts run normally
         beltune_ethercat::sched::set_realtime_priority(p)
@@ -400,6 +410,11 @@ fn run_on(
     }
     let mut progress = BarProgress::new(args.quiet);
     let run = commission(axis.as_axis(), &e.datasheet, cfg, &mut progress);
+    // the controller into the drive, its loops validated (CSP)
+    let in_drive = match &run {
+        Ok(r) if id.csp => Some(axis.validate_with_drive_loops(r, cfg)),
+        _ => None,
+    };
     // leave the drive switched off and at rest, also after a stop, then
     // bring the bus down (OP -> SAFE-OP -> PRE-OP -> INIT) so that the
     // drive's watchdog has nothing to watch and no error stays latched
@@ -462,6 +477,37 @@ fn run_on(
         }
     }
     let run = run.map_err(|e| stopped(e, &mut progress, args))?;
+    let mut in_drive_failure = None;
+    let line = match in_drive {
+        Some(Ok(v)) => {
+            if !v.verdict.limits_met() {
+                in_drive_failure = Some(v.verdict.failures().join(", "));
+            }
+            format!(
+                "{} parameters written by SDO and read back, preview {} cycles; the validation move closed by the drive (CSP): max cart error {:.3} mm, static {:.1} um; {}",
+                v.parameters_written,
+                v.preview_cycles,
+                v.summary.max_tracking_error_m * 1e3,
+                v.summary.static_error_m * 1e6,
+                v.verdict.text()
+            )
+        }
+        Some(Err(err)) => {
+            in_drive_failure = Some(crate::exit::one_line(&anyhow::Error::new(err)));
+            format!(
+                "the controller could not be validated in the drive: {}",
+                in_drive_failure.as_deref().unwrap_or("")
+            )
+        }
+        None => {
+            "the drive offers no CSP: the controller is the host's (controller.toml)".to_string()
+        }
+    };
+    if !args.quiet {
+        for l in crate::progress::stage_lines("drive loops", &line) {
+            eprintln!("{l}");
+        }
+    }
     if !args.quiet {
         let note = if sc.load_m_per_inc.is_some() {
             "the cart errors are measured by the load-side encoder"
@@ -479,7 +525,7 @@ fn run_on(
         truth: None,
         provenance: Provenance::of_this_process(None),
     };
-    Ok(ResultSet::of_run(&run, &origin)?)
+    Ok((ResultSet::of_run(&run, &origin)?, in_drive_failure))
 }
 
 /// Commission from recorded data (`--csv`).
