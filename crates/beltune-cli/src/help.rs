@@ -154,6 +154,7 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
             "realtime_priority",
             "dc",
             "no_dc",
+            "drive_profile",
         ],
     ),
     (

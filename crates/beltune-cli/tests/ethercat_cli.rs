@@ -364,3 +364,37 @@ fn ctrl_c_leaves_the_drive_switched_off_in_init_without_a_watchdog_error() {
     let _ = std::fs::remove_dir_all(&out_dir);
     let _ = std::fs::remove_dir_all(&diagnostic);
 }
+
+#[test]
+fn a_bad_drive_profile_is_refused_before_the_bus_is_opened() {
+    let dir = temp_dir("drive-profile");
+    std::fs::create_dir_all(&dir).unwrap();
+    let profile = dir.join("drive.toml");
+    std::fs::write(
+        &profile,
+        "name = \"x\"\nvendor_id = 1\nproduct_code = 2\nmode = 8\n[[parameter]]\nquantity = \"k_pp\"\nindex = 0x2000\nsub = 1\ntype = \"REAL32\"\n",
+    )
+    .unwrap();
+    let out = beltune()
+        .args([
+            "commission",
+            "--ethercat",
+            "nosuchif0",
+            "--quiet",
+            "--drive-profile",
+        ])
+        .arg(&profile)
+        .args(["--out"])
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let _ = std::fs::remove_dir_all(&dir);
+    // bad input (2), about the profile, not the interface: checked first
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("--drive-profile") && stderr.contains("unknown quantity `k_pp`"),
+        "{stderr}"
+    );
+}

@@ -23,6 +23,7 @@ pub mod netns;
 pub mod objects;
 pub mod od;
 pub mod pdo;
+pub mod profile;
 pub mod scaling;
 pub mod sched;
 pub mod serve;

@@ -5,10 +5,12 @@
 //! position mode (CSP, mode 8), parameterised through manufacturer objects.
 //!
 //! One table ([`PARAMETERS`]) says where each quantity of a
-//! [`CascadeConfig`] lives in the object dictionary (REAL32, as drives keep
-//! their gains, and as `ethercrab` writes them: expedited, 4 bytes); the
-//! dictionary's entries, the master's SDO writes and read-back, and the
-//! drive's controller are all built from it. The drive runs the cascade in
+//! [`CascadeConfig`] lives in the drive's object dictionary (REAL32, as
+//! drives keep their gains, and as `ethercrab` writes them: expedited, 4
+//! bytes); the dictionary's entries and the drive's controller are built
+//! from it. The master knows a drive's objects from its drive profile
+//! ([`crate::profile`]); the virtual drive's shipped profile is tested
+//! against this table. The drive runs the cascade in
 //! `f32`, as motor firmware does (the crate's README gives its per-sample
 //! cost).
 //!
@@ -38,6 +40,9 @@ pub const MAX_PREVIEW: usize = 64;
 /// A REAL32 parameter: object, sub-index, name (with its unit), and how
 /// it is read from and written into a cascade configuration.
 pub struct Parameter {
+    /// beltune's name of the quantity (the key of a drive profile,
+    /// [`crate::profile`]).
+    pub quantity: &'static str,
     /// Object index.
     pub index: u16,
     /// Sub-index.
@@ -51,8 +56,9 @@ pub struct Parameter {
 }
 
 macro_rules! p {
-    ($i:expr, $s:expr, $n:expr, |$c:ident| $e:expr) => {
+    ($q:expr, $i:expr, $s:expr, $n:expr, |$c:ident| $e:expr) => {
         Parameter {
+            quantity: $q,
             index: $i,
             sub: $s,
             name: $n,
@@ -64,56 +70,132 @@ macro_rules! p {
 
 /// Every REAL32 parameter of the drive's loops.
 pub const PARAMETERS: [Parameter; 24] = [
-    p!(POSITION_LOOP, 1, "K_PP [1/s]", |c| c.gains.k_pp_per_s),
-    p!(POSITION_LOOP, 2, "K_v [1]", |c| c.gains.k_v),
-    p!(VELOCITY_LOOP, 1, "K_P [N m s/rad]", |c| c
+    p!("k_pp_per_s", POSITION_LOOP, 1, "K_PP [1/s]", |c| c
         .gains
-        .k_p_nm_s_per_rad),
-    p!(VELOCITY_LOOP, 2, "K_I [N m/rad]", |c| c
+        .k_pp_per_s),
+    p!("k_v", POSITION_LOOP, 2, "K_v [1]", |c| c.gains.k_v),
+    p!(
+        "k_p_nm_s_per_rad",
+        VELOCITY_LOOP,
+        1,
+        "K_P [N m s/rad]",
+        |c| c.gains.k_p_nm_s_per_rad
+    ),
+    p!("k_i_nm_per_rad", VELOCITY_LOOP, 2, "K_I [N m/rad]", |c| c
         .gains
         .k_i_nm_per_rad),
-    p!(VELOCITY_LOOP, 3, "Velocity filter b0 [1/s]", |c| c
-        .velocity_filter
+    p!(
+        "velocity_filter_b0",
+        VELOCITY_LOOP,
+        3,
+        "Velocity filter b0 [1/s]",
+        |c| c.velocity_filter.b0
+    ),
+    p!(
+        "velocity_filter_b1",
+        VELOCITY_LOOP,
+        4,
+        "Velocity filter b1 [1/s]",
+        |c| c.velocity_filter.b1
+    ),
+    p!(
+        "velocity_filter_a1",
+        VELOCITY_LOOP,
+        5,
+        "Velocity filter a1 [1]",
+        |c| c.velocity_filter.a1
+    ),
+    p!("prefilter_1_b0", PREFILTER, 1, "Section 1 b0", |c| c
+        .prefilter[0]
         .b0),
-    p!(VELOCITY_LOOP, 4, "Velocity filter b1 [1/s]", |c| c
-        .velocity_filter
+    p!("prefilter_1_b1", PREFILTER, 2, "Section 1 b1", |c| c
+        .prefilter[0]
         .b1),
-    p!(VELOCITY_LOOP, 5, "Velocity filter a1 [1]", |c| c
-        .velocity_filter
+    p!("prefilter_1_b2", PREFILTER, 3, "Section 1 b2", |c| c
+        .prefilter[0]
+        .b2),
+    p!("prefilter_1_a1", PREFILTER, 4, "Section 1 a1", |c| c
+        .prefilter[0]
         .a1),
-    p!(PREFILTER, 1, "Section 1 b0", |c| c.prefilter[0].b0),
-    p!(PREFILTER, 2, "Section 1 b1", |c| c.prefilter[0].b1),
-    p!(PREFILTER, 3, "Section 1 b2", |c| c.prefilter[0].b2),
-    p!(PREFILTER, 4, "Section 1 a1", |c| c.prefilter[0].a1),
-    p!(PREFILTER, 5, "Section 1 a2", |c| c.prefilter[0].a2),
-    p!(PREFILTER, 6, "Section 2 b0", |c| c.prefilter[1].b0),
-    p!(PREFILTER, 7, "Section 2 b1", |c| c.prefilter[1].b1),
-    p!(PREFILTER, 8, "Section 2 b2", |c| c.prefilter[1].b2),
-    p!(PREFILTER, 9, "Section 2 a1", |c| c.prefilter[1].a1),
-    p!(PREFILTER, 10, "Section 2 a2", |c| c.prefilter[1].a2),
-    p!(FEEDFORWARD, 1, "Inertia [kg m^2]", |c| c
-        .feedforward
-        .params
-        .inertia_kg_m2),
-    p!(FEEDFORWARD, 2, "Viscous [N m s/rad]", |c| c
-        .feedforward
-        .params
-        .viscous_nm_s_per_rad),
-    p!(FEEDFORWARD, 3, "Coulomb [N m]", |c| c
-        .feedforward
-        .params
-        .coulomb_nm),
-    p!(FEEDFORWARD, 4, "Coulomb deadband [rad/s]", |c| c
-        .feedforward
-        .params
-        .coulomb_deadband_rad_s),
-    p!(FEEDFORWARD, 5, "Coulomb breakaway [rad]", |c| c
-        .feedforward
-        .params
-        .coulomb_breakaway_rad),
-    p!(OPTIONS, 1, "Torque limit [N m]", |c| c.torque_max_nm),
-    p!(OPTIONS, 2, "Torque offset [N m]", |c| c.torque_offset_nm),
+    p!("prefilter_1_a2", PREFILTER, 5, "Section 1 a2", |c| c
+        .prefilter[0]
+        .a2),
+    p!("prefilter_2_b0", PREFILTER, 6, "Section 2 b0", |c| c
+        .prefilter[1]
+        .b0),
+    p!("prefilter_2_b1", PREFILTER, 7, "Section 2 b1", |c| c
+        .prefilter[1]
+        .b1),
+    p!("prefilter_2_b2", PREFILTER, 8, "Section 2 b2", |c| c
+        .prefilter[1]
+        .b2),
+    p!("prefilter_2_a1", PREFILTER, 9, "Section 2 a1", |c| c
+        .prefilter[1]
+        .a1),
+    p!("prefilter_2_a2", PREFILTER, 10, "Section 2 a2", |c| c
+        .prefilter[1]
+        .a2),
+    p!(
+        "feedforward_inertia_kg_m2",
+        FEEDFORWARD,
+        1,
+        "Inertia [kg m^2]",
+        |c| c.feedforward.params.inertia_kg_m2
+    ),
+    p!(
+        "feedforward_viscous_nm_s_per_rad",
+        FEEDFORWARD,
+        2,
+        "Viscous [N m s/rad]",
+        |c| c.feedforward.params.viscous_nm_s_per_rad
+    ),
+    p!(
+        "feedforward_coulomb_nm",
+        FEEDFORWARD,
+        3,
+        "Coulomb [N m]",
+        |c| c.feedforward.params.coulomb_nm
+    ),
+    p!(
+        "feedforward_coulomb_deadband_rad_s",
+        FEEDFORWARD,
+        4,
+        "Coulomb deadband [rad/s]",
+        |c| c.feedforward.params.coulomb_deadband_rad_s
+    ),
+    p!(
+        "feedforward_coulomb_breakaway_rad",
+        FEEDFORWARD,
+        5,
+        "Coulomb breakaway [rad]",
+        |c| c.feedforward.params.coulomb_breakaway_rad
+    ),
+    p!("torque_max_nm", OPTIONS, 1, "Torque limit [N m]", |c| c
+        .torque_max_nm),
+    p!("torque_offset_nm", OPTIONS, 2, "Torque offset [N m]", |c| c
+        .torque_offset_nm),
 ];
+
+/// Quantity name of the feedforward terms (bits: inertia, viscous, Coulomb).
+pub const TERMS_QUANTITY: &str = "feedforward_terms";
+/// Quantity name of the option bits.
+pub const OPTIONS_QUANTITY: &str = "options";
+/// Quantity name of the feedforward preview, cycles.
+pub const PREVIEW_QUANTITY: &str = "preview_cycles";
+
+/// The value of quantity `name` of `c` with a preview of `preview` cycles
+/// (the bit sets as numbers); `None` for a name beltune does not know.
+pub fn quantity(name: &str, c: &CascadeConfig<f64>, preview: u8) -> Option<f64> {
+    match name {
+        TERMS_QUANTITY => Some(f64::from(terms_bits(c))),
+        OPTIONS_QUANTITY => Some(f64::from(option_bits(c))),
+        PREVIEW_QUANTITY => Some(f64::from(preview)),
+        _ => PARAMETERS
+            .iter()
+            .find(|p| p.quantity == name)
+            .map(|p| (p.get)(c)),
+    }
+}
 
 /// Sub-index of the feedforward terms (UNSIGNED8) in [`FEEDFORWARD`].
 pub const TERMS_SUB: u8 = 6;
@@ -134,19 +216,6 @@ pub fn option_bits(c: &CascadeConfig<f64>) -> u8 {
     u8::from(c.filter_desired_velocity)
         | (u8::from(c.feedforward_preview) << 1)
         | (u8::from(c.anti_windup == AntiWindup::ConditionalIntegration) << 2)
-}
-
-/// Everything the master writes for `c` with a preview of `preview` cycles:
-/// `(index, sub-index, little-endian bytes)`, the REAL32 values as `f32`.
-pub fn objects_of(c: &CascadeConfig<f64>, preview: u8) -> Vec<(u16, u8, Vec<u8>)> {
-    let mut out: Vec<(u16, u8, Vec<u8>)> = PARAMETERS
-        .iter()
-        .map(|p| (p.index, p.sub, ((p.get)(c) as f32).to_le_bytes().to_vec()))
-        .collect();
-    out.push((FEEDFORWARD, TERMS_SUB, vec![terms_bits(c)]));
-    out.push((OPTIONS, OPTIONS_SUB, vec![option_bits(c)]));
-    out.push((OPTIONS, PREVIEW_SUB, vec![preview]));
-    out
 }
 
 /// The configuration the objects describe (`ts_s` is the drive's cycle),

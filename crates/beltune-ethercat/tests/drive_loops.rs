@@ -15,6 +15,7 @@ use beltune_ethercat::loops;
 use beltune_ethercat::master::drive_loops::validate_with_drive_loops;
 use beltune_ethercat::master::inprocess::InProcess;
 use beltune_ethercat::master::{EthercatAxis, MasterConfig, Storage};
+use beltune_ethercat::profile::DriveProfile;
 
 /// Thesis chapter 5: maximum cart tracking error with nonlinear feedforward.
 const MAX_TRACKING_ERROR_M: f64 = 1e-3;
@@ -49,7 +50,8 @@ fn the_designed_controller_runs_in_the_drive_and_meets_the_thesis_limits() {
     let ds = DataSheet::for_plant(&plant, START_M, None);
     let cfg = CommissioningConfig::default();
     let run = commission(&mut axis, &ds, &cfg, &mut NoProgress).unwrap();
-    let v = validate_with_drive_loops(&mut axis, &run, &cfg)
+    let profile = DriveProfile::virtual_servo();
+    let v = validate_with_drive_loops(&mut axis, &run, &cfg, &profile)
         .unwrap_or_else(|e| panic!("validation in the drive: {e}"));
     let host = &run.validation.nonlinear;
     eprintln!(

@@ -30,7 +30,7 @@ use beltune::commission::{
     cascade_from_design, positioning_limits, Commissioning, CommissioningConfig,
 };
 use beltune::verdict::Verdict;
-use beltune_rt::control::{CartSample, CascadeConfig, SetpointConversion};
+use beltune_rt::control::{CartSample, SetpointConversion};
 use beltune_rt::trajectory::{Approach, State as Rest, Trajectory};
 
 /// Rest at the validation start before the measured move, s.
@@ -50,19 +50,17 @@ pub struct LoopsValidation {
 }
 
 impl<T: Transport> EthercatAxis<'_, T> {
-    /// Write the cascade `c` with a feedforward preview of `preview` cycles
-    /// into the drive's loop objects by SDO, each read back and compared;
+    /// Write `objects` (`(index, sub-index, bytes)`: 1, 2 or 4 bytes, e.g.
+    /// [`DriveProfile::objects`]) by SDO, each read back and compared;
     /// between two transfers one process-data cycle with `hold_torque_nm`
     /// (CST) keeps the watchdog fed and the axis held. Returns the number of
-    /// parameters written.
-    pub fn write_loops(
+    /// objects written.
+    pub fn write_objects(
         &mut self,
-        c: &CascadeConfig<f64>,
-        preview: u8,
+        objects: &[(u16, u8, Vec<u8>)],
         hold_torque_nm: f64,
     ) -> Result<usize, Error> {
-        let objects = crate::loops::objects_of(c, preview);
-        for (index, sub, bytes) in &objects {
+        for (index, sub, bytes) in objects {
             let (index, sub) = (*index, *sub);
             let n = self.cfg.subdevice;
             let md = &self.maindevice;
@@ -72,14 +70,25 @@ impl<T: Transport> EthercatAxis<'_, T> {
                     super::Group::Dc(g) => g.subdevice(md, n),
                     super::Group::NoDc(g) => g.subdevice(md, n),
                 }?;
-                if let Ok(b) = <[u8; 4]>::try_from(bytes.as_slice()) {
-                    sd.sdo_write(index, sub, f32::from_le_bytes(b)).await?;
-                    let back: f32 = sd.sdo_read(index, sub).await?;
-                    Ok(back.to_le_bytes().to_vec())
-                } else {
-                    sd.sdo_write(index, sub, bytes[0]).await?;
-                    let back: u8 = sd.sdo_read(index, sub).await?;
-                    Ok(vec![back])
+                // the value's bytes as they are (a REAL32 as its bit pattern)
+                match bytes.len() {
+                    4 => {
+                        let v = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
+                        sd.sdo_write(index, sub, v).await?;
+                        let back: u32 = sd.sdo_read(index, sub).await?;
+                        Ok(back.to_le_bytes().to_vec())
+                    }
+                    2 => {
+                        sd.sdo_write(index, sub, u16::from_le_bytes([bytes[0], bytes[1]]))
+                            .await?;
+                        let back: u16 = sd.sdo_read(index, sub).await?;
+                        Ok(back.to_le_bytes().to_vec())
+                    }
+                    _ => {
+                        sd.sdo_write(index, sub, bytes[0]).await?;
+                        let back: u8 = sd.sdo_read(index, sub).await?;
+                        Ok(vec![back])
+                    }
                 }
             };
             let back = super::run(&mut self.transport, write)
@@ -205,14 +214,15 @@ fn follow<T: Transport>(
 }
 
 /// The validation move of `run` again with the drive's own loops: the
-/// delivered controller (nonlinear feedforward) written into the drive and
-/// read back, CSP, a move back to the validation start and the measured move
-/// (Table A.8's or the one the run planned), summarised and judged against
-/// `cfg`'s limits.
+/// delivered controller (nonlinear feedforward) written into the drive's
+/// objects as `profile` maps them and read back, CSP, a move back to the
+/// validation start and the measured move (Table A.8's or the one the run
+/// planned), summarised and judged against `cfg`'s limits.
 pub fn validate_with_drive_loops<T: Transport>(
     axis: &mut EthercatAxis<'_, T>,
     run: &Commissioning,
     cfg: &CommissioningConfig,
+    profile: &crate::profile::DriveProfile,
 ) -> Result<LoopsValidation, Error> {
     let ts = axis.cycle_s();
     let axis_err = |what: &str| {
@@ -234,7 +244,8 @@ pub fn validate_with_drive_loops<T: Transport>(
         run.target_stiffness.stiffness_at(planned.target_m),
         FeedforwardVariant::Nonlinear,
     );
-    let written = axis.write_loops(&c, preview, run.holding_torque_nm)?;
+    let objects = profile.objects(&c, preview)?;
+    let written = axis.write_objects(&objects, run.holding_torque_nm)?;
     let ds = &run.datasheet;
     let origin = ds.origin_m;
     let opts = validation_track_options(

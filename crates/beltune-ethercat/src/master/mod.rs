@@ -892,6 +892,7 @@ pub trait BusAxis: Axis {
         &mut self,
         run: &beltune::commission::Commissioning,
         cfg: &beltune::commission::CommissioningConfig,
+        profile: &crate::profile::DriveProfile,
     ) -> Result<drive_loops::LoopsValidation, Error>;
 }
 
@@ -924,8 +925,9 @@ impl<T: Transport> BusAxis for EthercatAxis<'_, T> {
         &mut self,
         run: &beltune::commission::Commissioning,
         cfg: &beltune::commission::CommissioningConfig,
+        profile: &crate::profile::DriveProfile,
     ) -> Result<drive_loops::LoopsValidation, Error> {
-        drive_loops::validate_with_drive_loops(self, run, cfg)
+        drive_loops::validate_with_drive_loops(self, run, cfg, profile)
     }
 }
 

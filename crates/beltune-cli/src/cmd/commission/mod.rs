@@ -173,6 +173,13 @@ pub struct Args {
     /// for scripts that say so).
     #[arg(long, requires = "ethercat")]
     pub no_dc: bool,
+    /// EtherCAT: a drive profile (TOML) that maps the designed controller
+    /// onto the drive's objects; the controller is then written into the
+    /// drive, read back, and validated with the drive's own loops (CSP).
+    /// Default: the shipped profile whose identity matches the drive (the
+    /// virtual drive's), else the controller stays the host's.
+    #[arg(long, value_name = "FILE", requires = "ethercat")]
+    pub drive_profile: Option<PathBuf>,
     /// No progress bars or stage lines (the summary is still printed).
     #[arg(long)]
     pub quiet: bool,
@@ -410,9 +417,16 @@ fn run_on(
     }
     let mut progress = BarProgress::new(args.quiet);
     let run = commission(axis.as_axis(), &e.datasheet, cfg, &mut progress);
-    // the controller into the drive, its loops validated (CSP)
-    let in_drive = match &run {
-        Ok(r) if id.csp => Some(axis.validate_with_drive_loops(r, cfg)),
+    // the controller into the drive, its loops validated (CSP), where a
+    // profile says where it goes
+    let profile = e.drive_profile.clone().or_else(|| {
+        let shipped = beltune_ethercat::profile::DriveProfile::virtual_servo();
+        shipped
+            .matches(id.vendor_id, id.product_code)
+            .then_some(shipped)
+    });
+    let in_drive = match (&run, &profile) {
+        (Ok(r), Some(p)) if id.csp => Some(axis.validate_with_drive_loops(r, cfg, p)),
         _ => None,
     };
     // leave the drive switched off and at rest, also after a stop, then
@@ -499,9 +513,13 @@ fn run_on(
                 in_drive_failure.as_deref().unwrap_or("")
             )
         }
-        None => {
+        None if !id.csp => {
             "the drive offers no CSP: the controller is the host's (controller.toml)".to_string()
         }
+        None => format!(
+            "no drive profile for vendor {:#010x} product {:#010x} (--drive-profile): the controller is the host's (controller.toml)",
+            id.vendor_id, id.product_code
+        ),
     };
     if !args.quiet {
         for l in crate::progress::stage_lines("drive loops", &line) {
