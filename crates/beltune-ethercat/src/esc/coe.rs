@@ -833,6 +833,45 @@ mod tests {
     }
 
     #[test]
+    fn other_protocols_and_services_get_a_mailbox_error_reply_not_silence() {
+        let (mut srv, mut od) = server_with_name();
+        // FoE (type 4) read request: ETG.1000.4 mailbox error, detail 0x0002
+        let mut foe = request(5, &[1, 0, 0, 0, 0, 0, 0, 0]);
+        foe[5] = 0x04 | (5 << 4);
+        let a = srv.handle(&foe, &mut od, AlState::PreOp, 128).unwrap();
+        assert_eq!(a[5] & 0x0F, 0, "type 0: mailbox error");
+        assert_eq!(a[5] >> 4, 5, "the request's counter");
+        assert_eq!(
+            &a[6..10],
+            &[0x01, 0x00, 0x02, 0x00],
+            "command 1, unsupported protocol"
+        );
+        // a CoE service other than SDO request or information (5: RxPDO remote)
+        let mut coe = request(6, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]);
+        coe[7] = 0x50;
+        let a = srv.handle(&coe, &mut od, AlState::PreOp, 128).unwrap();
+        assert_eq!(
+            &a[6..10],
+            &[0x01, 0x00, 0x04, 0x00],
+            "service not supported"
+        );
+        // a length beyond the mailbox
+        let mut long = request(7, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]);
+        long[0] = 200;
+        let a = srv.handle(&long, &mut od, AlState::PreOp, 128).unwrap();
+        assert_eq!(&a[6..10], &[0x01, 0x00, 0x08, 0x00], "invalid size");
+        // an abort from the master ends a transfer without an answer
+        assert!(srv
+            .handle(
+                &request(8, &[0x80, 0, 0, 0, 0, 0, 0, 0]),
+                &mut od,
+                AlState::PreOp,
+                128
+            )
+            .is_none());
+    }
+
+    #[test]
     fn short_values_stay_expedited_and_mid_sized_ones_normal() {
         let (mut srv, mut od) = server_with_name();
         // 2-byte object: expedited, size indicated, 2 unused (0x4B)
