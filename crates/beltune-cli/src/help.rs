@@ -152,7 +152,9 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
             "cycle_us",
             "frame_timeout_ms",
             "realtime_priority",
+            "dc",
             "no_dc",
+            "drive_profile",
         ],
     ),
     (

@@ -10,9 +10,11 @@ use beltune::commission::{commission, CommissioningConfig, DataSheet};
 use beltune::model::rigs::{self, Plant};
 use beltune::sim::{SimAxis, SimConfig};
 use beltune_ethercat::netns::Netns;
+use common::drive::DriveProcess;
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
-use std::time::Duration;
+use std::process::Command;
+
+mod common;
 
 fn beltune() -> Command {
     Command::new(env!("CARGO_BIN_EXE_beltune"))
@@ -33,71 +35,6 @@ const WIRE_ERROR_ABS_M: f64 = 50e-6;
 const MAX_TRACKING_ERROR_M: f64 = 1e-3;
 const START_M: f64 = 0.05;
 
-/// `beltune virtual-drive` as a child process inside the namespace, its
-/// stderr in a file (no pipe to fill); stopped with SIGTERM (killed if it
-/// does not stop) and reaped on drop, also when the test panics.
-struct DriveProcess {
-    child: std::process::Child,
-    log: PathBuf,
-}
-
-impl DriveProcess {
-    fn spawn(net: &Netns, log: PathBuf, extra: &[&str]) -> Result<DriveProcess, String> {
-        let err = std::fs::File::create(&log).map_err(|e| e.to_string())?;
-        let child = net
-            .command(env!("CARGO_BIN_EXE_beltune"))
-            .args(["virtual-drive", "--interface", &net.drive_if])
-            .args(["--start-position", &START_M.to_string(), "--seed", "1"])
-            .args(extra)
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(err)
-            .spawn()
-            .map_err(|e| format!("spawn: {e}"))?;
-        let mut d = DriveProcess { child, log };
-        // ready once it has said so (its socket is bound by then)
-        for _ in 0..200 {
-            if d.stderr().contains("Ctrl-C stops") {
-                return Ok(d);
-            }
-            if let Ok(Some(status)) = d.child.try_wait() {
-                return Err(format!("the drive exited ({status}): {}", d.stderr()));
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        Err(format!("the drive did not start: {}", d.stderr()))
-    }
-
-    fn stderr(&self) -> String {
-        std::fs::read_to_string(&self.log).unwrap_or_default()
-    }
-
-    /// SIGTERM, wait for the exit; its stderr.
-    fn stop(&mut self) -> String {
-        // SAFETY: signalling our own child by its pid (`ip netns exec` execs in place).
-        unsafe { libc::kill(self.child.id() as libc::pid_t, libc::SIGTERM) };
-        for _ in 0..250 {
-            if let Ok(Some(_)) = self.child.try_wait() {
-                return self.stderr();
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-        self.stderr()
-    }
-}
-
-impl Drop for DriveProcess {
-    fn drop(&mut self) {
-        if let Ok(None) = self.child.try_wait() {
-            let _ = self.child.kill();
-            let _ = self.child.wait();
-        }
-        let _ = std::fs::remove_file(&self.log);
-    }
-}
-
 fn temp_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("beltune-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -114,11 +51,12 @@ fn temp_dir(name: &str) -> PathBuf {
 /// aborted the exchange in flight, whose own answer then came after it had
 /// been given up, and so on: no exchange succeeded any more. The raw-socket
 /// transport now drops such a late answer (one lost frame, bridged); the
-/// wire test of `beltune-ethercat` injects exactly one late answer. Here the
-/// drive runs SM-synchronous (`--no-dc`): one drive cycle per frame, so that
-/// the result does not depend on the host's scheduling; with distributed
-/// clocks this host misses SYNC0 cycles (counted on both sides, see the
-/// README).
+/// wire test of `beltune-ethercat` injects exactly one late answer. The
+/// drive offers distributed clocks as it does by default; the master's
+/// default is SM-synchronous (one drive cycle per frame, so that the result
+/// does not depend on the host's scheduling; with SYNC0 this host misses
+/// cycles, see docs/ethercat.md), and the default commissioning meets the
+/// thesis' limits over the wire (< 1 mm, < 100 um: the verdict, exit 0).
 #[test]
 fn a_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_process() {
     let net = match Netns::create("cli") {
@@ -132,7 +70,7 @@ fn a_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_pro
     let mut drive = DriveProcess::spawn(
         &net,
         std::env::temp_dir().join(format!("beltune-vd-{}.log", std::process::id())),
-        &["--no-dc"],
+        &["--start-position", &START_M.to_string()],
     )
     .unwrap_or_else(|e| panic!("virtual drive: {e}"));
     let out = beltune()
@@ -146,15 +84,6 @@ fn a_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_pro
         // a real drive answers within microseconds, a process on a shared
         // host sometimes within milliseconds
         .args(["--frame-timeout-ms", "20"])
-        // the verdict judges the move over a bus with late
-        // frames: this test checks the wire path, not the thesis' 1 mm
-        // (exit status 5 otherwise)
-        .args([
-            "--max-tracking-error",
-            "0.01",
-            "--max-static-error",
-            "0.001",
-        ])
         .args(["--start-position", &START_M.to_string(), "--out"])
         .arg(&out_dir)
         .output()
@@ -166,9 +95,47 @@ fn a_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_pro
         out.status.success(),
         "commission over the wire failed: {stderr}\ndrive: {drive_log}"
     );
+    assert!(stderr.contains("SM-synchronous"), "the default: {stderr}");
+    // the controller in the drive: written, read back, its own loops (CSP)
+    // run the validation move within the thesis' limits
+    let flat = stderr.split_whitespace().collect::<Vec<_>>().join(" ");
+    let csp = flat
+        .split_once("closed by the drive (CSP): ")
+        .unwrap_or_else(|| panic!("the drive's loops: {flat}"))
+        .1;
+    let number_after = |text: &str, key: &str| -> f64 {
+        let rest = text
+            .split_once(key)
+            .unwrap_or_else(|| panic!("`{key}` in {text}"))
+            .1;
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let csp_error_mm = number_after(csp, "max cart error ");
+    let csp_static_um = number_after(csp, "static ");
+    eprintln!("wire, the drive's loops: {csp_error_mm:.3} mm, {csp_static_um:.1} um");
     assert!(
-        stderr.contains("no distributed clocks"),
-        "SM-synchronous: {stderr}"
+        flat.contains("parameters written by SDO and read back"),
+        "{flat}"
+    );
+    assert!(
+        csp_error_mm < MAX_TRACKING_ERROR_M * 1e3,
+        "CSP: {csp_error_mm} mm"
+    );
+    assert!(
+        csp_static_um < STATIC_ERROR_M * 1e6,
+        "CSP: {csp_static_um} um"
+    );
+    assert!(
+        stderr.contains("cycle jitter rms"),
+        "jitter measured: {stderr}"
+    );
+    assert!(
+        stderr.contains("bus down: drive in AL state INIT"),
+        "bus down: {stderr}"
+    );
+    assert!(
+        drive_log.contains("0 watchdog expiries; AL INIT, status code 0x0000"),
+        "the drive left in INIT without an error: {drive_log}"
     );
     assert!(
         drive_log.contains("stopped:"),
@@ -310,6 +277,124 @@ fn without_the_rights_for_a_raw_socket_it_says_so_in_one_line() {
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
     assert!(
         stderr.contains("raw sockets need root or CAP_NET_RAW"),
+        "{stderr}"
+    );
+}
+
+/// Ctrl-C during a commissioning over the wire: the run stops at the next
+/// exchange, the drive is quick-stopped and switched off, the bus is brought
+/// down to INIT (the drive's watchdog never fires, no AL error stays
+/// latched), and the command ends with the safety-stop status and one line.
+#[test]
+fn ctrl_c_leaves_the_drive_switched_off_in_init_without_a_watchdog_error() {
+    let net = match Netns::create("int") {
+        Ok(n) => n,
+        Err(e) => {
+            eprintln!("SKIPPED: network namespace with a veth pair unavailable here ({e})");
+            return;
+        }
+    };
+    let out_dir = temp_dir("ethercat-ctrl-c");
+    let mut drive = DriveProcess::spawn(
+        &net,
+        std::env::temp_dir().join(format!("beltune-vd-int-{}.log", std::process::id())),
+        &["--start-position", &START_M.to_string(), "--no-dc"],
+    )
+    .unwrap_or_else(|e| panic!("virtual drive: {e}"));
+    let log = std::env::temp_dir().join(format!("beltune-int-{}.log", std::process::id()));
+    let mut child = beltune()
+        .args([
+            "commission",
+            "--ethercat",
+            &net.master_if,
+            "--cycle-us",
+            "1000",
+        ])
+        .args(["--frame-timeout-ms", "20", "--start-position"])
+        .arg(START_M.to_string())
+        .arg("--out")
+        .arg(&out_dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::fs::File::create(&log).unwrap())
+        .spawn()
+        .unwrap();
+    // wait until the axis is moving (a stage line after "take axis")
+    let started = std::time::Instant::now();
+    while !std::fs::read_to_string(&log)
+        .unwrap_or_default()
+        .contains("take axis")
+    {
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(120),
+            "no stage line: {}",
+            std::fs::read_to_string(&log).unwrap_or_default()
+        );
+        if let Ok(Some(s)) = child.try_wait() {
+            panic!(
+                "ended early ({s}): {}",
+                std::fs::read_to_string(&log).unwrap_or_default()
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    let status = child.wait().unwrap();
+    let stderr = std::fs::read_to_string(&log).unwrap_or_default();
+    let _ = std::fs::remove_file(&log);
+    let drive_log = drive.stop();
+    eprintln!("{stderr}\ndrive: {drive_log}");
+    assert_eq!(status.code(), Some(3), "safety stop status: {stderr}");
+    let last = stderr.trim_end().lines().last().unwrap_or("");
+    assert!(last.contains("stopped by the operator"), "{last}");
+    assert!(
+        stderr.contains("bus down: drive in AL state INIT"),
+        "{stderr}"
+    );
+    assert!(
+        drive_log.contains("0 watchdog expiries; AL INIT, status code 0x0000"),
+        "{drive_log}"
+    );
+    assert!(!out_dir.join("commissioning.json").exists(), "no result");
+    let diagnostic = PathBuf::from(format!("{}-safety-stop", out_dir.display()));
+    assert!(
+        diagnostic.join("safety-stop.json").is_file(),
+        "the diagnostic"
+    );
+    let _ = std::fs::remove_dir_all(&out_dir);
+    let _ = std::fs::remove_dir_all(&diagnostic);
+}
+
+#[test]
+fn a_bad_drive_profile_is_refused_before_the_bus_is_opened() {
+    let dir = temp_dir("drive-profile");
+    std::fs::create_dir_all(&dir).unwrap();
+    let profile = dir.join("drive.toml");
+    std::fs::write(
+        &profile,
+        "name = \"x\"\nvendor_id = 1\nproduct_code = 2\nmode = 8\n[[parameter]]\nquantity = \"k_pp\"\nindex = 0x2000\nsub = 1\ntype = \"REAL32\"\n",
+    )
+    .unwrap();
+    let out = beltune()
+        .args([
+            "commission",
+            "--ethercat",
+            "nosuchif0",
+            "--quiet",
+            "--drive-profile",
+        ])
+        .arg(&profile)
+        .args(["--out"])
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let _ = std::fs::remove_dir_all(&dir);
+    // bad input (2), about the profile, not the interface: checked first
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("--drive-profile") && stderr.contains("unknown quantity `k_pp`"),
         "{stderr}"
     );
 }

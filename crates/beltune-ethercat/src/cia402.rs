@@ -24,6 +24,9 @@ pub const SUPPORTED_DRIVE_MODES: u16 = 0x6502;
 
 /// Mode of operation: cyclic synchronous torque (CST).
 pub const MODE_CST: i8 = 10;
+/// Mode of operation: cyclic synchronous position (CSP): the drive closes
+/// its position and velocity loops.
+pub const MODE_CSP: i8 = 8;
 
 /// Statusword bit: remote (the drive accepts the controlword from the bus).
 pub const SW_REMOTE: u16 = 1 << 9;

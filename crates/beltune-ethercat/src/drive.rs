@@ -16,46 +16,47 @@
 //!
 //! When the master stops sending process data for the SM watchdog time
 //! (100 ms), the ESC drops to SAFE-OP and the firmware removes the torque and
-//! goes to "fault" with error code 0x8130 (communication: life guard error).
+//! goes to "fault" with error code 0x8130 (communication: life guard error);
+//! the inputs show it at the master's next read, and a CoE emergency
+//! (error code, error register 0x1001) goes into the mailbox, as for every
+//! fault (and one with code 0 when a fault reset clears it).
+//!
+//! The process data is the object dictionary's: each cycle the mapped
+//! outputs are written into their objects and the mapped inputs read from
+//! theirs, so any mapping of the mappable objects works, and an object not
+//! mapped keeps what an SDO wrote (0x6060 written by SDO selects the mode
+//! for an RxPDO without it). The objects behind the inputs are current from
+//! power-up on (0x6041 reads "switch on disabled" in PRE-OP).
 
-use crate::cia402::{self, Command, State, MODE_CST};
-use crate::esc::sii::{Identity, SiiContent, SiiPdo, SiiSyncManager};
+use crate::cia402::{self, Command, State, MODE_CSP, MODE_CST};
 use crate::esc::{al_code, coe, AlState, Application, Esc, SyncManager};
-use crate::od::{Access, Dictionary};
-use crate::pdo::{self, Codec, Inputs, Layout, MappingEntry};
-use crate::scaling::{self, Scaling};
+use crate::objects::{self, ObjectValues, ERROR_REGISTER, TORQUE_OFFSET};
+use crate::od::Dictionary;
+use crate::pdo::{self, Layout};
+use crate::scaling::Scaling;
 use crate::Error;
 use beltune::axis::Axis as _;
 use beltune::model::rigs::Plant;
 use beltune::sim::{SimAxis, SimConfig};
+use beltune_rt::control::{CascadeController, MotionSample, Setpoint};
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::Arc;
 
-/// Identity of the virtual drive (vendor ID 0: not a registered vendor).
-pub const IDENTITY: Identity = Identity {
-    vendor_id: 0x0000_0000,
-    product_code: 0x0042_0402,
-    revision: 0x0001_0000,
-    serial: 0x0000_0001,
-};
-/// Device name in the SII and 0x1008.
-pub const NAME: &str = "beltune virtual servo";
+pub use crate::objects::{IDENTITY, NAME};
 
 /// Error code for the SM watchdog (CiA 301: life guard error or heartbeat error).
 pub const ERROR_WATCHDOG: u16 = 0x8130;
 /// Error code when the bus leaves OP with the power stage on (CiA 301: communication).
 pub const ERROR_COMMUNICATION: u16 = 0x8100;
 
-const SM0: u16 = 0x1000;
-const SM1: u16 = 0x1080;
 /// Default length of each mailbox sync manager, bytes (SM0 at 0x1000 and
 /// SM1 at 0x1080 leave room for at most 128).
 pub const MAILBOX_LEN: u16 = 128;
 /// Shortest mailbox the drive accepts, bytes (a segmented SDO needs 16).
 pub const MAILBOX_MIN: u16 = 32;
-const SM2: u16 = 0x1100;
-const SM3: u16 = 0x1180;
+/// Emergencies kept for the mailbox at most (older ones are dropped).
+const MAX_EMERGENCIES: usize = 8;
 
 /// Faults a test can inject while the drive runs (shared with the test).
 #[derive(Debug, Default)]
@@ -146,7 +147,8 @@ pub struct Firmware {
     prev_cw: u16,
     mode_display: i8,
     error_code: u16,
-    codec: Option<Codec>,
+    /// Output and input layouts of the assigned mapping (from SAFE-OP on).
+    layouts: Option<(Layout, Layout)>,
     faults: Arc<Faults>,
     cfg: DriveConfig,
     load_nm_per_inc: u32,
@@ -154,7 +156,28 @@ pub struct Firmware {
     cycles: u64,
     quick_stop_damping: f64,
     sdo: coe::SdoServer,
+    /// The latest values behind the inputs.
+    position_inc: i32,
+    velocity_inc_s: i32,
+    torque_permille: i16,
+    load_position_inc: Option<i32>,
+    emergencies: std::collections::VecDeque<Vec<u8>>,
+    emergency_counter: u8,
+    /// The dictionary as it is at power-up (the ESI's default values).
+    power_up: Dictionary,
+    /// Motor encoder counts of the last cycle.
+    motor_counts: i64,
+    /// The drive's own loops in CSP, with their preview in cycles.
+    loops: Option<(CascadeController<f32>, usize)>,
+    /// CSP setpoints of the last `preview + 1` cycles, oldest first.
+    csp_setpoints: std::collections::VecDeque<MotionSample<f64>>,
+    csp_last_velocity_rad_s: f64,
+    following_error_inc: i32,
 }
+
+/// Error code when the loop parameters do not make a controller (CiA 402:
+/// parameter error).
+pub const ERROR_PARAMETER: u16 = 0x6320;
 
 /// The virtual drive: ESC and firmware.
 pub struct VirtualDrive {
@@ -218,7 +241,12 @@ impl VirtualDrive {
             1,
             Some(load_nm_per_inc),
         )?;
-        let od = dictionary(&scaling, cycle_ns, load_nm_per_inc);
+        let od = objects::dictionary(&ObjectValues {
+            scaling,
+            cycle_ns,
+            load_nm_per_inc,
+        });
+        let sii = crate::esc::sii::build(&objects::sii_content(&od, cfg.mailbox_bytes));
         let theta_e = match &plant {
             Plant::Physical(p) => p.theta_e(),
             Plant::Linear(l) => l.two_mass.theta_e,
@@ -234,17 +262,18 @@ impl VirtualDrive {
             None => 0.25 * theta_e / (cfg.cycle_s + plant.dead_time_s()),
         };
         let distributed_clocks = cfg.distributed_clocks;
-        let mailbox = cfg.mailbox_bytes;
-        let firmware = Firmware {
+        let initial_position = cfg.initial_position_inc;
+        let mut firmware = Firmware {
             od,
             sim,
             scaling,
             cycle_ns,
-            state: State::NotReadyToSwitchOn,
+            // transitions 0 and 1 (self-test, initialisation) are done at power-up
+            state: State::SwitchOnDisabled,
             prev_cw: 0,
             mode_display: 0,
             error_code: 0,
-            codec: None,
+            layouts: None,
             faults: Arc::new(Faults::default()),
             cfg,
             load_nm_per_inc,
@@ -252,8 +281,23 @@ impl VirtualDrive {
             cycles: 0,
             quick_stop_damping,
             sdo: coe::SdoServer::new(),
+            position_inc: initial_position,
+            velocity_inc_s: 0,
+            torque_permille: 0,
+            load_position_inc: None,
+            emergencies: Default::default(),
+            emergency_counter: 0,
+            power_up: Dictionary::new(),
+            motor_counts: 0,
+            loops: None,
+            csp_setpoints: Default::default(),
+            csp_last_velocity_rad_s: 0.0,
+            following_error_inc: 0,
         };
-        let mut esc = Esc::new(crate::esc::sii::build(&sii_content(mailbox)));
+        firmware.load_position_inc = firmware.load_increments(firmware.sim.cart_position_m());
+        firmware.publish();
+        firmware.power_up = firmware.od.clone();
+        let mut esc = Esc::new(sii);
         esc.set_distributed_clocks(distributed_clocks);
         Ok(VirtualDrive { esc, firmware })
     }
@@ -266,6 +310,14 @@ impl VirtualDrive {
     /// Advance the drive's clock to `t_ns` (SYNC0 cycles, watchdog).
     pub fn advance_to(&mut self, t_ns: u64) {
         self.esc.advance_to(t_ns, &mut self.firmware);
+    }
+
+    /// The drive's ESI file (ETG.2000 XML), from the dictionary and the SII
+    /// it serves.
+    pub fn esi(&self) -> String {
+        let od = &self.firmware.power_up;
+        let sii = objects::sii_content(od, self.firmware.cfg.mailbox_bytes);
+        crate::esi::esi(od, &sii, self.firmware.cycle_ns)
     }
 
     /// The fault injector shared with tests.
@@ -283,6 +335,11 @@ impl Firmware {
     /// The CiA 402 state.
     pub fn state(&self) -> State {
         self.state
+    }
+
+    /// The mode of operation the drive runs (0x6061).
+    pub fn mode_display(&self) -> i8 {
+        self.mode_display
     }
 
     /// The error code 0x603F.
@@ -310,15 +367,208 @@ impl Firmware {
         self.cycle_ns
     }
 
+    /// The object dictionary.
+    pub fn objects(&self) -> &Dictionary {
+        &self.od
+    }
+
     fn fault(&mut self, code: u16) {
         if !matches!(self.state, State::Fault | State::FaultReactionActive) {
             self.state = State::FaultReactionActive;
             self.error_code = code;
+            self.emergency(code);
         }
+    }
+
+    /// Queue a CoE emergency for `code` (0: error reset), with the error
+    /// register 0x1001 it sets: generic error, plus "communication" for the
+    /// 0x81xx codes.
+    fn emergency(&mut self, code: u16) {
+        let register = match code {
+            0 => 0,
+            0x8100..=0x81FF => 0x11,
+            _ => 0x01,
+        };
+        self.od.set(ERROR_REGISTER, 0, &[register]);
+        if self.emergencies.len() >= MAX_EMERGENCIES {
+            self.emergencies.pop_front();
+        }
+        self.emergency_counter = self.emergency_counter % 7 + 1;
+        self.emergencies.push_back(coe::emergency(
+            self.emergency_counter,
+            code,
+            register,
+            [0; 5],
+        ));
     }
 
     fn sync_mode_dc(&self) -> bool {
         self.od.get_uint(0x1C32, 1) == Some(2)
+    }
+
+    fn load_increments(&self, cart_m: f64) -> Option<i32> {
+        cart_m.is_finite().then(|| {
+            (cart_m * 1e9 / f64::from(self.load_nm_per_inc))
+                .round()
+                .clamp(i32::MIN as f64, i32::MAX as f64) as i32
+        })
+    }
+
+    fn statusword(&self) -> u16 {
+        let mut sw = self.state.statusword_bits() | cia402::SW_REMOTE;
+        if !matches!(
+            self.state,
+            State::SwitchOnDisabled | State::NotReadyToSwitchOn | State::Fault
+        ) {
+            sw |= cia402::SW_VOLTAGE_ENABLED;
+        }
+        if self.state == State::OperationEnabled
+            && (self.mode_display == MODE_CST || self.mode_display == MODE_CSP)
+        {
+            sw |= cia402::SW_FOLLOWS_TARGET;
+        }
+        sw
+    }
+
+    /// Enter CSP: the loops from the manufacturer objects, started
+    /// bumplessly at the present angle. Error code if they make no controller.
+    fn start_loops(&mut self) -> Result<(), u16> {
+        let od = &self.od;
+        let (c, preview) =
+            crate::loops::config_from(self.cfg.cycle_s, |i, s| od.get(i, s).map(<[u8]>::to_vec))
+                .ok_or(ERROR_PARAMETER)?;
+        let mut ctrl = CascadeController::new(c.cast::<f32>()).map_err(|_| ERROR_PARAMETER)?;
+        let phi = self.motor_angle_rad();
+        ctrl.reset_to(phi as f32);
+        self.loops = Some((ctrl, preview));
+        self.csp_setpoints.clear();
+        let hold = MotionSample {
+            angle_rad: phi,
+            velocity_rad_s: 0.0,
+            acceleration_rad_s2: 0.0,
+        };
+        self.csp_setpoints
+            .extend(std::iter::repeat_n(hold, preview + 1));
+        self.csp_last_velocity_rad_s = 0.0;
+        Ok(())
+    }
+
+    fn motor_angle_rad(&self) -> f64 {
+        self.motor_counts as f64 * self.sim.info().motor_rad_per_count
+    }
+
+    /// One cycle of the drive's loops: the setpoint of this cycle (target
+    /// position 0x607A and velocity offset 0x60B1, increments; acceleration
+    /// from the velocity's change) is the feedforward's preview, the one
+    /// `preview` cycles before is the loops' (the master sends the
+    /// trajectory `n_T` cycles ahead); the torque command, N m.
+    fn loops_torque(&mut self) -> f64 {
+        let q = self.sim.info().motor_rad_per_count;
+        let phi = self.motor_angle_rad();
+        let target = self
+            .od
+            .get_uint(crate::objects::TARGET_POSITION, 0)
+            .unwrap_or(0) as u32 as i32;
+        let velocity = self
+            .od
+            .get_uint(crate::objects::VELOCITY_OFFSET, 0)
+            .unwrap_or(0) as u32 as i32;
+        let omega = f64::from(velocity) * q;
+        let ahead = MotionSample {
+            angle_rad: phi + f64::from(target.wrapping_sub(self.position_inc)) * q,
+            velocity_rad_s: omega,
+            acceleration_rad_s2: (omega - self.csp_last_velocity_rad_s) / self.cfg.cycle_s,
+        };
+        self.csp_last_velocity_rad_s = omega;
+        let Some((ctrl, preview)) = self.loops.as_mut() else {
+            return 0.0;
+        };
+        self.csp_setpoints.push_back(ahead);
+        while self.csp_setpoints.len() > *preview + 1 {
+            self.csp_setpoints.pop_front();
+        }
+        let now = self.csp_setpoints.front().copied().unwrap_or(ahead);
+        let f = |m: MotionSample<f64>| MotionSample {
+            angle_rad: m.angle_rad as f32,
+            velocity_rad_s: m.velocity_rad_s as f32,
+            acceleration_rad_s2: m.acceleration_rad_s2 as f32,
+        };
+        let out = ctrl.step(&Setpoint::with_preview(f(now), f(ahead)), phi as f32);
+        self.following_error_inc = ((now.angle_rad - phi) / q)
+            .round()
+            .clamp(i32::MIN as f64, i32::MAX as f64) as i32;
+        f64::from(out.torque_nm)
+    }
+
+    /// The objects behind the inputs, from the drive's present state.
+    fn publish(&mut self) {
+        let sw = self.statusword();
+        self.od.set(cia402::STATUSWORD, 0, &sw.to_le_bytes());
+        self.od
+            .set(cia402::ERROR_CODE, 0, &self.error_code.to_le_bytes());
+        self.od.set(
+            cia402::MODES_OF_OPERATION_DISPLAY,
+            0,
+            &[self.mode_display as u8],
+        );
+        self.od
+            .set(pdo::POSITION_ACTUAL, 0, &self.position_inc.to_le_bytes());
+        self.od
+            .set(pdo::VELOCITY_ACTUAL, 0, &self.velocity_inc_s.to_le_bytes());
+        self.od
+            .set(pdo::TORQUE_ACTUAL, 0, &self.torque_permille.to_le_bytes());
+        self.od.set(
+            crate::objects::FOLLOWING_ERROR,
+            0,
+            &self.following_error_inc.to_le_bytes(),
+        );
+        if let Some(l) = self.load_position_inc {
+            self.od
+                .set(pdo::ADDITIONAL_POSITION_ACTUAL, 1, &l.to_le_bytes());
+        }
+    }
+
+    /// Copy the mapped inputs' objects into the SM3 image.
+    fn pack_inputs(&self, inputs: &mut [u8]) {
+        let Some((_, inp)) = &self.layouts else {
+            return;
+        };
+        for e in inp.entries() {
+            let (Some((o, n)), Some(v)) = (
+                inp.find(e.index, e.sub_index),
+                self.od.get(e.index, e.sub_index),
+            ) else {
+                continue;
+            };
+            if let Some(dst) = inputs.get_mut(o..o + n) {
+                let k = n.min(v.len());
+                dst[..k].copy_from_slice(&v[..k]);
+            }
+        }
+    }
+
+    /// Write the mapped outputs into their objects (`op`), or zeros (the
+    /// outputs are not valid outside OP).
+    fn unpack_outputs(&mut self, outputs: &[u8], op: bool) {
+        let Some((out, _)) = self.layouts.clone() else {
+            return;
+        };
+        for e in out.entries() {
+            let Some((o, n)) = out.find(e.index, e.sub_index) else {
+                continue;
+            };
+            let zero = vec![0u8; n];
+            let v = if op {
+                outputs.get(o..o + n).unwrap_or(&zero)
+            } else {
+                &zero
+            };
+            self.od.set(e.index, e.sub_index, v);
+        }
+    }
+
+    fn od_i16(&self, index: u16) -> i16 {
+        self.od.get_uint(index, 0).unwrap_or(0) as u16 as i16
     }
 }
 
@@ -329,21 +579,28 @@ impl Application for Firmware {
                 .map_err(|_| al_code::INVALID_OUTPUT_CONFIG)?;
             let inp = Layout::new(&self.od.assigned_mapping(pdo::SM3_ASSIGN))
                 .map_err(|_| al_code::INVALID_INPUT_CONFIG)?;
-            if !sms[2].enabled || sms[2].start != SM2 || usize::from(sms[2].len) != out.len() {
+            let (sm2, sm3) = (objects::SM2_START, objects::SM3_START);
+            let sm_ok = |sm: &SyncManager, start: u16, len: usize| {
+                if len == 0 {
+                    !sm.enabled || sm.len == 0
+                } else {
+                    sm.enabled && sm.start == start && usize::from(sm.len) == len
+                }
+            };
+            if !sm_ok(&sms[2], sm2, out.len()) {
                 return Err(al_code::INVALID_OUTPUT_CONFIG);
             }
-            if !sms[3].enabled || sms[3].start != SM3 || usize::from(sms[3].len) != inp.len() {
+            if !sm_ok(&sms[3], sm3, inp.len()) {
                 return Err(al_code::INVALID_INPUT_CONFIG);
             }
-            // the firmware needs the objects it drives: without them it has nothing to follow
-            let codec = Codec::new(out, inp).map_err(|_| al_code::INVALID_OUTPUT_CONFIG)?;
-            self.codec = Some(codec);
+            self.layouts = Some((out, inp));
         }
         if to < AlState::SafeOp {
-            self.codec = None;
+            self.layouts = None;
         }
         if from == AlState::Op && self.state.torque_enabled() {
             self.fault(ERROR_COMMUNICATION);
+            self.publish();
         }
         Ok(())
     }
@@ -353,29 +610,53 @@ impl Application for Firmware {
         self.sdo.handle(request, &mut self.od, state, capacity)
     }
 
+    fn outgoing(&mut self) -> Option<Vec<u8>> {
+        self.sdo
+            .follow_up()
+            .or_else(|| self.emergencies.pop_front())
+    }
+
     fn wants_sync0(&self) -> bool {
         self.sync_mode_dc()
     }
 
+    fn free_run_cycle_ns(&self) -> Option<u32> {
+        // with the power stage off the axis coasts (and is measured) whether
+        // or not the master sends; with torque the cycle follows the master
+        (!self.state.torque_enabled()).then_some(self.cycle_ns)
+    }
+
+    fn accepts_sync0_cycle(&self, cycle_ns: u32) -> bool {
+        // the drive runs its loops at its own cycle only
+        cycle_ns == self.cycle_ns
+    }
+
     fn watchdog_expired(&mut self) {
         self.fault(ERROR_WATCHDOG);
+        // the fault reaction (remove the torque) is done at once: "fault"
+        // (transition 14) without waiting for a cycle, which may not come
+        // without SYNC0
+        self.state = State::Fault;
         self.last_torque_nm = 0.0;
+        self.publish();
+    }
+
+    fn refresh_inputs(&mut self, inputs: &mut [u8]) {
+        self.publish();
+        self.pack_inputs(inputs);
     }
 
     fn cycle(&mut self, _t_ns: u64, op: bool, outputs: &[u8], inputs: &mut [u8]) {
         self.cycles += 1;
-        let Some(codec) = self.codec.clone() else {
+        if self.layouts.is_none() {
             return;
-        };
-        let out = if op {
-            codec.unpack_outputs(outputs).ok()
-        } else {
-            None
-        };
-        let (cw, mode, target) = match out {
-            Some(o) => (o.controlword, o.mode, o.target_torque_permille),
-            None => (0, 0, 0),
-        };
+        }
+        self.unpack_outputs(outputs, op);
+        let cw = self.od.get_uint(cia402::CONTROLWORD, 0).unwrap_or(0) as u16;
+        let mode = self.od.get_uint(cia402::MODES_OF_OPERATION, 0).unwrap_or(0) as u8 as i8;
+        let target =
+            i32::from(self.od_i16(pdo::TARGET_TORQUE)) + i32::from(self.od_i16(TORQUE_OFFSET));
+        let target = target.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16;
         let injected = if self.faults.armed(self.cycles) {
             self.faults.drive_fault.swap(0, Ordering::Relaxed)
         } else {
@@ -398,10 +679,22 @@ impl Application for Firmware {
         self.state = cia402::drive_transition(self.state, cmd);
         if self.state == State::SwitchOnDisabled && before == State::Fault {
             self.error_code = 0;
+            self.emergency(0);
         }
         self.prev_cw = cw;
-        if mode == MODE_CST {
-            self.mode_display = MODE_CST;
+        let enabled_now = self.state == State::OperationEnabled;
+        if mode == MODE_CST || mode == MODE_CSP {
+            // the cyclic synchronous modes switch at any time (CiA 402);
+            // CSP starts its loops when it is entered with the power on
+            let entering = mode == MODE_CSP
+                && enabled_now
+                && (self.mode_display != MODE_CSP || before != State::OperationEnabled);
+            if entering {
+                if let Err(code) = self.start_loops() {
+                    self.fault(code);
+                }
+            }
+            self.mode_display = mode;
         } else if !self.state.torque_enabled() {
             self.mode_display = mode.max(0);
         }
@@ -410,6 +703,9 @@ impl Application for Firmware {
         let torque = match self.state {
             State::OperationEnabled if self.mode_display == MODE_CST => {
                 self.scaling.permille_to_nm(target).clamp(-lim, lim)
+            }
+            State::OperationEnabled if self.mode_display == MODE_CSP => {
+                self.loops_torque().clamp(-lim, lim)
             }
             State::QuickStopActive => {
                 if omega.abs() < self.cfg.quick_stop_done_rad_s {
@@ -423,215 +719,16 @@ impl Application for Firmware {
         };
         self.last_torque_nm = torque;
         let m = self.sim.step(torque);
+        self.motor_counts = m.motor_counts;
         let q = self.sim.info().motor_rad_per_count;
-        let position = i64::from(self.cfg.initial_position_inc).wrapping_add(m.motor_counts) as i32;
-        let velocity = (self.sim.motor_velocity_rad_s() / q)
+        self.position_inc =
+            i64::from(self.cfg.initial_position_inc).wrapping_add(m.motor_counts) as i32;
+        self.velocity_inc_s = (self.sim.motor_velocity_rad_s() / q)
             .round()
             .clamp(i32::MIN as f64, i32::MAX as f64) as i32;
-        let load = m.cart_position_m.map(|x| {
-            (x * 1e9 / f64::from(self.load_nm_per_inc))
-                .round()
-                .clamp(i32::MIN as f64, i32::MAX as f64) as i32
-        });
-        let mut sw = self.state.statusword_bits() | cia402::SW_REMOTE;
-        if !matches!(
-            self.state,
-            State::SwitchOnDisabled | State::NotReadyToSwitchOn | State::Fault
-        ) {
-            sw |= cia402::SW_VOLTAGE_ENABLED;
-        }
-        if self.state == State::OperationEnabled && self.mode_display == MODE_CST {
-            sw |= cia402::SW_FOLLOWS_TARGET;
-        }
-        let inp = Inputs {
-            statusword: sw,
-            mode_display: self.mode_display,
-            position_inc: position,
-            velocity_inc_s: velocity,
-            torque_permille: self.scaling.nm_to_permille(m.torque_actual_nm),
-            error_code: self.error_code,
-            load_position_inc: load,
-        };
-        let _ = codec.pack_inputs(&inp, inputs);
-        // the objects behind the process data, for SDO reads
-        self.od.set(cia402::STATUSWORD, 0, &sw.to_le_bytes());
-        self.od
-            .set(cia402::ERROR_CODE, 0, &self.error_code.to_le_bytes());
-        self.od.set(
-            cia402::MODES_OF_OPERATION_DISPLAY,
-            0,
-            &[self.mode_display as u8],
-        );
-        self.od
-            .set(pdo::POSITION_ACTUAL, 0, &position.to_le_bytes());
-        self.od
-            .set(pdo::VELOCITY_ACTUAL, 0, &velocity.to_le_bytes());
-        self.od
-            .set(pdo::TORQUE_ACTUAL, 0, &inp.torque_permille.to_le_bytes());
-        if let Some(l) = load {
-            self.od
-                .set(pdo::ADDITIONAL_POSITION_ACTUAL, 1, &l.to_le_bytes());
-        }
-    }
-}
-
-fn rx_mappable() -> Vec<MappingEntry> {
-    pdo::OUTPUTS.to_vec()
-}
-
-fn tx_mappable() -> Vec<MappingEntry> {
-    let mut v = pdo::INPUTS.to_vec();
-    v.push(pdo::LOAD_POSITION);
-    v
-}
-
-fn dictionary(s: &Scaling, cycle_ns: u32, load_nm_per_inc: u32) -> Dictionary {
-    use Access::*;
-    let mut od = Dictionary::new(rx_mappable(), tx_mappable());
-    let u8v = |v: u8| vec![v];
-    let u16v = |v: u16| v.to_le_bytes().to_vec();
-    let u32v = |v: u32| v.to_le_bytes().to_vec();
-    od.insert(0x1000, 0, u32v(0x0002_0192), Ro); // device type: CiA 402 servo
-    od.insert(0x1008, 0, NAME.as_bytes().to_vec(), Ro);
-    od.insert(0x1018, 0, u8v(4), Ro);
-    od.insert(0x1018, 1, u32v(IDENTITY.vendor_id), Ro);
-    od.insert(0x1018, 2, u32v(IDENTITY.product_code), Ro);
-    od.insert(0x1018, 3, u32v(IDENTITY.revision), Ro);
-    od.insert(0x1018, 4, u32v(IDENTITY.serial), Ro);
-    od.insert(0x1C00, 0, u8v(4), Ro);
-    for (i, t) in [1u8, 2, 3, 4].iter().enumerate() {
-        od.insert(0x1C00, i as u8 + 1, u8v(*t), Ro);
-    }
-    // default mapping: the standard one with the load position
-    let rx = rx_mappable();
-    let tx = tx_mappable();
-    od.insert(pdo::RX_PDO, 0, u8v(rx.len() as u8), RwPreOp);
-    for (i, e) in rx.iter().enumerate() {
-        od.insert(pdo::RX_PDO, i as u8 + 1, u32v(e.to_u32()), RwPreOp);
-    }
-    od.insert(pdo::TX_PDO, 0, u8v(tx.len() as u8), RwPreOp);
-    for (i, e) in tx.iter().enumerate() {
-        od.insert(pdo::TX_PDO, i as u8 + 1, u32v(e.to_u32()), RwPreOp);
-    }
-    od.insert(pdo::SM2_ASSIGN, 0, u8v(1), RwPreOp);
-    od.insert(pdo::SM2_ASSIGN, 1, u16v(pdo::RX_PDO), RwPreOp);
-    od.insert(pdo::SM3_ASSIGN, 0, u8v(1), RwPreOp);
-    od.insert(pdo::SM3_ASSIGN, 1, u16v(pdo::TX_PDO), RwPreOp);
-    for idx in [0x1C32u16, 0x1C33] {
-        od.insert(idx, 0, u8v(9), Ro);
-        od.insert(idx, 1, u16v(1), RwPreOp); // sync type: 1 SM-synchronous, 2 DC SYNC0
-        od.insert(idx, 2, u32v(cycle_ns), Ro); // cycle time, ns
-        od.insert(idx, 4, u16v(0x0007), Ro); // supported: free run, SM, DC SYNC0
-        od.insert(idx, 5, u32v(cycle_ns), Ro); // minimum cycle time
-        od.insert(idx, 6, u32v(cycle_ns / 10), Ro); // calc and copy time
-        od.insert(idx, 9, u32v(0), Ro); // delay time
-    }
-    od.insert(cia402::ERROR_CODE, 0, u16v(0), Ro);
-    od.insert(cia402::CONTROLWORD, 0, u16v(0), Rw);
-    od.insert(cia402::STATUSWORD, 0, u16v(0), Ro);
-    od.insert(0x605A, 0, (2i16).to_le_bytes().to_vec(), Rw); // quick stop option code
-    od.insert(cia402::MODES_OF_OPERATION, 0, u8v(0), Rw);
-    od.insert(cia402::MODES_OF_OPERATION_DISPLAY, 0, u8v(0), Ro);
-    od.insert(pdo::POSITION_ACTUAL, 0, u32v(0), Ro);
-    od.insert(pdo::VELOCITY_ACTUAL, 0, u32v(0), Ro);
-    od.insert(pdo::TARGET_TORQUE, 0, u16v(0), Rw);
-    od.insert(scaling::MAX_TORQUE, 0, u16v(s.max_torque_permille), Ro);
-    od.insert(
-        scaling::RATED_TORQUE,
-        0,
-        u32v((s.rated_torque_nm * 1e3).round() as u32),
-        Ro,
-    );
-    od.insert(pdo::TORQUE_ACTUAL, 0, u16v(0), Ro);
-    od.insert(scaling::ENCODER_RESOLUTION, 0, u8v(2), Ro);
-    od.insert(
-        scaling::ENCODER_RESOLUTION,
-        1,
-        u32v(s.encoder_increments),
-        Ro,
-    );
-    od.insert(
-        scaling::ENCODER_RESOLUTION,
-        2,
-        u32v(s.motor_revolutions),
-        Ro,
-    );
-    // interpolation time: cycle in units of 10^-6 s when whole, else 10^-7 s
-    let (v, e) = if cycle_ns % 1000 == 0 && cycle_ns / 1000 <= 255 {
-        ((cycle_ns / 1000) as u8, -6i8)
-    } else {
-        ((cycle_ns / 100).min(255) as u8, -7i8)
-    };
-    od.insert(scaling::INTERPOLATION_TIME, 0, u8v(2), Ro);
-    od.insert(scaling::INTERPOLATION_TIME, 1, u8v(v), Ro);
-    od.insert(scaling::INTERPOLATION_TIME, 2, vec![e as u8], Ro);
-    od.insert(pdo::ADDITIONAL_POSITION_ACTUAL, 0, u8v(1), Ro);
-    od.insert(pdo::ADDITIONAL_POSITION_ACTUAL, 1, u32v(0), Ro);
-    od.insert(cia402::SUPPORTED_DRIVE_MODES, 0, u32v(1 << 9), Ro); // CST only
-    od.insert(
-        scaling::LOAD_ENCODER_RESOLUTION,
-        0,
-        u32v(load_nm_per_inc),
-        Ro,
-    );
-    od
-}
-
-fn sii_content(mailbox: u16) -> SiiContent {
-    let entries = |m: &[MappingEntry]| {
-        m.iter()
-            .map(|e| {
-                // CoE data types: 0x0006 UNSIGNED16, 0x0002 INTEGER8, 0x0003 INTEGER16, 0x0004 INTEGER32
-                let ty = match (e.index, e.bits) {
-                    (cia402::CONTROLWORD | cia402::STATUSWORD | cia402::ERROR_CODE, _) => 0x06,
-                    (_, 8) => 0x02,
-                    (_, 16) => 0x03,
-                    _ => 0x04,
-                };
-                (e.index, e.sub_index, ty, e.bits)
-            })
-            .collect()
-    };
-    SiiContent {
-        identity: IDENTITY,
-        name: NAME.into(),
-        mailbox: (SM0, mailbox, SM1, mailbox),
-        sync_managers: vec![
-            SiiSyncManager {
-                start: SM0,
-                len: mailbox,
-                control: 0x26,
-                ty: 1,
-            },
-            SiiSyncManager {
-                start: SM1,
-                len: mailbox,
-                control: 0x22,
-                ty: 2,
-            },
-            SiiSyncManager {
-                start: SM2,
-                len: 0,
-                control: 0x64,
-                ty: 3,
-            },
-            SiiSyncManager {
-                start: SM3,
-                len: 0,
-                control: 0x20,
-                ty: 4,
-            },
-        ],
-        fmmus: vec![1, 2, 3, 0],
-        rx_pdos: vec![SiiPdo {
-            index: pdo::RX_PDO,
-            sync_manager: 2,
-            entries: entries(&rx_mappable()),
-        }],
-        tx_pdos: vec![SiiPdo {
-            index: pdo::TX_PDO,
-            sync_manager: 3,
-            entries: entries(&tx_mappable()),
-        }],
+        self.load_position_inc = m.cart_position_m.and_then(|x| self.load_increments(x));
+        self.torque_permille = self.scaling.nm_to_permille(m.torque_actual_nm);
+        self.publish();
+        self.pack_inputs(inputs);
     }
 }

@@ -15,11 +15,15 @@ pub mod cia402;
 pub mod drive;
 pub mod error;
 pub mod esc;
+pub mod esi;
+pub mod loops;
 pub mod master;
 #[cfg(feature = "test-util")]
 pub mod netns;
+pub mod objects;
 pub mod od;
 pub mod pdo;
+pub mod profile;
 pub mod scaling;
 pub mod sched;
 pub mod serve;

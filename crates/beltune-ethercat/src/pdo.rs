@@ -82,6 +82,13 @@ pub const INPUTS: [MappingEntry; 6] = [
     MappingEntry::new(ERROR_CODE, 0, 16),
 ];
 
+/// The outputs appended to [`OUTPUTS`] for cyclic synchronous position
+/// (CSP): target position 0x607A and velocity offset 0x60B1.
+pub const CSP_OUTPUTS: [MappingEntry; 2] = [
+    MappingEntry::new(0x607A, 0, 32),
+    MappingEntry::new(0x60B1, 0, 32),
+];
+
 /// The load-side position entry appended to [`INPUTS`] when the drive has it.
 pub const LOAD_POSITION: MappingEntry = MappingEntry::new(ADDITIONAL_POSITION_ACTUAL, 1, 32);
 
@@ -173,6 +180,10 @@ pub struct Outputs {
     pub mode: i8,
     /// Target torque 0x6071, per mille of the rated torque.
     pub target_torque_permille: i16,
+    /// Target position 0x607A (CSP), increments, when mapped.
+    pub target_position_inc: i32,
+    /// Velocity offset 0x60B1 (CSP), increments/s, when mapped.
+    pub velocity_offset_inc_s: i32,
 }
 
 /// The inputs of one cycle.
@@ -227,6 +238,16 @@ impl Codec {
         Ok(Codec { outputs, inputs })
     }
 
+    /// The codec of the axis' mapping with the CSP outputs ([`CSP_OUTPUTS`])
+    /// after [`OUTPUTS`].
+    pub fn with_csp(load_position: bool) -> Self {
+        let mut c = Self::standard(load_position);
+        let mut out = OUTPUTS.to_vec();
+        out.extend_from_slice(&CSP_OUTPUTS);
+        c.outputs = Layout::new(&out).expect("byte-aligned mapping");
+        c
+    }
+
     /// The codec of the axis' own mapping ([`OUTPUTS`], [`INPUTS`], the load
     /// position when `load_position`).
     pub fn standard(load_position: bool) -> Self {
@@ -252,6 +273,9 @@ impl Codec {
             0,
             o.target_torque_permille as u16 as u64,
         );
+        let [p, v] = CSP_OUTPUTS;
+        l.set(buf, p.index, 0, o.target_position_inc as u32 as u64);
+        l.set(buf, v.index, 0, o.velocity_offset_inc_s as u32 as u64);
         Ok(())
     }
 
@@ -263,6 +287,8 @@ impl Codec {
             controlword: l.get(buf, CONTROLWORD, 0).unwrap_or(0) as u16,
             mode: l.get(buf, MODES_OF_OPERATION, 0).unwrap_or(0) as u8 as i8,
             target_torque_permille: l.get(buf, TARGET_TORQUE, 0).unwrap_or(0) as u16 as i16,
+            target_position_inc: l.get(buf, CSP_OUTPUTS[0].index, 0).unwrap_or(0) as u32 as i32,
+            velocity_offset_inc_s: l.get(buf, CSP_OUTPUTS[1].index, 0).unwrap_or(0) as u32 as i32,
         })
     }
 
@@ -368,6 +394,7 @@ mod tests {
                 controlword: 0x000F,
                 mode: 10,
                 target_torque_permille: -1,
+                ..Outputs::default()
             },
             &mut out,
         )
@@ -407,7 +434,7 @@ mod tests {
             let mut buf = vec![0u8; c.inputs.len()];
             c.pack_inputs(&i, &mut buf).unwrap();
             prop_assert_eq!(c.unpack_inputs(&buf).unwrap(), i);
-            let o = Outputs { controlword: cw, mode, target_torque_permille: target };
+            let o = Outputs { controlword: cw, mode, target_torque_permille: target, ..Outputs::default() };
             let mut buf = vec![0u8; c.outputs.len()];
             c.pack_outputs(&o, &mut buf).unwrap();
             prop_assert_eq!(c.unpack_outputs(&buf).unwrap(), o);

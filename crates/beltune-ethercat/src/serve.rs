@@ -11,7 +11,7 @@ use crate::Error;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What a serving session did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ServeStats {
     /// Frames answered.
     pub frames: u64,
@@ -23,6 +23,12 @@ pub struct ServeStats {
     /// came after the SYNC0 it was meant for: the drive applied the previous
     /// torque once more, as a real drive does).
     pub cycles_without_new_outputs: u64,
+    /// AL state when serving stopped.
+    pub al_state: crate::esc::AlState,
+    /// Whether an AL error was latched then.
+    pub al_error: bool,
+    /// AL status code then.
+    pub al_status_code: u16,
 }
 
 /// Nanoseconds of the monotonic clock.
@@ -172,5 +178,8 @@ pub fn serve(
         cycles: s.cycles,
         watchdog_expiries: s.watchdog_expiries,
         cycles_without_new_outputs: s.cycles_without_new_outputs,
+        al_state: drive.esc.al_state(),
+        al_error: drive.esc.al_error(),
+        al_status_code: drive.esc.al_status_code(),
     })
 }

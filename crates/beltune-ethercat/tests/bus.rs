@@ -27,6 +27,7 @@ fn open(storage: &Storage, cycle_s: f64) -> EthercatAxis<'_, InProcess<'_>> {
         storage,
         MasterConfig {
             cycle_s,
+            use_dc: true,
             ..MasterConfig::default()
         },
         |tx, rx| Ok(InProcess::new(tx, rx, d)),

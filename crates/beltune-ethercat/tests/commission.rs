@@ -41,6 +41,7 @@ fn run(cycle_s: f64) -> (Plant, Commissioning) {
         &storage,
         MasterConfig {
             cycle_s,
+            use_dc: true,
             ..MasterConfig::default()
         },
         |tx, rx| Ok(InProcess::new(tx, rx, drive)),

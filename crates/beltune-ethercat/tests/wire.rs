@@ -40,6 +40,7 @@ fn the_master_drives_the_virtual_drive_over_a_veth_pair() {
         &storage,
         MasterConfig {
             frame_timeout_s: 20e-3,
+            use_dc: true,
             ..MasterConfig::default()
         },
         |tx, rx| RawSocket::open(&net.master_if, tx, rx),

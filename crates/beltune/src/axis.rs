@@ -61,6 +61,10 @@ pub enum AxisError {
     /// "Operation enabled", bus state OP).
     #[error("the drive is not operational")]
     NotOperational,
+    /// The operator stopped the run (Ctrl-C, SIGTERM): the axis is
+    /// quick-stopped like after a failure.
+    #[error("stopped by the operator (SIGINT or SIGTERM)")]
+    Interrupted,
 }
 
 /// An axis driven by one cyclic exchange per cycle: simulated or real.

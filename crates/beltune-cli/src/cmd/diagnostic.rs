@@ -76,6 +76,7 @@ pub fn axis_error_name(e: &AxisError) -> &'static str {
         AxisError::WorkingCounter { .. } => "working_counter",
         AxisError::DriveFault { .. } => "drive_fault",
         AxisError::NotOperational => "not_operational",
+        AxisError::Interrupted => "interrupted",
     }
 }
 

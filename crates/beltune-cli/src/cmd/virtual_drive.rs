@@ -6,7 +6,6 @@
 //! load-side position 0x60E4:01. Stops on SIGINT/SIGTERM.
 
 use anyhow::Context;
-use beltune::model::rigs;
 use beltune::sim::SimConfig;
 use beltune_ethercat::drive::{DriveConfig, VirtualDrive};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -15,9 +14,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 #[derive(clap::Args)]
 pub struct Args {
     /// Network interface to answer on (e.g. one end of a veth pair).
-    #[arg(long)]
-    pub interface: String,
-    /// Built-in plant name (egc70, sim-a, sim-b, sim-c) or a plant TOML file.
+    #[arg(long, required_unless_present = "esi")]
+    pub interface: Option<String>,
+    /// Write the drive's ESI file (EtherCAT SubDevice Information, ETG.2000
+    /// XML, for TwinCAT and other configurators) to FILE and exit.
+    #[arg(long, value_name = "FILE")]
+    pub esi: Option<std::path::PathBuf>,
+    /// Built-in plant name (egc70, sim-a, sim-b, sim-c) or a plant TOML file
+    /// (a built-in name always means the built-in plant; write `./egc70` for a file).
     #[arg(long, default_value = "egc70")]
     pub plant: String,
     /// Payload on the cart, kg (egc70 only; default 11.2 kg).
@@ -27,7 +31,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1000)]
     pub cycle_us: u32,
     /// Cart position at power-up, m.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
     pub start_position: f64,
     /// Seed of the simulated measurement noise.
     #[arg(long, default_value_t = 1)]
@@ -51,12 +55,13 @@ extern "C" fn on_signal(_: libc::c_int) {
 
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let p = std::path::Path::new(&args.plant);
-    let plant = if args.plant.ends_with(".toml") || p.exists() {
-        rigs::load_toml(p)?
-    } else {
-        rigs::builtin(&args.plant, args.payload)?
-    };
+    if !args.start_position.is_finite() {
+        return Err(super::commission::preflight::bad(format!(
+            "--start-position {} is not a finite number",
+            args.start_position
+        )));
+    }
+    let plant = super::plant::resolve_plant(&args.plant, args.payload)?;
     let cfg = DriveConfig {
         cycle_s: f64::from(args.cycle_us) * 1e-6,
         sim: SimConfig {
@@ -67,7 +72,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         distributed_clocks: !args.no_dc,
         ..DriveConfig::default()
     };
-    let mut drive = VirtualDrive::new(&plant, cfg).context("virtual drive")?;
+    // a refused setting is bad input (exit status 2), like the library's own
+    let mut drive = VirtualDrive::new(&plant, cfg).map_err(|e| match e {
+        beltune_ethercat::Error::Sim(lib) => anyhow::Error::new(lib).context("virtual drive"),
+        e @ beltune_ethercat::Error::Config { .. } => {
+            super::commission::preflight::bad(format!("virtual drive: {e}"))
+        }
+        e => anyhow::Error::new(e).context("virtual drive"),
+    })?;
+    if let Some(path) = &args.esi {
+        beltune::io::write_atomic(path, drive.esi().as_bytes())?;
+        eprintln!(
+            "ESI of `{}` written to {}",
+            beltune_ethercat::drive::NAME,
+            path.display()
+        );
+        return Ok(());
+    }
+    let interface = args.interface.clone().unwrap_or_default();
     if let Some(p) = args.realtime_priority {
         beltune_ethercat::sched::set_realtime_priority(p).context("--realtime-priority")?;
     }
@@ -79,14 +101,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     eprintln!(
         "virtual drive `{}` on {}: plant {}, cycle {} us; Ctrl-C stops",
         beltune_ethercat::drive::NAME,
-        args.interface,
+        interface,
         args.plant,
         args.cycle_us
     );
-    let stats = beltune_ethercat::serve::serve(&args.interface, &mut drive, &STOP)?;
+    let stats = beltune_ethercat::serve::serve(&interface, &mut drive, &STOP)?;
     eprintln!(
-        "stopped: {} frames, {} cycles ({} without new outputs), {} watchdog expiries",
-        stats.frames, stats.cycles, stats.cycles_without_new_outputs, stats.watchdog_expiries
+        "stopped: {} frames, {} cycles ({} without new outputs), {} watchdog expiries; AL {}{}, status code {:#06x}",
+        stats.frames,
+        stats.cycles,
+        stats.cycles_without_new_outputs,
+        stats.watchdog_expiries,
+        stats.al_state,
+        if stats.al_error { " (error latched)" } else { "" },
+        stats.al_status_code
     );
     Ok(())
 }

@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod bench;
+pub mod drive;
 pub mod http;
 
 use fantoccini::{Client, ClientBuilder};

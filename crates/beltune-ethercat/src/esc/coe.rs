@@ -9,9 +9,23 @@
 //! 0), `n` (bits 1-3, unused bytes of a 7-byte segment) and `c` (bit 0, the
 //! last segment). A mailbox frame is a 6-byte mailbox header
 //! (length, address, channel/priority, type 3 = CoE | counter << 4), a 2-byte
-//! CoE header (number, service: 2 request, 3 response) and the SDO: command
-//! specifier, index, sub-index, 4 data bytes, then more data.
+//! CoE header (number, service: 1 emergency, 2 SDO request, 3 SDO response,
+//! 8 SDO information) and the SDO: command specifier, index, sub-index, 4
+//! data bytes, then more data.
+//!
+//! - An abort transfer goes as an SDO *request* (service 2, ETG.1000.6
+//!   5.6.2.7): a master tells it from a response by the service (SOEM read a
+//!   service-3 abort of a read as a too-short answer and of a write as
+//!   success).
+//! - Complete access (command bit 4): the whole object from sub-index 0 or 1,
+//!   sub-index 0 as UNSIGNED8 padded to 16 bits, the entries packed by their
+//!   bit lengths; always a normal or segmented transfer.
+//! - A request of another protocol (EoE, FoE, SoE, VoE), a CoE service this
+//!   server does not offer or a malformed header gets a mailbox error reply
+//!   (type 0, ETG.1000.4 table 29) instead of silence.
+//! - SDO information (service 8): [`super::sdo_info`].
 
+use super::sdo_info::{self, EntryInfo, ObjectInfo};
 use super::AlState;
 
 /// SDO abort codes (CiA 301 table 22) used by the emulator.
@@ -20,6 +34,10 @@ pub mod abort {
     pub const TOGGLE: u32 = 0x0503_0000;
     /// Client/server command specifier not valid or unknown.
     pub const COMMAND_UNKNOWN: u32 = 0x0504_0001;
+    /// Unsupported access to an object (complete access to a variable).
+    pub const UNSUPPORTED_ACCESS: u32 = 0x0601_0000;
+    /// Attempt to read a write only object.
+    pub const WRITE_ONLY: u32 = 0x0601_0001;
     /// Out of memory (a download longer than the server accepts).
     pub const OUT_OF_MEMORY: u32 = 0x0504_0005;
     /// Attempt to write a read only object.
@@ -32,10 +50,16 @@ pub mod abort {
     pub const PDO_TOO_LONG: u32 = 0x0604_0042;
     /// Data type does not match, length of service parameter does not match.
     pub const LENGTH_MISMATCH: u32 = 0x0607_0010;
+    /// Data type does not match, length of service parameter too high.
+    pub const LENGTH_TOO_HIGH: u32 = 0x0607_0012;
+    /// Data type does not match, length of service parameter too low.
+    pub const LENGTH_TOO_LOW: u32 = 0x0607_0013;
     /// Sub-index does not exist.
     pub const NO_SUB_INDEX: u32 = 0x0609_0011;
     /// Value range of parameter exceeded.
     pub const VALUE_RANGE: u32 = 0x0609_0030;
+    /// Value of parameter written too high.
+    pub const VALUE_TOO_HIGH: u32 = 0x0609_0031;
     /// Data cannot be transferred because of the present device state.
     pub const DEVICE_STATE: u32 = 0x0800_0022;
     /// Data cannot be transferred (general).
@@ -54,6 +78,63 @@ pub trait Objects {
         data: &[u8],
         state: AlState,
     ) -> Result<(), u32>;
+    /// The indices of an SDO information list (1 all objects, 2 RxPDO
+    /// mappable, 3 TxPDO mappable, 4 stored for a device replacement, 5
+    /// startup parameters).
+    fn list(&self, _list_type: u16) -> Vec<u16> {
+        Vec::new()
+    }
+    /// An object's description (SDO information, complete access).
+    fn object_info(&self, _index: u16) -> Option<ObjectInfo> {
+        None
+    }
+    /// An entry's description, or the abort code why there is none.
+    fn entry_info(&self, _index: u16, _sub_index: u8) -> Result<EntryInfo, u32> {
+        Err(abort::NO_OBJECT)
+    }
+}
+
+/// Mailbox types (ETG.1000.4 table 30).
+pub mod mailbox_type {
+    /// Mailbox error reply.
+    pub const ERROR: u8 = 0;
+    /// CANopen over EtherCAT.
+    pub const COE: u8 = 3;
+}
+
+/// Mailbox error codes (ETG.1000.4 table 29).
+pub mod mailbox_error {
+    /// Syntax of the 6-byte mailbox header wrong.
+    pub const SYNTAX: u16 = 0x0001;
+    /// The mailbox protocol is not supported.
+    pub const UNSUPPORTED_PROTOCOL: u16 = 0x0002;
+    /// The service in the protocol's header is not supported.
+    pub const SERVICE_NOT_SUPPORTED: u16 = 0x0004;
+    /// The length in the mailbox header is too short for the protocol.
+    pub const SIZE_TOO_SHORT: u16 = 0x0006;
+    /// The length in the mailbox header does not fit the sync manager.
+    pub const INVALID_SIZE: u16 = 0x0008;
+}
+
+/// A mailbox error reply: header (length 4, type 0), command 0x0001, detail.
+pub fn mailbox_error_reply(counter: u8, detail: u16) -> Vec<u8> {
+    let mut out = 4u16.to_le_bytes().to_vec();
+    out.extend_from_slice(&[0, 0, 0, mailbox_type::ERROR | (counter << 4)]);
+    out.extend_from_slice(&1u16.to_le_bytes());
+    out.extend_from_slice(&detail.to_le_bytes());
+    out
+}
+
+/// A CoE emergency (service 1, CiA 301 7.2.7): error code, error register
+/// (0x1001), 5 bytes of manufacturer data.
+pub fn emergency(counter: u8, error_code: u16, error_register: u8, data: [u8; 5]) -> Vec<u8> {
+    let mut out = 10u16.to_le_bytes().to_vec();
+    out.extend_from_slice(&[0, 0, 0, mailbox_type::COE | (counter << 4)]);
+    out.extend_from_slice(&(1u16 << 12).to_le_bytes());
+    out.extend_from_slice(&error_code.to_le_bytes());
+    out.push(error_register);
+    out.extend_from_slice(&data);
+    out
 }
 
 const MAILBOX_HEADER: usize = 6;
@@ -80,29 +161,37 @@ enum Transfer {
         size: usize,
         data: Vec<u8>,
         toggle: bool,
+        complete: bool,
     },
 }
 
-/// The SDO server: the state of a segmented transfer between requests.
+/// The SDO server: the state of a segmented transfer between requests, and
+/// the further fragments of an SDO information answer.
 #[derive(Clone, Debug, Default)]
 pub struct SdoServer {
     transfer: Option<Transfer>,
+    follow_ups: std::collections::VecDeque<Vec<u8>>,
 }
 
 /// Counter and CoE header of a request, for building the answer.
-struct Frame {
-    counter: u8,
+pub(crate) struct Frame {
+    pub(crate) counter: u8,
 }
 
 impl Frame {
-    fn mailbox(&self, sdo: &[u8]) -> Vec<u8> {
-        let len = COE_HEADER + sdo.len();
+    /// A CoE message of `service` with `body` after the CoE header.
+    pub(crate) fn coe(&self, service: u16, body: &[u8]) -> Vec<u8> {
+        let len = COE_HEADER + body.len();
         let mut out = Vec::with_capacity(MAILBOX_HEADER + len);
         out.extend_from_slice(&(len as u16).to_le_bytes());
-        out.extend_from_slice(&[0, 0, 0, 3 | (self.counter << 4)]);
-        out.extend_from_slice(&(3u16 << 12).to_le_bytes());
-        out.extend_from_slice(sdo);
+        out.extend_from_slice(&[0, 0, 0, mailbox_type::COE | (self.counter << 4)]);
+        out.extend_from_slice(&(service << 12).to_le_bytes());
+        out.extend_from_slice(body);
         out
+    }
+
+    fn mailbox(&self, sdo: &[u8]) -> Vec<u8> {
+        self.coe(3, sdo)
     }
 
     /// An initiate-style answer: command, index, sub-index, data (at least 4 bytes).
@@ -115,8 +204,13 @@ impl Frame {
         self.mailbox(&sdo)
     }
 
+    /// Abort transfer: command 0x80 in an SDO *request* (service 2).
     fn abort(&self, index: u16, sub: u8, code: u32) -> Vec<u8> {
-        self.reply(0x80, index, sub, &code.to_le_bytes())
+        let mut sdo = vec![0x80];
+        sdo.extend_from_slice(&index.to_le_bytes());
+        sdo.push(sub);
+        sdo.extend_from_slice(&code.to_le_bytes());
+        self.coe(2, &sdo)
     }
 }
 
@@ -131,9 +225,16 @@ impl SdoServer {
         self.transfer.is_some()
     }
 
-    /// Handle one mailbox request (the SM0 buffer); `None` for anything that
-    /// is not a CoE SDO request (the mailbox then answers nothing, as for an
-    /// unsupported protocol). `capacity` is the length of the answer mailbox
+    /// The next fragment of a multi-fragment answer (SDO information),
+    /// which the master reads without a further request.
+    pub fn follow_up(&mut self) -> Option<Vec<u8>> {
+        self.follow_ups.pop_front()
+    }
+
+    /// Handle one mailbox request (the SM0 buffer). `None` only for an abort
+    /// from the master (no answer) or a request too short to carry a
+    /// mailbox header; anything else this server does not offer gets a
+    /// mailbox error reply. `capacity` is the length of the answer mailbox
     /// (SM1), bytes.
     pub fn handle(
         &mut self,
@@ -142,20 +243,49 @@ impl SdoServer {
         state: AlState,
         capacity: usize,
     ) -> Option<Vec<u8>> {
-        if request.len() < MAILBOX_HEADER + MIN_SDO || capacity < MAILBOX_HEADER + MIN_SDO {
+        if request.len() < MAILBOX_HEADER || capacity < MAILBOX_HEADER + MIN_SDO {
             return None;
         }
         let length = usize::from(u16::from_le_bytes([request[0], request[1]]));
         let ty = request[5] & 0x0F;
         let counter = (request[5] >> 4) & 0x07;
-        if ty != 3 || length + MAILBOX_HEADER > request.len() || length < COE_HEADER + 1 {
-            return None;
+        if length + MAILBOX_HEADER > request.len() {
+            return Some(mailbox_error_reply(counter, mailbox_error::INVALID_SIZE));
+        }
+        if ty != mailbox_type::COE {
+            return Some(mailbox_error_reply(
+                counter,
+                mailbox_error::UNSUPPORTED_PROTOCOL,
+            ));
+        }
+        if length < COE_HEADER {
+            return Some(mailbox_error_reply(counter, mailbox_error::SIZE_TOO_SHORT));
         }
         let coe = u16::from_le_bytes([request[6], request[7]]);
-        if coe >> 12 != 2 {
-            return None;
-        }
         let f = Frame { counter };
+        match coe >> 12 {
+            2 => {}
+            8 => {
+                let body = &request[MAILBOX_HEADER + COE_HEADER..MAILBOX_HEADER + length];
+                let mut answers = sdo_info::handle(&f, body, objects, capacity);
+                let first = if answers.is_empty() {
+                    None
+                } else {
+                    Some(answers.remove(0))
+                };
+                self.follow_ups = answers.into();
+                return first;
+            }
+            _ => {
+                return Some(mailbox_error_reply(
+                    counter,
+                    mailbox_error::SERVICE_NOT_SUPPORTED,
+                ))
+            }
+        }
+        if length < COE_HEADER + 1 || request.len() < MAILBOX_HEADER + MIN_SDO {
+            return Some(mailbox_error_reply(counter, mailbox_error::SIZE_TOO_SHORT));
+        }
         let s = MAILBOX_HEADER + COE_HEADER;
         let cmd = request[s];
         // the SDO after the CoE header, as long as the mailbox header says
@@ -172,18 +302,14 @@ impl SdoServer {
                 self.transfer = None;
                 None
             }
-            _ if cmd & 0x10 != 0 => {
-                // complete access is not offered (SII general category says so)
-                self.transfer = None;
-                Some(f.abort(index, sub, abort::COMMAND_UNKNOWN))
-            }
             1 => {
                 self.transfer = None;
                 Some(self.initiate_download(&f, cmd, index, sub, sdo, length, objects, state))
             }
             2 => {
                 self.transfer = None;
-                Some(self.initiate_upload(&f, index, sub, objects, capacity))
+                let complete = cmd & 0x10 != 0;
+                Some(self.initiate_upload(&f, index, sub, complete, objects, capacity))
             }
             _ => {
                 self.transfer = None;
@@ -206,7 +332,12 @@ impl SdoServer {
     ) -> Vec<u8> {
         let expedited = cmd & 0x02 != 0;
         let sized = cmd & 0x01 != 0;
+        let complete = cmd & 0x10 != 0;
         let body = &sdo[SDO_HEADER..];
+        if complete && (expedited || sub > 1) {
+            // complete access goes normal or segmented, from sub-index 0 or 1
+            return f.abort(index, sub, abort::UNSUPPORTED_ACCESS);
+        }
         if expedited {
             let n = if sized {
                 4 - usize::from((cmd >> 2) & 0x03)
@@ -225,7 +356,12 @@ impl SdoServer {
         // data present in this frame: the mailbox length after CoE header, SDO header and size
         let present = length.saturating_sub(MIN_SDO).min(body.len() - 4);
         if size <= present {
-            return match objects.download(index, sub, &body[4..4 + size], state) {
+            let r = if complete {
+                download_complete(objects, index, sub, &body[4..4 + size], state)
+            } else {
+                objects.download(index, sub, &body[4..4 + size], state)
+            };
+            return match r {
                 Ok(()) => f.reply(0x60, index, sub, &[0; 4]),
                 Err(code) => f.abort(index, sub, code),
             };
@@ -240,6 +376,7 @@ impl SdoServer {
             size,
             data: body[4..4 + present].to_vec(),
             toggle: false,
+            complete,
         });
         f.reply(0x60, index, sub, &[0; 4])
     }
@@ -259,6 +396,7 @@ impl SdoServer {
             size,
             mut data,
             toggle,
+            complete,
         }) = self.transfer.take()
         else {
             return f.abort(0, 0, abort::COMMAND_UNKNOWN);
@@ -280,7 +418,12 @@ impl SdoServer {
         }
         let answer = f.mailbox(&[0x20 | (u8::from(t) << 4), 0, 0, 0, 0, 0, 0, 0]);
         if last {
-            return match objects.download(index, sub, &data, state) {
+            let r = if complete {
+                download_complete(objects, index, sub, &data, state)
+            } else {
+                objects.download(index, sub, &data, state)
+            };
+            return match r {
                 Ok(()) => answer,
                 Err(code) => f.abort(index, sub, code),
             };
@@ -291,6 +434,7 @@ impl SdoServer {
             size,
             data,
             toggle: !toggle,
+            complete,
         });
         answer
     }
@@ -300,11 +444,17 @@ impl SdoServer {
         f: &Frame,
         index: u16,
         sub: u8,
+        complete: bool,
         objects: &mut dyn Objects,
         capacity: usize,
     ) -> Vec<u8> {
-        match objects.upload(index, sub) {
-            Ok(v) if v.len() <= 4 => {
+        let value = if complete {
+            upload_complete(objects, index, sub)
+        } else {
+            objects.upload(index, sub)
+        };
+        match value {
+            Ok(v) if v.len() <= 4 && !complete => {
                 let mut d = [0u8; 4];
                 d[..v.len()].copy_from_slice(&v);
                 f.reply(0x43 | (((4 - v.len()) as u8) << 2), index, sub, &d)
@@ -365,6 +515,90 @@ impl SdoServer {
     }
 }
 
+/// Bytes of sub-index 0 in a complete access (UNSIGNED8 padded to 16 bits).
+const CA_SUB0_BYTES: usize = 2;
+
+/// The whole object for a complete-access upload from `first` (0 or 1).
+fn upload_complete(objects: &mut dyn Objects, index: u16, first: u8) -> Result<Vec<u8>, u32> {
+    if first > 1 {
+        return Err(abort::UNSUPPORTED_ACCESS);
+    }
+    let info = objects.object_info(index).ok_or(abort::NO_OBJECT)?;
+    if info.object_code == sdo_info::OBJECT_CODE_VAR {
+        return Err(abort::UNSUPPORTED_ACCESS);
+    }
+    let n = objects.upload(index, 0)?.first().copied().unwrap_or(0);
+    let mut out = Vec::new();
+    if first == 0 {
+        out.extend_from_slice(&[n, 0]);
+    }
+    for sub in 1..=n {
+        let e = objects.entry_info(index, sub)?;
+        let v = objects.upload(index, sub)?;
+        let bytes = usize::from(e.bits).div_ceil(8);
+        let mut v = v;
+        v.resize(bytes, 0);
+        out.extend_from_slice(&v);
+        if out.len() > MAX_DOWNLOAD {
+            return Err(abort::OUT_OF_MEMORY);
+        }
+    }
+    Ok(out)
+}
+
+/// A complete-access download from `first` (0 or 1): the entries in order,
+/// each as long as its description says; with sub-index 0 (writable, e.g. a
+/// PDO mapping) it is set to 0 first, then the entries, then its value, as
+/// CiA 301 asks for mapping and assignment objects.
+fn download_complete(
+    objects: &mut dyn Objects,
+    index: u16,
+    first: u8,
+    data: &[u8],
+    state: AlState,
+) -> Result<(), u32> {
+    let info = objects.object_info(index).ok_or(abort::NO_OBJECT)?;
+    if info.object_code == sdo_info::OBJECT_CODE_VAR {
+        return Err(abort::UNSUPPORTED_ACCESS);
+    }
+    let (n, mut at) = if first == 0 {
+        if data.len() < CA_SUB0_BYTES {
+            return Err(abort::LENGTH_MISMATCH);
+        }
+        (data[0], CA_SUB0_BYTES)
+    } else {
+        (info.max_sub, 0)
+    };
+    if n > info.max_sub {
+        return Err(abort::VALUE_RANGE);
+    }
+    let sub0_writable = first == 0
+        && objects
+            .entry_info(index, 0)
+            .is_ok_and(|e| e.access & sdo_info::ACCESS_WRITE_ANY != 0);
+    if sub0_writable {
+        objects.download(index, 0, &[0], state)?;
+    } else if first == 0 && objects.upload(index, 0)?.first() != Some(&n) {
+        return Err(abort::VALUE_RANGE);
+    }
+    for sub in 1..=n {
+        let e = objects.entry_info(index, sub)?;
+        let bytes = usize::from(e.bits).div_ceil(8);
+        let Some(v) = data.get(at..at + bytes) else {
+            return Err(abort::LENGTH_MISMATCH);
+        };
+        objects.download(index, sub, v, state)?;
+        at += bytes;
+    }
+    if at != data.len() {
+        return Err(abort::LENGTH_MISMATCH);
+    }
+    if sub0_writable {
+        objects.download(index, 0, &[n], state)?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -405,11 +639,10 @@ mod tests {
     fn sdo_of(answer: &[u8]) -> &[u8] {
         let len = usize::from(u16::from_le_bytes([answer[0], answer[1]]));
         assert_eq!(answer[5] & 0x0F, 3, "CoE");
-        assert_eq!(
-            u16::from_le_bytes([answer[6], answer[7]]) >> 12,
-            3,
-            "SDO response"
-        );
+        let service = u16::from_le_bytes([answer[6], answer[7]]) >> 12;
+        // ETG.1000.6 5.6.2.7.1: the abort transfer is an SDO request
+        let expected = if answer[8] == 0x80 { 2 } else { 3 };
+        assert_eq!(service, expected, "SDO response, or request for an abort");
         &answer[8..MAILBOX_HEADER + len]
     }
 
@@ -597,6 +830,45 @@ mod tests {
             .unwrap();
         assert_eq!(&sdo_of(&a)[4..8], &abort::LENGTH_MISMATCH.to_le_bytes());
         assert_eq!(od.0[&(0x2000, 1)], vec![0; 12]);
+    }
+
+    #[test]
+    fn other_protocols_and_services_get_a_mailbox_error_reply_not_silence() {
+        let (mut srv, mut od) = server_with_name();
+        // FoE (type 4) read request: ETG.1000.4 mailbox error, detail 0x0002
+        let mut foe = request(5, &[1, 0, 0, 0, 0, 0, 0, 0]);
+        foe[5] = 0x04 | (5 << 4);
+        let a = srv.handle(&foe, &mut od, AlState::PreOp, 128).unwrap();
+        assert_eq!(a[5] & 0x0F, 0, "type 0: mailbox error");
+        assert_eq!(a[5] >> 4, 5, "the request's counter");
+        assert_eq!(
+            &a[6..10],
+            &[0x01, 0x00, 0x02, 0x00],
+            "command 1, unsupported protocol"
+        );
+        // a CoE service other than SDO request or information (5: RxPDO remote)
+        let mut coe = request(6, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]);
+        coe[7] = 0x50;
+        let a = srv.handle(&coe, &mut od, AlState::PreOp, 128).unwrap();
+        assert_eq!(
+            &a[6..10],
+            &[0x01, 0x00, 0x04, 0x00],
+            "service not supported"
+        );
+        // a length beyond the mailbox
+        let mut long = request(7, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]);
+        long[0] = 200;
+        let a = srv.handle(&long, &mut od, AlState::PreOp, 128).unwrap();
+        assert_eq!(&a[6..10], &[0x01, 0x00, 0x08, 0x00], "invalid size");
+        // an abort from the master ends a transfer without an answer
+        assert!(srv
+            .handle(
+                &request(8, &[0x80, 0, 0, 0, 0, 0, 0, 0]),
+                &mut od,
+                AlState::PreOp,
+                128
+            )
+            .is_none());
     }
 
     #[test]

@@ -27,6 +27,7 @@
 
 pub mod coe;
 pub mod frame;
+pub mod sdo_info;
 pub mod sii;
 
 use frame::{Cmd, Datagram};
@@ -45,6 +46,17 @@ pub enum AlState {
     SafeOp = 4,
     /// OPERATIONAL (8).
     Op = 8,
+}
+
+impl core::fmt::Display for AlState {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            AlState::Init => "INIT",
+            AlState::PreOp => "PRE-OP",
+            AlState::SafeOp => "SAFE-OP",
+            AlState::Op => "OP",
+        })
+    }
 }
 
 impl AlState {
@@ -77,7 +89,19 @@ pub mod al_code {
     pub const INVALID_INPUT_CONFIG: u16 = 0x001E;
     /// Invalid DC SYNC configuration.
     pub const INVALID_DC_SYNC: u16 = 0x0030;
+    /// DC SYNC0 cycle time not supported (the drive runs at its own cycle).
+    pub const DC_SYNC0_CYCLE_TIME: u16 = 0x0036;
 }
+
+/// Mailbox answers and device messages the ESC keeps for SM1 at most; a
+/// further request stays in SM0 (its status "full") and writes to SM0 are
+/// not taken (working counter unchanged) until the master reads SM1, as a
+/// real device's mailbox does.
+pub const MAX_PENDING_MAILBOX: usize = 16;
+/// SYNC0 events the application runs one by one in one [`Esc::advance_to`];
+/// older ones (a clock that jumped, a SYNC0 cycle far below the
+/// application's) are skipped and counted in [`EscStats::sync0_skipped`].
+pub const MAX_SYNC0_PER_ADVANCE: u64 = 64;
 
 /// A sync manager's configuration (registers 0x0800 + 8 n).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -114,6 +138,25 @@ pub trait Application {
     fn watchdog_expired(&mut self);
     /// Whether the application runs DC-synchronous (SYNC0 required for SAFE-OP).
     fn wants_sync0(&self) -> bool;
+    /// Whether the application runs with a SYNC0 cycle of `cycle_ns`
+    /// (checked at PRE-OP -> SAFE-OP and when the master changes SYNC0 in
+    /// SAFE-OP or OP; refused with AL code 0x0036).
+    fn accepts_sync0_cycle(&self, _cycle_ns: u32) -> bool {
+        true
+    }
+    /// A message the device sends on its own (a CoE emergency), queued
+    /// behind the mailbox answers; polled from PRE-OP on.
+    fn outgoing(&mut self) -> Option<Vec<u8>> {
+        None
+    }
+    /// Write the current inputs into `inputs` without running a cycle (the
+    /// SM watchdog just expired: the master's next read must see the fault).
+    fn refresh_inputs(&mut self, _inputs: &mut [u8]) {}
+    /// Without SYNC0: the cycle on which the application runs by itself
+    /// when no process data comes (`None`: only on process data).
+    fn free_run_cycle_ns(&self) -> Option<u32> {
+        None
+    }
 }
 
 /// Counters for tests and diagnostics.
@@ -133,6 +176,11 @@ pub struct EscStats {
     /// before (SYNC0: the master's frame came late; the cycle used the
     /// previous outputs again).
     pub cycles_without_new_outputs: u64,
+    /// SYNC0 events skipped without an application cycle
+    /// ([`MAX_SYNC0_PER_ADVANCE`]).
+    pub sync0_skipped: u64,
+    /// Mailbox repeat requests served (SM1 activate bit 1 toggled).
+    pub mailbox_repeats: u64,
 }
 
 /// The emulated ESC.
@@ -143,13 +191,19 @@ pub struct Esc {
     al_error: bool,
     al_code: u16,
     time_ns: u64,
-    /// Mailbox answers waiting for SM1.
+    /// Mailbox answers waiting for SM1 (at most [`MAX_PENDING_MAILBOX`]).
     pending: std::collections::VecDeque<Vec<u8>>,
     sm1_full: bool,
+    /// The last message put into SM1, for the master's repeat request.
+    last_sm1: Vec<u8>,
+    /// A request held in SM0 while the answer queue is full.
+    sm0_held: Option<Vec<u8>>,
     outputs: Vec<u8>,
     last_output_ns: u64,
     watchdog_expired: bool,
     next_sync0_ns: Option<u64>,
+    /// Local time of the last application cycle, ns.
+    last_cycle_ns: u64,
     cycle_due: bool,
     fresh_outputs: bool,
     stats: EscStats,
@@ -190,9 +244,13 @@ impl Esc {
         mem[0x0007] = 0x0F; // ports 0, 1: MII; 2, 3: not implemented
                             // feature flags 0x0008: DC supported (bit 2), 64-bit DC (bit 3)
         mem[0x0008] = 0x0C;
-        // DL status: PDI operational (bit 0), link on port 0 (bit 4), loop
-        // closed on port 1..3 (bits 11, 13, 15), communication on port 0 (bit 9)
-        let dl: u16 = 0x0001 | 0x0010 | 0x0200 | 0x0800 | 0x2000 | 0x8000;
+        // DL status (ETG.1000.4 table 39): PDI operational (bit 0), PDI
+        // watchdog reloaded (bit 1, not expired), physical link on port 0 only
+        // (bit 4; 0x0007 says ports 2, 3 do not exist and port 1 has no
+        // cable), port 0 open with communication (bit 9, loop bit 8 clear),
+        // ports 1-3 loop closed without communication (bits 10, 12, 14): the
+        // last device of a line, as a master counts it
+        let dl: u16 = 0x0001 | 0x0002 | 0x0010 | 0x0200 | 0x0400 | 0x1000 | 0x4000;
         mem[REG_DL_STATUS..REG_DL_STATUS + 2].copy_from_slice(&dl.to_le_bytes());
         mem[REG_WD_DIVIDER..REG_WD_DIVIDER + 2].copy_from_slice(&2498u16.to_le_bytes());
         mem[REG_WD_SM..REG_WD_SM + 2].copy_from_slice(&1000u16.to_le_bytes());
@@ -207,10 +265,13 @@ impl Esc {
             time_ns: 0,
             pending: Default::default(),
             sm1_full: false,
+            last_sm1: Vec::new(),
+            sm0_held: None,
             outputs: Vec::new(),
             last_output_ns: 0,
             watchdog_expired: false,
             next_sync0_ns: None,
+            last_cycle_ns: 0,
             cycle_due: false,
             fresh_outputs: false,
             stats: EscStats::default(),
@@ -229,6 +290,11 @@ impl Esc {
         }
     }
 
+    /// The SII EEPROM image, bytes.
+    pub fn sii(&self) -> &[u8] {
+        &self.sii
+    }
+
     /// The AL state.
     pub fn al_state(&self) -> AlState {
         self.al_state
@@ -237,6 +303,11 @@ impl Esc {
     /// The AL status code (0 without error).
     pub fn al_status_code(&self) -> u16 {
         self.al_code
+    }
+
+    /// Whether an AL error indication is latched (0x0130 bit 4).
+    pub fn al_error(&self) -> bool {
+        self.al_error
     }
 
     /// Counters.
@@ -296,8 +367,49 @@ impl Esc {
         // SM1 (mailbox read by the master): bit 3 "mailbox full"
         let s1 = REG_SM + 8 + 5;
         self.mem[s1] = if self.sm1_full { 0x08 } else { 0 };
-        // SM0 is emptied at once (the request is handled when written)
-        self.mem[REG_SM + 5] = 0;
+        // SM0 is emptied when the request is handled, full while it is held
+        self.mem[REG_SM + 5] = if self.sm0_held.is_some() { 0x08 } else { 0 };
+    }
+
+    /// The message in SM1 while the master has not read it.
+    pub fn sm1_message(&self) -> Option<&[u8]> {
+        self.sm1_full.then_some(self.last_sm1.as_slice())
+    }
+
+    /// Messages waiting for SM1 behind the one in it (bounded by
+    /// [`MAX_PENDING_MAILBOX`]), and whether a request is held in SM0.
+    pub fn mailbox_backlog(&self) -> (usize, bool) {
+        (self.pending.len(), self.sm0_held.is_some())
+    }
+
+    /// Queue a message for SM1 (the answer to a request or the device's
+    /// own); false if the queue is full.
+    fn send_mailbox(&mut self, msg: Vec<u8>) -> bool {
+        if !self.sm1_full {
+            self.load_sm1(msg);
+            true
+        } else if self.pending.len() < MAX_PENDING_MAILBOX {
+            self.pending.push_back(msg);
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Device messages (emergencies) into the queue while there is room.
+    fn poll_outgoing(&mut self, app: &mut dyn Application) {
+        if self.al_state < AlState::PreOp {
+            return;
+        }
+        while self.pending.len() < MAX_PENDING_MAILBOX {
+            match app.outgoing() {
+                Some(m) => {
+                    self.send_mailbox(m);
+                }
+                None => break,
+            }
+        }
+        self.publish_sm_status();
     }
 
     /// System time (local time + offset, register 0x0910), ns.
@@ -340,15 +452,35 @@ impl Esc {
                     }
                 }
             };
+            let c = u64::from(cycle);
+            // in INIT and PRE-OP no cycle runs; beyond MAX_SYNC0_PER_ADVANCE
+            // due events the oldest are skipped (a SYNC0 cycle of 1 ns made
+            // this loop spin for minutes and the process deaf to signals)
+            let keep = if self.al_state >= AlState::SafeOp {
+                MAX_SYNC0_PER_ADVANCE
+            } else {
+                0
+            };
+            if next_t <= t_ns {
+                let due = (t_ns - next_t) / c + 1;
+                if due > keep {
+                    let skip = due - keep;
+                    next_t = next_t.saturating_add(skip.saturating_mul(c));
+                    if keep > 0 {
+                        self.stats.sync0_skipped += skip;
+                    }
+                }
+            }
             while next_t <= t_ns {
                 self.time_ns = next_t;
                 self.check_watchdog(app);
                 self.run_cycle(app);
-                next_t += u64::from(cycle);
+                next_t += c;
             }
             self.next_sync0_ns = Some(next_t);
         } else {
             self.next_sync0_ns = None;
+            self.free_run(t_ns, app);
         }
         self.time_ns = t_ns;
         self.check_watchdog(app);
@@ -368,7 +500,42 @@ impl Esc {
                 self.al_error = true;
                 self.al_code = al_code::SM_WATCHDOG;
                 self.publish_al();
+                // the inputs show the fault at the master's next read
+                let sm3 = self.sync_manager(3);
+                let (s, n) = (usize::from(sm3.start), usize::from(sm3.len));
+                if sm3.enabled && s + n <= MEMORY_SIZE {
+                    let mut inputs = self.mem[s..s + n].to_vec();
+                    app.refresh_inputs(&mut inputs);
+                    self.mem[s..s + n].copy_from_slice(&inputs);
+                }
+                self.poll_outgoing(app);
             }
+        }
+    }
+
+    /// Without SYNC0 and without process data for two of the application's
+    /// free-run cycles, the application runs on its own clock (the axis
+    /// moves whether or not the master sends): at most
+    /// [`MAX_SYNC0_PER_ADVANCE`] cycles per advance, older ones skipped.
+    fn free_run(&mut self, t_ns: u64, app: &mut dyn Application) {
+        let Some(c) = app.free_run_cycle_ns().map(u64::from).filter(|c| *c > 0) else {
+            return;
+        };
+        if self.al_state < AlState::SafeOp {
+            return;
+        }
+        if self.last_cycle_ns + 2 * c > t_ns {
+            return;
+        }
+        let due = (t_ns - self.last_cycle_ns) / c - 1;
+        if due > MAX_SYNC0_PER_ADVANCE {
+            self.last_cycle_ns += (due - MAX_SYNC0_PER_ADVANCE) * c;
+        }
+        while self.last_cycle_ns + 2 * c <= t_ns {
+            self.time_ns = self.last_cycle_ns + c;
+            self.check_watchdog(app);
+            self.fresh_outputs = true; // not a late master: no cycle without new outputs
+            self.run_cycle(app);
         }
     }
 
@@ -376,6 +543,7 @@ impl Esc {
         if self.al_state < AlState::SafeOp {
             return;
         }
+        self.last_cycle_ns = self.time_ns;
         let sm3 = self.sync_manager(3);
         let (s, n) = (usize::from(sm3.start), usize::from(sm3.len));
         if s + n > MEMORY_SIZE {
@@ -394,6 +562,7 @@ impl Esc {
         );
         self.mem[s..s + n].copy_from_slice(&inputs);
         self.stats.cycles += 1;
+        self.poll_outgoing(app);
     }
 
     /// Process one frame in place as the device on port 0 of a one-device
@@ -479,19 +648,32 @@ impl Esc {
             None
         };
         if cmd.reads() || matches!(cmd, Cmd::Armw | Cmd::Frmw) {
-            if matches!(cmd, Cmd::Brd | Cmd::Brw) {
+            let emptied = if matches!(cmd, Cmd::Brd | Cmd::Brw) {
                 // broadcast reads OR the devices' data into the datagram
                 let mut mine = vec![0u8; data.len()];
-                self.read(ado, &mut mine);
+                let e = self.read(ado, &mut mine);
                 data.iter_mut().zip(mine).for_each(|(d, m)| *d |= m);
+                e
             } else {
-                self.read(ado, data);
+                self.read(ado, data)
+            };
+            if emptied {
+                self.after_sm1_read(app);
             }
             wkc += 1;
         }
         if let Some(incoming) = incoming {
-            self.write(ado, &incoming, app);
-            wkc += if cmd.reads() { 2 } else { 1 };
+            // a write into a full SM0 (a request held) is not taken
+            let sm0 = self.sync_manager(0);
+            let (s0, n0) = (usize::from(sm0.start), usize::from(sm0.len));
+            let into_held_sm0 = self.sm0_held.is_some()
+                && sm0.enabled
+                && ado < s0 + n0
+                && ado + incoming.len() > s0;
+            if !into_held_sm0 {
+                self.write(ado, &incoming, app);
+                wkc += if cmd.reads() { 2 } else { 1 };
+            }
         }
         wkc
     }
@@ -511,13 +693,16 @@ impl Esc {
             if self.mem[b + 12] & 1 == 0 {
                 continue;
             }
-            let log_start = self.u32_at(b);
-            let len = u32::from(self.u16_at(b + 4));
+            let log_start = u64::from(self.u32_at(b));
+            let len = u64::from(self.u16_at(b + 4));
             let phys = usize::from(self.u16_at(b + 8));
             let ty = self.mem[b + 11];
-            // overlap of [logical, logical + data.len()) and [log_start, log_start + len)
+            // overlap of [logical, logical + data.len()) and [log_start,
+            // log_start + len), in 64 bits: a mapping that ends past
+            // 0xFFFFFFFF must not wrap
+            let logical = u64::from(logical);
             let lo = logical.max(log_start);
-            let hi = (logical + data.len() as u32).min(log_start + len);
+            let hi = (logical + data.len() as u64).min(log_start + len);
             if lo >= hi {
                 continue;
             }
@@ -561,7 +746,8 @@ impl Esc {
         wkc
     }
 
-    fn read(&mut self, ado: usize, data: &mut [u8]) {
+    /// Read registers or memory; true if the read emptied SM1.
+    fn read(&mut self, ado: usize, data: &mut [u8]) -> bool {
         let n = data.len();
         // live registers
         let st = self.system_time_ns();
@@ -575,7 +761,28 @@ impl Esc {
                 self.load_sm1(next);
             }
             self.publish_sm_status();
+            return true;
         }
+        false
+    }
+
+    /// After the master read SM1: a request held in SM0 gets its answer
+    /// now that there is room, and device messages follow.
+    fn after_sm1_read(&mut self, app: &mut dyn Application) {
+        if self.pending.len() < MAX_PENDING_MAILBOX {
+            if let Some(req) = self.sm0_held.take() {
+                self.handle_request(req, app);
+            }
+        }
+        self.poll_outgoing(app);
+    }
+
+    fn handle_request(&mut self, req: Vec<u8>, app: &mut dyn Application) {
+        self.stats.mailbox_requests += 1;
+        if let Some(answer) = app.mailbox(&req, self.al_state) {
+            self.send_mailbox(answer);
+        }
+        self.publish_sm_status();
     }
 
     fn load_sm1(&mut self, mut answer: Vec<u8>) {
@@ -585,6 +792,7 @@ impl Esc {
         if s + answer.len() <= MEMORY_SIZE {
             self.mem[s..s + answer.len()].copy_from_slice(&answer);
             self.sm1_full = true;
+            self.last_sm1 = answer;
         }
     }
 
@@ -615,21 +823,35 @@ impl Esc {
             || touches(REG_DC_SYNC0_CYCLE, 4)
         {
             self.next_sync0_ns = None;
+            self.check_sync0_in_operation(app);
+        }
+        // SM1 repeat request (activate register bit 1 toggled): the last
+        // answer again, acknowledged in the PDI control register bit 1
+        let sm1_activate = REG_SM + 8 + 6;
+        if touches(sm1_activate, 1) {
+            let repeat = self.mem[sm1_activate] & 0x02;
+            let ack = REG_SM + 8 + 7;
+            if self.mem[ack] & 0x02 != repeat {
+                if !self.sm1_full && !self.last_sm1.is_empty() {
+                    let last = std::mem::take(&mut self.last_sm1);
+                    self.load_sm1(last);
+                }
+                self.stats.mailbox_repeats += 1;
+                self.mem[ack] = (self.mem[ack] & !0x02) | repeat;
+                self.publish_sm_status();
+            }
         }
         // mailbox request complete?
         let sms = self.sms();
         if sms[0].contains_last_byte(ado, data.len()) && sms[0].control & 0x03 == 0x02 {
             let s = usize::from(sms[0].start);
             let req = self.mem[s..s + usize::from(sms[0].len)].to_vec();
-            self.stats.mailbox_requests += 1;
-            if let Some(answer) = app.mailbox(&req, self.al_state) {
-                if self.sm1_full {
-                    self.pending.push_back(answer);
-                } else {
-                    self.load_sm1(answer);
-                }
+            if self.pending.len() >= MAX_PENDING_MAILBOX {
+                self.sm0_held = Some(req);
+                self.publish_sm_status();
+            } else {
+                self.handle_request(req, app);
             }
-            self.publish_sm_status();
         }
         // outputs complete?
         if sms[2].contains_last_byte(ado, data.len()) {
@@ -649,7 +871,8 @@ impl Esc {
             0x0440..=0x0443 => false, // watchdog status and counters
             0x0508..=0x050F => false, // SII data (read only here: no EEPROM writes)
             0x0900..=0x091F => false, // DC receive and system times (handled above)
-            a if (REG_SM..REG_SM + 0x80).contains(&a) && (a - REG_SM) % 8 == 5 => false, // SM status
+            // SM status and PDI control (the device's side)
+            a if (REG_SM..REG_SM + 0x80).contains(&a) && matches!((a - REG_SM) % 8, 5 | 7) => false,
             a => a < MEMORY_SIZE,
         }
     }
@@ -712,16 +935,20 @@ impl Esc {
         let sms = self.sms();
         let check = match (from, to) {
             (AlState::Init, AlState::PreOp) => self.check_mailbox_sms(&sms),
-            (AlState::PreOp, AlState::SafeOp)
-                if app.wants_sync0() && self.sync0_cycle_ns().is_none() =>
-            {
-                Err(al_code::INVALID_DC_SYNC)
-            }
+            (AlState::PreOp, AlState::SafeOp) if app.wants_sync0() => match self.sync0_cycle_ns() {
+                None => Err(al_code::INVALID_DC_SYNC),
+                Some(c) if !app.accepts_sync0_cycle(c) => Err(al_code::DC_SYNC0_CYCLE_TIME),
+                Some(_) => Ok(()),
+            },
             _ => Ok(()),
         };
         match check.and_then(|_| app.al_change(from, to, &sms)) {
             Ok(()) => {
                 self.al_state = to;
+                if from < AlState::SafeOp {
+                    // free-run cycles count from here
+                    self.last_cycle_ns = self.time_ns;
+                }
                 if to == AlState::Op {
                     self.last_output_ns = self.time_ns;
                     self.watchdog_expired = false;
@@ -732,12 +959,40 @@ impl Esc {
                 if to == AlState::Init {
                     self.pending.clear();
                     self.sm1_full = false;
+                    self.sm0_held = None;
+                    self.last_sm1.clear();
                     self.publish_sm_status();
+                }
+                if to >= AlState::PreOp {
+                    self.poll_outgoing(app);
                 }
             }
             Err(code) => self.fail(code),
         }
         self.publish_al();
+    }
+
+    /// The master changed SYNC0 while the application runs on it: a cycle
+    /// it does not run with ends OP (SAFE-OP with AL code 0x0036).
+    fn check_sync0_in_operation(&mut self, app: &mut dyn Application) {
+        if self.al_state < AlState::SafeOp || !app.wants_sync0() {
+            return;
+        }
+        let ok = match self.sync0_cycle_ns() {
+            Some(c) => app.accepts_sync0_cycle(c),
+            // SYNC0 switched off: the cycle waits (the watchdog guards OP)
+            None => true,
+        };
+        if !ok {
+            let from = self.al_state;
+            if from == AlState::Op {
+                let sms = self.sms();
+                let _ = app.al_change(from, AlState::SafeOp, &sms);
+                self.al_state = AlState::SafeOp;
+            }
+            self.fail(al_code::DC_SYNC0_CYCLE_TIME);
+            self.publish_al();
+        }
     }
 
     fn fail(&mut self, code: u16) {
@@ -758,5 +1013,7 @@ impl Esc {
     }
 }
 
+#[cfg(test)]
+mod standard_tests;
 #[cfg(test)]
 mod tests;

@@ -118,12 +118,14 @@ pub fn build(c: &SiiContent) -> Vec<u8> {
         strings.extend_from_slice(s.as_bytes());
     }
     category(&mut w, 10, strings);
-    // general: group 2, image 0, order 1, name 1; CoE: SDO, PDO assign, PDO config (no complete access)
+    // general: group 2, image 0, order 1, name 1
     let mut general = vec![0u8; 32];
     general[0] = 2;
     general[2] = 1;
     general[3] = 1;
-    general[5] = 0x01 | 0x04 | 0x08;
+    // CoE details (ETG.2010): SDO 0x01, SDO information 0x02, PDO assign
+    // 0x04, PDO configuration 0x08, complete access 0x20
+    general[5] = 0x01 | 0x02 | 0x04 | 0x08 | 0x20;
     general[9] = 1; // one DS402 channel
     general[11] = 0x01; // safe-op enabled
     category(&mut w, 30, general);

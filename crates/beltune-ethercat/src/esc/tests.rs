@@ -6,14 +6,14 @@ use super::frame::{self, Cmd};
 use super::sii::{Identity, SiiContent, SiiSyncManager};
 use super::*;
 
-const SRC: [u8; 6] = [0x10; 6];
+pub(super) const SRC: [u8; 6] = [0x10; 6];
 
 #[derive(Default)]
-struct App {
-    cycles: Vec<(u64, bool, Vec<u8>)>,
-    watchdog: bool,
-    sync0: bool,
-    mailbox: Vec<Vec<u8>>,
+pub(super) struct App {
+    pub(super) cycles: Vec<(u64, bool, Vec<u8>)>,
+    pub(super) watchdog: bool,
+    pub(super) sync0: bool,
+    pub(super) mailbox: Vec<Vec<u8>>,
 }
 
 impl Application for App {
@@ -43,7 +43,7 @@ impl Application for App {
     }
 }
 
-fn esc() -> Esc {
+pub(super) fn esc() -> Esc {
     Esc::new(sii::build(&SiiContent {
         identity: Identity {
             vendor_id: 0x1234_5678,
@@ -74,7 +74,13 @@ fn esc() -> Esc {
 }
 
 /// Send one datagram; returns (data, working counter, address field).
-fn send(esc: &mut Esc, app: &mut App, cmd: Cmd, addr: u32, data: &[u8]) -> (Vec<u8>, u16, u32) {
+pub(super) fn send(
+    esc: &mut Esc,
+    app: &mut App,
+    cmd: Cmd,
+    addr: u32,
+    data: &[u8],
+) -> (Vec<u8>, u16, u32) {
     let mut f = frame::build(SRC, &[(cmd, addr, data)]);
     assert!(esc.process_frame(&mut f, app));
     assert_eq!(f[6], 0x12, "source MAC with the locally administered bit");
@@ -84,18 +90,18 @@ fn send(esc: &mut Esc, app: &mut App, cmd: Cmd, addr: u32, data: &[u8]) -> (Vec<
     (f[d.data()..d.data() + d.len].to_vec(), w, a)
 }
 
-fn fp(station: u16, reg: u16) -> u32 {
+pub(super) fn fp(station: u16, reg: u16) -> u32 {
     u32::from(station) | (u32::from(reg) << 16)
 }
 
-fn sm(start: u16, len: u16, control: u8, enable: u8) -> Vec<u8> {
+pub(super) fn sm(start: u16, len: u16, control: u8, enable: u8) -> Vec<u8> {
     let mut v = start.to_le_bytes().to_vec();
     v.extend_from_slice(&len.to_le_bytes());
     v.extend_from_slice(&[control, 0, enable, 0]);
     v
 }
 
-fn to_preop(e: &mut Esc, a: &mut App) {
+pub(super) fn to_preop(e: &mut Esc, a: &mut App) {
     send(
         e,
         a,

@@ -2,7 +2,7 @@
 //! (Linux `AF_PACKET`, EtherType 0x88A4) polled together with each exchange,
 //! and cycles paced by the monotonic clock.
 
-use super::{Clock, Transport};
+use super::{Clock, CycleJitter, Transport};
 use crate::Error;
 use core::future::Future;
 use core::pin::Pin;
@@ -19,6 +19,8 @@ pub struct RawSocket<'sto> {
     task: TxRx<'sto>,
     next_cycle: Option<Instant>,
     stray_frames: u64,
+    last_start: Option<Instant>,
+    jitter: CycleJitter,
     /// Pace the cycles in real time (a real drive needs it; a test against
     /// an SM-synchronous virtual drive may run unpaced).
     pub paced: bool,
@@ -49,6 +51,8 @@ impl<'sto> RawSocket<'sto> {
             task: Box::pin(task),
             next_cycle: None,
             stray_frames: 0,
+            last_start: None,
+            jitter: CycleJitter::default(),
             paced: true,
         })
     }
@@ -104,6 +108,16 @@ impl Transport for RawSocket<'_> {
             std::hint::spin_loop();
         }
         self.next_cycle = Some(next);
+        // the next exchange starts now: its period from the one before
+        let start = Instant::now();
+        if let Some(prev) = self.last_start.replace(start) {
+            self.jitter
+                .add((start - prev).as_secs_f64(), cycle.as_secs_f64());
+        }
+    }
+
+    fn jitter(&self) -> Option<CycleJitter> {
+        Some(self.jitter)
     }
 
     fn real_time(&self) -> bool {

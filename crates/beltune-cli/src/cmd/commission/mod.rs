@@ -162,10 +162,24 @@ pub struct Args {
     /// miss cycles (the computation threads keep normal scheduling).
     #[arg(long, value_name = "PRIO", requires = "ethercat")]
     pub realtime_priority: Option<u8>,
-    /// EtherCAT: do not use distributed clocks even where the drive offers
-    /// them (SM-synchronous: the drive runs a cycle per process-data frame).
+    /// EtherCAT: use distributed clocks (SYNC0) where the drive offers them.
+    /// Needs a master that keeps real time (PREEMPT_RT, an isolated core,
+    /// --realtime-priority): each missed SYNC0 makes the drive apply the
+    /// previous torque again. Default: SM-synchronous (a drive cycle per
+    /// process-data frame), which commissions within the limits on a PC.
+    #[arg(long, requires = "ethercat", conflicts_with = "no_dc")]
+    pub dc: bool,
+    /// EtherCAT: SM-synchronous, no distributed clocks (the default; kept
+    /// for scripts that say so).
     #[arg(long, requires = "ethercat")]
     pub no_dc: bool,
+    /// EtherCAT: a drive profile (TOML) that maps the designed controller
+    /// onto the drive's objects; the controller is then written into the
+    /// drive, read back, and validated with the drive's own loops (CSP).
+    /// Default: the shipped profile whose identity matches the drive (the
+    /// virtual drive's), else the controller stays the host's.
+    #[arg(long, value_name = "FILE", requires = "ethercat")]
+    pub drive_profile: Option<PathBuf>,
     /// No progress bars or stage lines (the summary is still printed).
     #[arg(long)]
     pub quiet: bool,
@@ -253,12 +267,20 @@ pub fn run_on_bus(args: Args, bus: Bus<'_>) -> anyhow::Result<()> {
 fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
     let plan = preflight::plan(&args)?;
     let started = Instant::now();
-    let set = match plan.mode {
-        Mode::Simulated(s) => run_simulated(&args, &plan.cfg, *s)?,
+    let (set, in_drive_failure) = match plan.mode {
+        Mode::Simulated(s) => (run_simulated(&args, &plan.cfg, *s)?, None),
         Mode::Ethercat(e) => run_ethercat(&args, &plan.cfg, e, bus)?,
-        Mode::Recorded(r) => run_recorded(&args, &plan.cfg, r)?,
+        Mode::Recorded(r) => (run_recorded(&args, &plan.cfg, r)?, None),
     };
-    deliver(&set, &plan.target, &args, started)
+    deliver(&set, &plan.target, &args, started)?;
+    match in_drive_failure {
+        // the result set is written; the drive's own loops missed the limits
+        Some(failures) => Err(anyhow::Error::new(Failure::new(
+            ExitStatus::LimitsNotMet,
+            format!("the controller in the drive (CSP) misses its limits: {failures}"),
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// Write the result set, print the summary of the record it holds, and end
@@ -319,7 +341,7 @@ fn run_ethercat(
     cfg: &CommissioningConfig,
     e: preflight::Ethercat,
     bus: Option<Bus<'_>>,
-) -> anyhow::Result<ResultSet> {
+) -> anyhow::Result<(ResultSet, Option<String>)> {
     use beltune_ethercat::master::wire::RawSocket;
     use beltune_ethercat::master::{EthercatAxis, Storage};
     if let Some(bus) = bus {
@@ -339,13 +361,22 @@ fn run_ethercat(
     run_on(args, cfg, e, bus)
 }
 
-/// Commission the drive on `bus`.
+/// Set by SIGINT/SIGTERM while a drive on a bus is commissioned.
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+extern "C" fn on_signal(_: libc::c_int) {
+    INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Commission the drive on `bus`; where the drive offers CSP, the delivered
+/// controller then goes into the drive and the validation move is run again
+/// with the drive's own loops (the failures of its verdict, if any).
 fn run_on(
     args: &Args,
     cfg: &CommissioningConfig,
     e: preflight::Ethercat,
     bus: Bus<'_>,
-) -> anyhow::Result<ResultSet> {
+) -> anyhow::Result<(ResultSet, Option<String>)> {
     if let Some(p) = args.realtime_priority {
         // this thread runs the bus; the computation threads it starts run normally
         beltune_ethercat::sched::set_realtime_priority(p)
@@ -353,6 +384,14 @@ fn run_on(
     }
     let label = bus.label;
     let mut axis = (bus.open)(e.master).with_context(|| label.clone())?;
+    // Ctrl-C or SIGTERM: the next exchange fails, the axis is quick-stopped
+    // and the bus brought down as after any failure
+    axis.set_interrupt(&INTERRUPTED);
+    // SAFETY: installing an async-signal-safe handler (an atomic store).
+    unsafe {
+        libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
+        libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
+    }
     let id = axis.identity().clone();
     let sc = axis.scaling();
     if !args.quiet {
@@ -365,7 +404,7 @@ fn run_on(
             id.product_code,
             id.revision,
             id.serial,
-            if id.dc { "SYNC0" } else { "no distributed clocks" },
+            if id.dc { "SYNC0" } else { "SM-synchronous" },
             sc.rated_torque_nm,
             sc.torque_limit_nm(),
             sc.encoder_increments,
@@ -378,24 +417,115 @@ fn run_on(
     }
     let mut progress = BarProgress::new(args.quiet);
     let run = commission(axis.as_axis(), &e.datasheet, cfg, &mut progress);
-    // leave the drive switched off and at rest, also after a stop
+    // the controller into the drive, its loops validated (CSP), where a
+    // profile says where it goes
+    let profile = e.drive_profile.clone().or_else(|| {
+        let shipped = beltune_ethercat::profile::DriveProfile::virtual_servo();
+        shipped
+            .matches(id.vendor_id, id.product_code)
+            .then_some(shipped)
+    });
+    let in_drive = match (&run, &profile) {
+        (Ok(r), Some(p)) if id.csp => Some(axis.validate_with_drive_loops(r, cfg, p)),
+        _ => None,
+    };
+    // leave the drive switched off and at rest, also after a stop, then
+    // bring the bus down (OP -> SAFE-OP -> PRE-OP -> INIT) so that the
+    // drive's watchdog has nothing to watch and no error stays latched
     let _ = axis.stop_drive();
     let (exchanges, missed) = axis.cycle_counts();
+    let jitter = axis.jitter();
+    let down = axis.shut_down();
     drop(axis);
+    if !args.quiet {
+        let line = if down.reached {
+            format!(
+                "bus down: drive in AL state {}{}{}",
+                match down.al_state {
+                    1 => "INIT",
+                    2 => "PRE-OP",
+                    4 => "SAFE-OP",
+                    8 => "OP",
+                    _ => "?",
+                },
+                if down.error { ", error latched" } else { "" },
+                if down.al_status_code != 0 {
+                    format!(", AL status code {:#06x}", down.al_status_code)
+                } else {
+                    String::new()
+                }
+            )
+        } else {
+            "bus down: the drive did not answer (its watchdog removes the torque)".to_string()
+        };
+        for l in crate::progress::stage_lines(&label, &line) {
+            eprintln!("{l}");
+        }
+    }
     if args.realtime_priority.is_some() {
         // the bus is closed: the report is no real-time work
         beltune_ethercat::sched::set_normal();
     }
-    if !args.quiet && id.dc {
-        // a late exchange makes the drive apply the previous torque again
-        let line = format!(
-            "{exchanges} exchanges, {missed} SYNC0 cycles missed by the master (host scheduling)"
+    if !args.quiet {
+        // the master's measured cycle; with SYNC0 a late exchange makes the
+        // drive apply the previous torque again
+        let mut line = format!(
+            "{exchanges} exchanges ({})",
+            if id.dc { "SYNC0" } else { "SM-synchronous" }
         );
+        if let Some(j) = jitter.filter(|j| j.periods > 0) {
+            line.push_str(&format!(
+                ", cycle jitter rms {:.0} us, max {:.0} us, {} cycles longer than 1.5 periods",
+                j.rms_s() * 1e6,
+                j.max_s * 1e6,
+                j.late
+            ));
+        }
+        if id.dc {
+            line.push_str(&format!(
+                ", {missed} SYNC0 cycles missed by the master (host scheduling)"
+            ));
+        }
         for l in crate::progress::stage_lines(&label, &line) {
             eprintln!("{l}");
         }
     }
     let run = run.map_err(|e| stopped(e, &mut progress, args))?;
+    let mut in_drive_failure = None;
+    let line = match in_drive {
+        Some(Ok(v)) => {
+            if !v.verdict.limits_met() {
+                in_drive_failure = Some(v.verdict.failures().join(", "));
+            }
+            format!(
+                "{} parameters written by SDO and read back, preview {} cycles; the validation move closed by the drive (CSP): max cart error {:.3} mm, static {:.1} um; {}",
+                v.parameters_written,
+                v.preview_cycles,
+                v.summary.max_tracking_error_m * 1e3,
+                v.summary.static_error_m * 1e6,
+                v.verdict.text()
+            )
+        }
+        Some(Err(err)) => {
+            in_drive_failure = Some(crate::exit::one_line(&anyhow::Error::new(err)));
+            format!(
+                "the controller could not be validated in the drive: {}",
+                in_drive_failure.as_deref().unwrap_or("")
+            )
+        }
+        None if !id.csp => {
+            "the drive offers no CSP: the controller is the host's (controller.toml)".to_string()
+        }
+        None => format!(
+            "no drive profile for vendor {:#010x} product {:#010x} (--drive-profile): the controller is the host's (controller.toml)",
+            id.vendor_id, id.product_code
+        ),
+    };
+    if !args.quiet {
+        for l in crate::progress::stage_lines("drive loops", &line) {
+            eprintln!("{l}");
+        }
+    }
     if !args.quiet {
         let note = if sc.load_m_per_inc.is_some() {
             "the cart errors are measured by the load-side encoder"
@@ -413,7 +543,7 @@ fn run_on(
         truth: None,
         provenance: Provenance::of_this_process(None),
     };
-    Ok(ResultSet::of_run(&run, &origin)?)
+    Ok((ResultSet::of_run(&run, &origin)?, in_drive_failure))
 }
 
 /// Commission from recorded data (`--csv`).

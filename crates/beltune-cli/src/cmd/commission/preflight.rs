@@ -64,6 +64,8 @@ pub struct Simulated {
 pub struct Ethercat {
     /// The network interface.
     pub interface: String,
+    /// The drive profile of `--drive-profile`, read and checked.
+    pub drive_profile: Option<beltune_ethercat::profile::DriveProfile>,
     /// The data sheet (from `--plant`).
     pub datasheet: DataSheet,
     /// The master's settings.
@@ -381,12 +383,19 @@ fn ethercat(args: &Args, interface: &str, datasheet: DataSheet) -> anyhow::Resul
     }
     Ok(Ethercat {
         interface: interface.to_string(),
+        drive_profile: match &args.drive_profile {
+            Some(p) => Some(
+                beltune_ethercat::profile::DriveProfile::read(p)
+                    .map_err(|e| bad(format!("--drive-profile: {e}")))?,
+            ),
+            None => None,
+        },
         datasheet,
         master: MasterConfig {
             subdevice: args.subdevice,
             cycle_s: f64::from(args.cycle_us) * 1e-6,
             frame_timeout_s: args.frame_timeout_ms * 1e-3,
-            use_dc: !args.no_dc,
+            use_dc: args.dc && !args.no_dc,
             ..MasterConfig::default()
         },
     })
