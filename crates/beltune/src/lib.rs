@@ -34,6 +34,7 @@ pub mod axis;
 pub mod commission;
 pub mod design;
 pub mod error;
+pub mod health;
 pub mod ident;
 pub mod io;
 pub mod lti;
