@@ -35,6 +35,7 @@ pub mod commission;
 pub mod design;
 pub mod error;
 pub mod health;
+pub mod history;
 pub mod ident;
 pub mod io;
 pub mod lti;
