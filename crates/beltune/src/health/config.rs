@@ -261,7 +261,7 @@ impl Default for HealthExperiment {
     fn default() -> Self {
         HealthExperiment {
             prbs_order: 7,
-            clock_period_s: 1.6e-3,
+            clock_period_s: 1.2e-3,
             periods: 2,
             slow_speed_m_s: 0.2,
             slow_run_m: 0.06,

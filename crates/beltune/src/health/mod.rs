@@ -212,6 +212,65 @@ pub fn health_simulated(
     health_check(&mut axis, &ds, baseline, cfg, progress)
 }
 
+/// Check the health from a recording instead of an axis (`beltune health
+/// --csv`): the two-mass fit of a recorded excitation (taken as made where
+/// the baseline was identified, at its amplitude) and, if given, the
+/// friction regressed from a recorded motion (without an uncertainty: the
+/// regression gives none). Only these quantities are compared.
+pub fn health_of_recording(
+    fit: &crate::ident::TwoMassFit,
+    friction: Option<&crate::ident::friction::MotionFriction>,
+    record_time_s: f64,
+    baseline: &Baseline,
+    limits: &HealthLimits,
+) -> Result<HealthCheck> {
+    limits.validate()?;
+    let nan = f64::NAN;
+    let far = experiment::PositionFit {
+        position_m: nan,
+        amplitude_nm: baseline.excitation_amplitude_nm.unwrap_or(nan),
+        params: fit.params,
+        sigma: fit.uncertainty,
+        method: crate::record::model::IdentificationMethod::FrfFit,
+        mass_held: false,
+        frf_fit: fit.params,
+        frf_sigma: fit.uncertainty,
+        fit_rms_db: fit.fit_rms_db,
+    };
+    let friction = friction.map(|f| friction::FrictionEstimate {
+        coulomb_nm: f.coulomb,
+        coulomb_sigma_nm: nan,
+        viscous_nm_s_per_rad: f.viscous,
+        viscous_sigma_nm_s_per_rad: nan,
+        holding_nm: f.offset,
+        holding_sigma_nm: nan,
+    });
+    let measured = Measured {
+        far: Some(far),
+        far_half: None,
+        near: None,
+        runs: Vec::new(),
+        friction,
+        failures: Vec::new(),
+    };
+    let log = vec![format!(
+        "recording: f_r {:.2} Hz, f_z {:.2} Hz, c {:.1} kN/m, m_c {:.2} kg, fit {:.2} dB rms",
+        fit.f_r_hz,
+        fit.f_z_hz,
+        fit.params.c / 1e3,
+        fit.params.m_c,
+        fit.fit_rms_db
+    )];
+    Ok(HealthCheck::judge(
+        baseline,
+        measured,
+        limits,
+        record_time_s,
+        0.0,
+        log,
+    ))
+}
+
 /// Typed error for experiment settings out of range.
 pub fn validate_experiment(e: &HealthExperiment) -> Result<()> {
     use crate::error::require_range;

@@ -132,6 +132,9 @@ pub fn render_html(report: &Report) -> Result<String> {
     if let Some(f) = &report.friction {
         add("friction", "Friction", plot::friction_svg(f)?);
     }
+    for (i, t) in report.trends.iter().enumerate() {
+        add(&format!("trend-{i}"), &t.title, plot::trend_svg(t)?);
+    }
     if !report.moves.is_empty() {
         let limit = report.excitation.as_ref().map(|e| e.torque_limit_nm);
         add(

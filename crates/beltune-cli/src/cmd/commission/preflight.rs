@@ -38,6 +38,8 @@ pub struct Plan {
     pub cfg: CommissioningConfig,
     /// What the run is made on.
     pub mode: Mode,
+    /// The history database (checked, [`super::super::history::DbArgs::check`]).
+    pub history: beltune::history::Location,
 }
 
 /// What a run is made on.
@@ -110,10 +112,12 @@ pub fn plan(args: &Args) -> anyhow::Result<Plan> {
     };
     if let Some(csv) = &args.csv {
         let recorded = recorded(args, csv)?;
+        let history = args.history.check(&target)?;
         return Ok(Plan {
             target,
             cfg,
             mode: Mode::Recorded(recorded),
+            history,
         });
     }
     let plant = load_plant(args)?;
@@ -132,10 +136,13 @@ pub fn plan(args: &Args) -> anyhow::Result<Plan> {
     let datasheet = DataSheet::for_plant(&plant, start_position, args.travel_window);
     datasheet.validate()?;
     if let Some(interface) = &args.ethercat {
+        let mode = Mode::Ethercat(ethercat(args, interface, datasheet)?);
+        let history = args.history.check(&target)?;
         return Ok(Plan {
             target,
             cfg,
-            mode: Mode::Ethercat(ethercat(args, interface, datasheet)?),
+            mode,
+            history,
         });
     }
     let plant_noise = plant.noise();
@@ -150,9 +157,11 @@ pub fn plan(args: &Args) -> anyhow::Result<Plan> {
         initial_cart_position_m: Some(start_position),
         ..SimConfig::default()
     };
+    let history = args.history.check(&target)?;
     Ok(Plan {
         target,
         cfg,
+        history,
         mode: Mode::Simulated(Box::new(Simulated {
             name: args.plant.clone().unwrap_or_else(|| "egc70".to_string()),
             plant,
@@ -257,10 +266,20 @@ pub fn check_flag(flag: &str, v: Option<f64>, lo: f64, hi: f64, open: bool) -> a
 
 /// The plant of `--plant` (default egc70) with `--payload` and `--tilt`.
 fn load_plant(args: &Args) -> anyhow::Result<Plant> {
-    let name = args.plant.as_deref().unwrap_or("egc70");
-    check_flag("--tilt", args.tilt, -90.0, 90.0, false)?;
-    let mut plant = super::super::plant::resolve_plant(name, args.payload)?;
-    if let Some(tilt) = args.tilt {
+    plant_with(args.plant.as_deref(), args.payload, args.tilt)
+}
+
+/// The plant `name` (default egc70) with a payload and a tilt (degrees),
+/// checked (`commission` and `health`).
+pub fn plant_with(
+    name: Option<&str>,
+    payload: Option<f64>,
+    tilt: Option<f64>,
+) -> anyhow::Result<Plant> {
+    let name = name.unwrap_or("egc70");
+    check_flag("--tilt", tilt, -90.0, 90.0, false)?;
+    let mut plant = super::super::plant::resolve_plant(name, payload)?;
+    if let Some(tilt) = tilt {
         match &mut plant {
             Plant::Physical(pp) => pp.tilt_rad = tilt.to_radians(),
             Plant::Linear(_) => {
@@ -318,6 +337,28 @@ fn check_excitation(
 
 /// The EtherCAT settings.
 fn ethercat(args: &Args, interface: &str, datasheet: DataSheet) -> anyhow::Result<Ethercat> {
+    Ok(Ethercat {
+        interface: interface.to_string(),
+        datasheet,
+        master: master_config(
+            interface,
+            args.subdevice,
+            args.cycle_us,
+            args.frame_timeout_ms,
+            args.no_dc,
+        )?,
+    })
+}
+
+/// The master's settings of `--ethercat IFACE` and its flags, checked
+/// (`commission` and `health`).
+pub fn master_config(
+    interface: &str,
+    subdevice: usize,
+    cycle_us: u32,
+    frame_timeout_ms: f64,
+    no_dc: bool,
+) -> anyhow::Result<beltune_ethercat::master::MasterConfig> {
     use beltune_ethercat::master::MasterConfig;
     if interface.is_empty() || interface.len() > MAX_INTERFACE_NAME_BYTES {
         return Err(bad(format!(
@@ -325,22 +366,18 @@ fn ethercat(args: &Args, interface: &str, datasheet: DataSheet) -> anyhow::Resul
             interface.escape_debug()
         )));
     }
-    if !(args.frame_timeout_ms.is_finite() && (0.1..=1000.0).contains(&args.frame_timeout_ms)) {
+    if !(frame_timeout_ms.is_finite() && (0.1..=1000.0).contains(&frame_timeout_ms)) {
         return Err(bad(format!(
             "--frame-timeout-ms {} is outside 0.1 ..= 1000",
-            beltune::error::short_number(args.frame_timeout_ms)
+            beltune::error::short_number(frame_timeout_ms)
         )));
     }
-    Ok(Ethercat {
-        interface: interface.to_string(),
-        datasheet,
-        master: MasterConfig {
-            subdevice: args.subdevice,
-            cycle_s: f64::from(args.cycle_us) * 1e-6,
-            frame_timeout_s: args.frame_timeout_ms * 1e-3,
-            use_dc: !args.no_dc,
-            ..MasterConfig::default()
-        },
+    Ok(MasterConfig {
+        subdevice,
+        cycle_s: f64::from(cycle_us) * 1e-6,
+        frame_timeout_s: frame_timeout_ms * 1e-3,
+        use_dc: !no_dc,
+        ..MasterConfig::default()
     })
 }
 
