@@ -270,6 +270,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         limits: limits(&args)?,
         ..HealthConfig::default()
     };
+    if !args
+        .baseline
+        .join(beltune::record::COMMISSIONING_FILE)
+        .is_file()
+    {
+        return Err(bad(format!(
+            "--baseline {}: no {} there (the result folder of a `beltune commission`)",
+            args.baseline.display(),
+            beltune::record::COMMISSIONING_FILE
+        )));
+    }
     let baseline = Baseline::read(&args.baseline)?;
     let mode = if args.csv.is_some() {
         Mode::Recorded

@@ -44,6 +44,9 @@ impl DbArgs {
         }
         let loc = self.location(target);
         match &loc {
+            // the default file goes beside the results, whose folder the
+            // result's writing creates
+            Location::Sqlite(_) if self.db.is_none() => {}
             Location::Sqlite(path) if !path.exists() => {
                 let dir = match path.parent() {
                     Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -90,6 +93,11 @@ fn beside(target: &OutputTarget) -> PathBuf {
 
 /// Record `run` in `loc`; its number.
 pub fn record(loc: &Location, run: &NewRun) -> anyhow::Result<i64> {
+    if let Location::Sqlite(path) = loc {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
+        }
+    }
     let mut db = HistoryDb::open(loc)?;
     Ok(db.record(run)?)
 }
