@@ -225,7 +225,11 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
             g.extend(
                 simulated
                     .iter()
-                    .filter(|f| f.1 && f.0 != "--payload" && f.0 != "--tilt" && f.0 != "--plant")
+                    // the data sheet and the homing result apply to a drive too
+                    .filter(|f| {
+                        f.1 && !["--payload", "--tilt", "--plant", "--start-position"]
+                            .contains(&f.0)
+                    })
                     .map(|f| f.0),
             );
         }
