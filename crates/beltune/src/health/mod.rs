@@ -75,7 +75,10 @@ impl HealthCheck {
             .measured
             .failures
             .iter()
-            .map(|f| format!("the belt's response {f}: it no longer behaves as the commissioned two-mass axis (a slack span, backlash, a loose clamp): re-tension the belt, check the clamps and the pulleys, then re-commission"))
+            .map(|f| {
+                let block = f.split_once(": ").map_or(f.as_str(), |(b, _)| b);
+                format!("the belt's response {block} no longer fits the commissioned two-mass axis (a slack span, backlash, a loose clamp): re-tension the belt, check the clamps and the pulleys, then re-commission")
+            })
             .collect();
         let mut c: Vec<&Comparison> = self
             .comparisons
