@@ -48,6 +48,10 @@ fn a_healthy_and_an_aged_axis_are_told_apart_and_both_go_into_the_history() {
     assert_eq!(o.status.code(), Some(0), "{out}{}", text(&o.stderr));
     assert!(out.starts_with("health of egc70: OK"), "{out}");
     assert!(dir.join("h1/health.json").is_file() && dir.join("h1/report.html").is_file());
+    // health.json reads back as it was written
+    let rec = beltune::record::health::HealthRecord::load(&dir.join("h1/health.json")).unwrap();
+    assert_eq!(rec.axis, "egc70");
+    assert_eq!(rec.check.comparisons.len(), 12);
     // 18 % of the belt stiffness lost: act, with the recommendation in words
     let o = beltune(
         &dir,
@@ -198,6 +202,8 @@ fn a_recording_is_checked_against_the_commissioning() {
             "resonance_damping"
         ]
     );
+    let rec = beltune::record::health::HealthRecord::load(&dir.join("h/health.json")).unwrap();
+    assert!(rec.check.measured.far.as_ref().unwrap().position_m.is_nan());
     let c = &j["quantities"][0];
     eprintln!("recording: stiffness {}", c["change"]);
     // the thesis' FRF fit of the recording against the commissioning's

@@ -141,18 +141,26 @@ fn the_health_check_measures_the_truth() {
 }
 
 /// Healthy runs (seeds and noise levels varied) raise no alarm: no quantity
-/// asks for action, and none is even on watch.
+/// asks for action, and none is even on watch. And the uncertainty each run
+/// states covers the spread of its value over the runs: the standard
+/// deviation of the far stiffness, the Coulomb and the viscous friction over
+/// the runs is at most twice the mean stated one-sigma value (a stated
+/// uncertainty far below the real spread would turn noise into alarms).
 #[test]
 fn healthy_runs_raise_no_alarm() {
     let _ = baseline();
-    let findings: Vec<String> = (0..HEALTHY_RUNS)
+    let runs: Vec<HealthCheck> = (0..HEALTHY_RUNS)
         .into_par_iter()
-        .flat_map(|k| {
-            let h = check(Wear::default(), k);
+        .map(|k| check(Wear::default(), k))
+        .collect();
+    let findings: Vec<String> = runs
+        .iter()
+        .enumerate()
+        .flat_map(|(k, h)| {
             h.comparisons
                 .iter()
                 .filter(|c| c.status != Status::Ok)
-                .map(|c| {
+                .map(move |c| {
                     format!(
                         "run {k}: {} {} {:?}",
                         c.quantity.key(),
@@ -160,11 +168,38 @@ fn healthy_runs_raise_no_alarm() {
                         c.status
                     )
                 })
-                .chain(h.measured.failures.iter().map(|f| format!("run {k}: {f}")))
-                .collect::<Vec<_>>()
+                .chain(
+                    h.measured
+                        .failures
+                        .iter()
+                        .map(move |f| format!("run {k}: {f}")),
+                )
         })
         .collect();
     assert!(findings.is_empty(), "false alarms: {findings:#?}");
+    for q in [
+        Quantity::StiffnessFar,
+        Quantity::CoulombFriction,
+        Quantity::ViscousFriction,
+    ] {
+        let (values, sigmas): (Vec<f64>, Vec<f64>) = runs
+            .iter()
+            .map(|h| {
+                let c = h.comparison(q).unwrap();
+                (c.measured.value, c.measured.sigma)
+            })
+            .unzip();
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let stated = sigmas.iter().sum::<f64>() / n;
+        eprintln!("{}: spread {sd:.3e}, stated {stated:.3e}", q.key());
+        assert!(
+            sd <= 2.0 * stated,
+            "{}: spread {sd} against stated {stated}",
+            q.key()
+        );
+    }
 }
 
 /// Each ageing of the simulator is found in every run: a 10 % belt

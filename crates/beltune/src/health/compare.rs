@@ -52,8 +52,10 @@ pub struct Comparison {
     /// The health check's value and uncertainty.
     pub measured: Estimate,
     /// The change: relative (a fraction) or absolute (the quantity's unit), as the limit.
+    #[serde(with = "super::nan_as_null")]
     pub change: f64,
     /// Its one-sigma uncertainty (NaN: unknown).
+    #[serde(with = "super::nan_as_null")]
     pub change_sigma: f64,
     /// The limit it was judged against.
     pub limit: Limit,

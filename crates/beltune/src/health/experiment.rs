@@ -46,9 +46,12 @@ use serde::{Deserialize, Serialize};
 /// A two-mass model measured at one position and amplitude.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PositionFit {
-    /// Mean motor-side position over the compared periods, m.
+    /// Mean motor-side position over the compared periods, m (NaN / `null`:
+    /// unknown, a recording).
+    #[serde(with = "super::nan_as_null")]
     pub position_m: f64,
-    /// PRBS amplitude `A_PRBS`, N m.
+    /// PRBS amplitude `A_PRBS`, N m (NaN / `null`: unknown).
+    #[serde(with = "super::nan_as_null")]
     pub amplitude_nm: f64,
     /// The model (friction-aware where the baseline's is and the fit holds).
     pub params: TwoMassParams,
@@ -63,6 +66,7 @@ pub struct PositionFit {
     /// Its uncertainties.
     pub frf_sigma: Option<ParamUncertainty>,
     /// RMS error of the FRF fit, dB.
+    #[serde(with = "super::nan_as_null")]
     pub fit_rms_db: f64,
 }
 

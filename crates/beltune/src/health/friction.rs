@@ -18,14 +18,17 @@ pub struct FrictionEstimate {
     /// Coulomb friction at the motor `tau_c~`, N m.
     pub coulomb_nm: f64,
     /// Its uncertainty, N m (NaN: unknown).
+    #[serde(with = "super::nan_as_null")]
     pub coulomb_sigma_nm: f64,
     /// Viscous friction at the motor `d_v~`, N m s/rad.
     pub viscous_nm_s_per_rad: f64,
     /// Its uncertainty, N m s/rad (NaN: unknown).
+    #[serde(with = "super::nan_as_null")]
     pub viscous_sigma_nm_s_per_rad: f64,
     /// The torque offset (the holding torque), N m.
     pub holding_nm: f64,
     /// Its uncertainty, N m (NaN: unknown).
+    #[serde(with = "super::nan_as_null")]
     pub holding_sigma_nm: f64,
 }
 

@@ -294,8 +294,8 @@ pub fn validate_experiment(e: &HealthExperiment) -> Result<()> {
     Ok(())
 }
 
-/// `NaN` as JSON `null` and back (an unknown uncertainty).
-mod nan_as_null {
+/// `NaN` as JSON `null` and back (an unknown uncertainty, an unknown position).
+pub(crate) mod nan_as_null {
     use serde::{Deserialize, Deserializer, Serializer};
 
     pub fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {

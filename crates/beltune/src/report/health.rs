@@ -242,7 +242,11 @@ pub fn history_report(title: &str, runs: &[RunRow]) -> Report {
                     r.run.created_utc.clone(),
                     r.run.status.clone(),
                     r.run.result_dir.clone().unwrap_or_default(),
-                    r.run.recommendations.join("; "),
+                    match r.run.recommendations.as_slice() {
+                        [] => String::new(),
+                        [one] => one.clone(),
+                        [first, rest @ ..] => format!("{first} (and {} more)", rest.len()),
+                    },
                 ]
             })
             .collect(),
