@@ -196,7 +196,10 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
             "current_units",
         ],
     ),
-    ("Output", &["config", "out", "force", "quiet", "json"]),
+    (
+        "Output",
+        &["config", "out", "force", "quiet", "json", "db", "axis"],
+    ),
 ];
 
 /// The heading of a `beltune commission` flag.

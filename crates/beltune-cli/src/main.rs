@@ -44,6 +44,10 @@ enum Command {
     Design(cmd::design::Args),
     /// Commission an axis end to end: identify, design, validate, report.
     Commission(cmd::commission::Args),
+    /// Check the health of a commissioned axis against its commissioning (a few seconds).
+    Health(cmd::health::Args),
+    /// The runs of the history database, their trends and limits.
+    History(cmd::history::Args),
     /// Serve the interactive tuning page.
     Serve(cmd::serve::Args),
     /// Robustness study: commission N seeded random axes and print the table.
@@ -93,6 +97,8 @@ fn main() {
         Command::Friction(a) => cmd::friction::run(a),
         Command::Design(a) => cmd::design::run(a),
         Command::Commission(a) => cmd::commission::run(a),
+        Command::Health(a) => cmd::health::run(a),
+        Command::History(a) => cmd::history::run(a),
         Command::Serve(a) => cmd::serve::run(a),
         Command::Montecarlo(a) => cmd::montecarlo::run(a),
         Command::Compare(a) => cmd::compare::run(a),

@@ -216,6 +216,91 @@ fn a_late_answer_no_longer_loses_every_later_frame_with_the_drive_as_a_child_pro
     let _ = std::fs::remove_dir_all(&out_dir);
 }
 
+/// `beltune health --ethercat` against `beltune virtual-drive` (a child
+/// process in the namespace, SM-synchronous): a commissioning over the wire
+/// is the baseline, the health check over the same wire finds the same axis
+/// (every quantity within its limits: exit status 0) in at most 5 s of axis
+/// time.
+#[test]
+fn a_health_check_runs_over_the_wire() {
+    let net = match Netns::create("health") {
+        Ok(n) => n,
+        Err(e) => {
+            eprintln!("SKIPPED: network namespace with a veth pair unavailable here ({e})");
+            return;
+        }
+    };
+    let dir = temp_dir("ethercat-health");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut drive = DriveProcess::spawn(
+        &net,
+        std::env::temp_dir().join(format!("beltune-vd-health-{}.log", std::process::id())),
+        &["--no-dc"],
+    )
+    .unwrap_or_else(|e| panic!("virtual drive: {e}"));
+    let wire = [
+        "--ethercat",
+        net.master_if.as_str(),
+        "--cycle-us",
+        "1000",
+        "--frame-timeout-ms",
+        "20",
+        "--start-position",
+        "0.05",
+        "--quiet",
+    ];
+    let base = dir.join("base");
+    let out = beltune()
+        .arg("commission")
+        .args(wire)
+        .args([
+            "--max-tracking-error",
+            "0.01",
+            "--max-static-error",
+            "0.001",
+        ])
+        .arg("--out")
+        .arg(&base)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "commission over the wire: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // the axis homed again and parked at 50 mm: a drive powered up anew
+    // (the master counts the position from where it finds the drive)
+    drive.stop();
+    let mut drive = DriveProcess::spawn(
+        &net,
+        std::env::temp_dir().join(format!("beltune-vd-health2-{}.log", std::process::id())),
+        &["--no-dc"],
+    )
+    .unwrap_or_else(|e| panic!("virtual drive: {e}"));
+    let out = beltune()
+        .arg("health")
+        .args(wire)
+        .arg("--baseline")
+        .arg(&base)
+        .arg("--json")
+        .arg("--out")
+        .arg(dir.join("health"))
+        .output()
+        .unwrap();
+    let drive_log = drive.stop();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "health over the wire: {stdout}{}\ndrive: {drive_log}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(j["status"], "ok");
+    assert!(j["experiment_time_s"].as_f64().unwrap() <= 5.0);
+    assert!(dir.join("beltune-history.sqlite").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn a_missing_interface_is_one_line_and_no_outputs() {
     let out_dir = temp_dir("ethercat-missing");

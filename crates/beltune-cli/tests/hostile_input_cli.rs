@@ -402,11 +402,17 @@ fn a_killed_commissioning_leaves_the_old_or_the_new_set() {
         .output()
         .unwrap();
     assert!(o.status.success());
-    let names: Vec<String> = std::fs::read_dir(&dir)
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert_eq!(names, ["result"], "seen new set: {seen_new}");
+    names.sort();
+    // beside the result: the history database the runs are recorded in
+    assert_eq!(
+        names,
+        ["beltune-history.sqlite", "result"],
+        "seen new set: {seen_new}"
+    );
     eprintln!(
         "kills leaving the old set: {}, the new set: {}",
         outcomes[0], outcomes[1]

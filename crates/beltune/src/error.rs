@@ -126,6 +126,16 @@ pub enum Error {
         reason: String,
     },
 
+    // ---- history database ----
+    /// The history database could not be opened, migrated, read or written.
+    #[error("history database {location}: {reason}")]
+    Database {
+        /// The file or the server (without a password).
+        location: String,
+        /// What failed.
+        reason: String,
+    },
+
     // ---- files ----
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]

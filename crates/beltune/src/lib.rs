@@ -34,6 +34,8 @@ pub mod axis;
 pub mod commission;
 pub mod design;
 pub mod error;
+pub mod health;
+pub mod history;
 pub mod ident;
 pub mod io;
 pub mod lti;

@@ -9,6 +9,8 @@ pub mod diagnostic;
 pub mod excitation;
 pub mod export;
 pub mod friction;
+pub mod health;
+pub mod history;
 pub mod identify;
 pub mod knobs;
 pub mod man;

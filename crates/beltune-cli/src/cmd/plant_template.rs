@@ -118,6 +118,23 @@ fn noise_section(out: &mut String, table: &toml::Table) -> anyhow::Result<()> {
     section(out, NOISE, noise, &[])
 }
 
+/// The optional `[wear]` table of a physical plant, commented out (a new
+/// axis): what ages, for the simulator and `beltune health` (docs/health.md).
+const WEAR: &str = "
+# ---- ageing (optional table, simulator; none is a new axis: docs/health.md) ----
+# [wear]
+# belt tension loss: the fraction of the belt stiffness c_b lost (0 .. 0.9)
+# belt_stiffness_loss = 0.1
+# friction growth: every friction coefficient times 1 + this (0 .. 10)
+# friction_growth = 0.3
+# a slack span: the belt's pretension, N (a span cannot push; absent: never slack)
+# belt_pretension_n = 40.0
+# a worn guide: extra Coulomb friction of the cart, N, on the worn section, m
+# (absent: the whole stroke)
+# guide_wear_n = 3.0
+# guide_wear_section_m = [0.2, 0.4]
+";
+
 /// A float as TOML: 12 significant digits ([`term::tidy`]), always with a
 /// fraction or an exponent so that it reads back as a float.
 fn toml_float(v: f64) -> String {
@@ -189,8 +206,9 @@ pub fn template(plant: &Plant, name: &str) -> anyhow::Result<String> {
     );
     match plant {
         Plant::Physical(_) => {
-            section(&mut out, PHYSICAL, &table, &["kind", "noise"])?;
+            section(&mut out, PHYSICAL, &table, &["kind", "noise", "wear"])?;
             noise_section(&mut out, &table)?;
+            out.push_str(WEAR);
         }
         Plant::Linear(_) => {
             section(&mut out, LINEAR, &table, &["kind", "two_mass", "noise"])?;
@@ -280,6 +298,42 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The commented `[wear]` table of the template, uncommented, is read
+    /// as the ageing it describes.
+    #[test]
+    fn the_wear_table_of_the_template_reads_as_ageing() {
+        let plant = beltune::model::builtin("egc70", None).unwrap();
+        let text = template(&plant, "egc70").unwrap();
+        let start = text.find("# [wear]").unwrap();
+        let aged: String = text[..start].to_string()
+            + &text[start..]
+                .lines()
+                .map(|l| {
+                    if l.starts_with("# [") || l.contains(" = ") {
+                        l.trim_start_matches("# ").to_string()
+                    } else {
+                        l.to_string()
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join("\n");
+        let back: Plant = toml::from_str(&aged).unwrap_or_else(|e| panic!("{e}\n{aged}"));
+        back.validate().unwrap();
+        let Plant::Physical(p) = back else {
+            panic!("physical")
+        };
+        assert_eq!(
+            p.wear,
+            beltune::model::Wear {
+                belt_stiffness_loss: 0.1,
+                friction_growth: 0.3,
+                belt_pretension_n: Some(40.0),
+                guide_wear_n: 3.0,
+                guide_wear_section_m: Some((0.2, 0.4)),
+            }
+        );
     }
 
     #[test]

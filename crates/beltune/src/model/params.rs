@@ -112,6 +112,13 @@ pub struct PhysicalParams {
     /// Measurement noise of the simulated drive (`[noise]` table, optional).
     #[serde(default)]
     pub noise: MeasurementNoise,
+
+    // ---- ageing ----
+    /// What has aged (`[wear]` table, optional; [`super::wear`]): belt
+    /// stiffness, friction, a slack span, a worn guide. The default is a
+    /// new axis and is left out of a written plant.
+    #[serde(default, skip_serializing_if = "super::wear::Wear::is_new")]
+    pub wear: super::wear::Wear,
 }
 
 /// Measurement noise of a simulated drive, part of the plant (the `[noise]`
@@ -263,16 +270,51 @@ impl PhysicalParams {
         }
     }
 
-    /// Segment stiffness and damping at `xi_m` (2.10): `c_i = c_b / (l_i + l_e)`.
+    /// The specific belt stiffness the belt has now, N: `c_b` less the
+    /// [`super::wear::Wear::belt_stiffness_loss`] (`c_b` on a new axis).
+    pub fn c_b_effective_n(&self) -> f64 {
+        self.c_b_n * self.wear.stiffness_factor()
+    }
+
+    /// The plant as the simulator runs it: the belt stiffness loss and the
+    /// friction growth of [`Self::wear`] folded into `c_b` and the friction
+    /// coefficients (and cleared from the wear); the slack span and the
+    /// worn guide stay in the wear (they act on the state). A new axis is
+    /// returned unchanged.
+    pub fn aged(&self) -> PhysicalParams {
+        if self.wear.belt_stiffness_loss == 0.0 && self.wear.friction_growth == 0.0 {
+            return self.clone();
+        }
+        let k = self.wear.friction_factor();
+        PhysicalParams {
+            c_b_n: self.c_b_effective_n(),
+            d_m_n_s_per_m: k * self.d_m_n_s_per_m,
+            tau_c_motor_nm: k * self.tau_c_motor_nm,
+            d_c_n_s_per_m: k * self.d_c_n_s_per_m,
+            f_c_cart_n: k * self.f_c_cart_n,
+            d_end_pulley_n_s_per_m: k * self.d_end_pulley_n_s_per_m,
+            tau_c_end_pulley_nm: k * self.tau_c_end_pulley_nm,
+            wear: super::wear::Wear {
+                belt_stiffness_loss: 0.0,
+                friction_growth: 0.0,
+                ..self.wear
+            },
+            ..self.clone()
+        }
+    }
+
+    /// Segment stiffness and damping at `xi_m` (2.10): `c_i = c_b / (l_i + l_e)`
+    /// (`c_b` as aged, [`Self::c_b_effective_n`]).
     /// Positions outside the stroke are clamped to it (a real axis has end stops there).
     pub fn belt_segments(&self, xi_m: f64) -> BeltSegments {
         let l = self.segment_lengths(xi_m.clamp(0.0, self.stroke_m));
         let le = self.end_compliance_length_m;
         let (e1, e2, e3) = (l.l_1_m + le, l.l_2_m + le, l.l_3_m + le);
+        let c_b = self.c_b_effective_n();
         BeltSegments {
-            c_1_n_per_m: self.c_b_n / e1,
-            c_2_n_per_m: self.c_b_n / e2,
-            c_3_n_per_m: self.c_b_n / e3,
+            c_1_n_per_m: c_b / e1,
+            c_2_n_per_m: c_b / e2,
+            c_3_n_per_m: c_b / e3,
             d_1_n_s_per_m: self.d_b_n_s / e1,
             d_2_n_s_per_m: self.d_b_n_s / e2,
             d_3_n_s_per_m: self.d_b_n_s / e3,
@@ -294,8 +336,25 @@ impl PhysicalParams {
     }
 
     /// Friction totals seen at the motor (3.36), with the end-pulley friction
-    /// reflected through `i_g`.
+    /// reflected through `i_g`, as aged ([`Self::aged`]; a worn guide counts
+    /// where it covers the whole stroke: a worn section is position
+    /// dependent and not in the totals).
     pub fn friction_totals(&self) -> FrictionTotals {
+        if !self.wear.is_new() {
+            let a = self.aged();
+            let guide = if a.wear.guide_wear_section_m.is_none() {
+                a.wear.guide_wear_n
+            } else {
+                0.0
+            };
+            let mut t = PhysicalParams {
+                wear: super::wear::Wear::default(),
+                ..a
+            }
+            .friction_totals();
+            t.coulomb_nm += self.i_t() * guide;
+            return t;
+        }
         let it = self.i_t();
         FrictionTotals {
             viscous_nm_s_per_rad: it
@@ -314,14 +373,15 @@ impl PhysicalParams {
     pub fn linearize(&self, xi_m: f64) -> Result<TwoMassParams> {
         self.validate()?;
         require_finite("xi [m]", xi_m)?;
-        let seg = self.belt_segments(xi_m);
+        let aged = self.aged();
+        let seg = aged.belt_segments(xi_m);
         let p = TwoMassParams {
             theta_e: self.theta_e(),
             m_c: self.m_c(),
             c: seg.replacement_stiffness_n_per_m(),
             d: seg.replacement_damping_n_s_per_m(),
-            d_m: self.d_m_n_s_per_m + self.d_end_pulley_n_s_per_m,
-            d_c: self.d_c_n_s_per_m,
+            d_m: aged.d_m_n_s_per_m + aged.d_end_pulley_n_s_per_m,
+            d_c: aged.d_c_n_s_per_m,
             i_t: self.i_t(),
         };
         p.validate()?;
@@ -342,6 +402,7 @@ impl PhysicalParams {
         use crate::error::require_range;
         use bounds::*;
         self.noise.validate()?;
+        self.wear.validate(self.stroke_m)?;
         // Positivity first (the messages say "must be > 0"), then the
         // plausibility bounds: every quantity has an upper bound, so that no
         // derived frequency overflows and the simulator's sub-steps stay few.

@@ -437,6 +437,7 @@ pub fn egc70_params(payload_kg: f64) -> PhysicalParams {
         motor_rad_per_count: BELT_TRAVEL_PER_COUNT_M / r,
         ts_s: SAMPLE_TIME_S,
         noise: super::params::MeasurementNoise::default(),
+        wear: super::wear::Wear::default(),
     }
 }
 

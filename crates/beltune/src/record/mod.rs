@@ -8,6 +8,7 @@
 //! | `controller.toml` | what a drive or firmware needs | [`controller`] |
 //! | firmware source (Rust module, C header) | `controller.toml` as constants | [`export`] |
 //! | `report.html` | what a person reads | [`crate::report`] |
+//! | `health.json` | a health check (its own folder) | [`health`] |
 //! | `frf.csv`, `loops.csv`, `moves.csv`, `excitation.csv`, `friction.csv` | the report's data | [`crate::report::data_files`] |
 //!
 //! [`model`] reads the identified model of `commissioning.json` (and of
@@ -32,5 +33,6 @@ pub mod commissioning;
 pub mod controller;
 pub mod export;
 pub mod folder;
+pub mod health;
 pub mod model;
 pub mod provenance;

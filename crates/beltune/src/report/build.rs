@@ -138,6 +138,7 @@ pub fn build_report(inp: &ReportInputs) -> Result<Report> {
         excitation: inp.data.excitation.clone(),
         data_files: inp.data.notes(),
         tables,
+        trends: Vec::new(),
     })
 }
 

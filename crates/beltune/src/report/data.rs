@@ -192,6 +192,8 @@ pub struct Report {
     pub data_files: Vec<(String, String)>,
     /// Extra tables (title, header, rows), e.g. the parameter changes of a comparison.
     pub tables: Vec<Table>,
+    /// Trends of quantities over an axis' runs (`beltune history --html`).
+    pub trends: Vec<TrendPlot>,
 }
 
 /// A table of text cells.
@@ -203,4 +205,28 @@ pub struct Table {
     pub header: Vec<String>,
     /// Rows of cells.
     pub rows: Vec<Vec<String>>,
+}
+
+/// One quantity's trend over an axis' runs (`beltune history --html`):
+/// values in the quantity's unit, the runs numbered oldest first.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct TrendPlot {
+    /// Title (the quantity in words and its unit).
+    pub title: String,
+    /// Unit of the values.
+    pub unit: String,
+    /// Run numbers of the commissionings.
+    pub commissioning_run: Vec<f64>,
+    /// Their values.
+    pub commissioning_value: Vec<f64>,
+    /// Run numbers of the health checks.
+    pub health_run: Vec<f64>,
+    /// Their values.
+    pub health_value: Vec<f64>,
+    /// Their one-sigma uncertainties (NaN: unknown).
+    pub health_sigma: Vec<f64>,
+    /// The baseline of the latest health check, if any.
+    pub baseline: Option<f64>,
+    /// Its limits as values (label, value), where there are.
+    pub limits: Vec<(String, f64)>,
 }

@@ -52,11 +52,11 @@ pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; overflow-x: auto; 
 </section>{% endif %}
 <p class="summary">{{ summary }}</p>
 
-<h2>Parameters</h2>
+{% if parameters %}<h2>Parameters</h2>
 <table id="parameters">
 <tr><th>quantity</th><th>unit</th><th>before (data sheet / default)</th><th>after (commissioned)</th>{% if has_truth %}<th>simulation truth</th>{% endif %}</tr>
 {% for p in parameters %}<tr><td>{{ p.name }}</td><td>{{ p.unit }}</td><td>{{ p.before or "" }}</td><td class="after"{% if p.value is not none %} data-value="{{ p.value }}"{% endif %}>{{ p.after }}</td>{% if has_truth %}<td>{{ p.truth or "" }}</td>{% endif %}</tr>
-{% endfor %}</table>
+{% endfor %}</table>{% endif %}
 
 {% if validation_rows %}<h2>Validation</h2>
 <table id="validation">
@@ -131,6 +131,9 @@ pub fn render_html(report: &Report) -> Result<String> {
     }
     if let Some(f) = &report.friction {
         add("friction", "Friction", plot::friction_svg(f)?);
+    }
+    for (i, t) in report.trends.iter().enumerate() {
+        add(&format!("trend-{i}"), &t.title, plot::trend_svg(t)?);
     }
     if !report.moves.is_empty() {
         let limit = report.excitation.as_ref().map(|e| e.torque_limit_nm);

@@ -21,12 +21,13 @@ pub mod compare;
 pub mod data;
 pub mod data_files;
 pub mod folder;
+pub mod health;
 pub mod html;
 pub mod plot;
 pub mod plot_data;
 
 pub use data::{
     BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrfPlot, FrictionPlot, MarginPoint,
-    MovePlot, Panel, ParameterRow, Report, Table,
+    MovePlot, Panel, ParameterRow, Report, Table, TrendPlot,
 };
 pub use html::render_html;

@@ -9,7 +9,7 @@
 
 use super::data::{
     BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrfPlot, FrictionPlot, MarginPoint,
-    MovePlot, Panel,
+    MovePlot, Panel, TrendPlot,
 };
 use crate::{Error, Result};
 use plotters::coord::Shift;
@@ -723,6 +723,116 @@ pub fn friction_svg(plot: &FrictionPlot) -> Result<String> {
                 .draw_series(LineSeries::new(part, PALETTE[1].stroke_width(px(2))))
                 .map_err(err)?;
         }
+        root.present().map_err(err)?;
+    }
+    Ok(finish(out, height))
+}
+
+/// A quantity over an axis' runs: commissionings and health checks (with
+/// their one-sigma bars), the latest baseline and its limits as lines.
+pub fn trend_svg(plot: &TrendPlot) -> Result<String> {
+    register_font();
+    let height = 360;
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (px(WIDTH), px(height))).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let style = |label: &str, color: RGBColor, dots: bool, dashed: bool| Style {
+            label: label.into(),
+            color,
+            dots,
+            dashed,
+            sets_range: true,
+        };
+        let mut st = vec![
+            style("commissioning", PALETTE[0], true, false),
+            style("health check (one sigma)", PALETTE[2], true, false),
+        ];
+        if plot.baseline.is_some() {
+            st.push(style("baseline", GREY, false, false));
+        }
+        if !plot.limits.is_empty() {
+            st.push(style("limits", PALETTE[1], false, true));
+        }
+        let body = draw_head(&root, &plot.title, &st, 70)?;
+        let runs: Vec<f64> = plot
+            .commissioning_run
+            .iter()
+            .chain(&plot.health_run)
+            .copied()
+            .collect();
+        let xr = range_of(runs.iter(), 0.0..2.0);
+        let xr = (xr.start - 0.5)..(xr.end + 0.5);
+        let lows: Vec<f64> = plot
+            .health_value
+            .iter()
+            .zip(&plot.health_sigma)
+            .flat_map(|(v, s)| [v - s.max(0.0), v + s.max(0.0)])
+            .collect();
+        let values: Vec<f64> = plot
+            .commissioning_value
+            .iter()
+            .chain(&plot.health_value)
+            .chain(&lows)
+            .chain(plot.baseline.iter())
+            .chain(plot.limits.iter().map(|l| &l.1))
+            .copied()
+            .collect();
+        let yr = range_of(values.iter(), 0.0..1.0);
+        let mut chart = panel(&body, true, 80)
+            .build_cartesian_2d(xr.clone(), yr)
+            .map_err(err)?;
+        report_mesh!(chart
+            .configure_mesh()
+            .x_desc("run (oldest first)")
+            .y_desc(format!("{} / {}", "value", plot.unit)))
+        .draw()
+        .map_err(err)?;
+        let hline = |y: f64| vec![(xr.start, y), (xr.end, y)];
+        if let Some(b) = plot.baseline {
+            chart
+                .draw_series(LineSeries::new(hline(b), GREY.stroke_width(px(2))))
+                .map_err(err)?;
+        }
+        for (_, y) in &plot.limits {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    hline(*y),
+                    px(8),
+                    px(5),
+                    PALETTE[1].stroke_width(px(2)),
+                ))
+                .map_err(err)?;
+        }
+        for ((x, v), s) in plot
+            .health_run
+            .iter()
+            .zip(&plot.health_value)
+            .zip(&plot.health_sigma)
+        {
+            if s.is_finite() && v.is_finite() {
+                chart
+                    .draw_series(LineSeries::new(
+                        vec![(*x, v - s), (*x, v + s)],
+                        PALETTE[2].stroke_width(px(2)),
+                    ))
+                    .map_err(err)?;
+            }
+        }
+        chart
+            .draw_series(
+                points(&plot.health_run, &plot.health_value)
+                    .into_iter()
+                    .map(|p| Circle::new(p, px(4), PALETTE[2].filled())),
+            )
+            .map_err(err)?;
+        chart
+            .draw_series(
+                points(&plot.commissioning_run, &plot.commissioning_value)
+                    .into_iter()
+                    .map(|p| Circle::new(p, px(5), PALETTE[0].filled())),
+            )
+            .map_err(err)?;
         root.present().map_err(err)?;
     }
     Ok(finish(out, height))

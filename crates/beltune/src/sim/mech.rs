@@ -40,6 +40,23 @@ pub(crate) struct Mech<const N: usize, const S: usize> {
     pub c: [f64; S],
     /// Segment damping `d_k` (N s/m).
     pub d: [f64; S],
+    /// Slack spans ([`Slack`]), `None`: every segment is a linear spring.
+    pub slack: Option<Slack<S>>,
+}
+
+/// Spans that cannot push ([`crate::model::wear`]): segment `k` carries the
+/// tension `T_k = P + sign_k (c_k g_k.q + d_k g_k.q')` (`sign_k g_k.q` its
+/// elongation, the pretension `P` cancelling around the closed belt); where
+/// `T_k` would fall below zero the span is slack and carries nothing, which
+/// adds `sign_k g_k min(T_k, 0)` to the generalized force of the linear
+/// springs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Slack<const S: usize> {
+    /// The pretension `P`, N.
+    pub pretension_n: f64,
+    /// `sign_k`: +1 where `g_k.q` is the elongation of segment `k`, -1 where
+    /// it is the shortening.
+    pub sign: [f64; S],
 }
 
 /// The velocity-level (Moreau) Coulomb step of one body (module docs):
@@ -120,12 +137,32 @@ impl<const N: usize, const S: usize> Mech<N, S> {
         Assembled { kq, kv, f }
     }
 
+    /// The accelerations of the assembled linear part, with the slack spans'
+    /// correction where there are any ([`Slack`]).
+    #[inline(always)]
+    fn accel_of(&self, asm: &Assembled<N>, q: &[f64; N], v: &[f64; N]) -> [f64; N] {
+        let mut a = asm.accel(q, v);
+        if let Some(slack) = &self.slack {
+            for k in 0..S {
+                let sign = slack.sign[k];
+                let t = slack.pretension_n
+                    + sign * (self.c[k] * dot(&self.g[k], q) + self.d[k] * dot(&self.g[k], v));
+                if t < 0.0 {
+                    for i in 0..N {
+                        a[i] += self.inv_mass[i] * sign * self.g[k][i] * t;
+                    }
+                }
+            }
+        }
+        a
+    }
+
     /// One step of length `h` with constant input `u`.
     #[inline]
     pub fn step(&mut self, u: f64, h: f64) {
         let asm = self.assemble(u);
         let (q0, v0) = (self.q, self.v);
-        let a1 = asm.accel(&q0, &v0);
+        let a1 = self.accel_of(&asm, &q0, &v0);
         let mut q = [0.0; N];
         let mut v = [0.0; N];
         for i in 0..N {
@@ -133,19 +170,19 @@ impl<const N: usize, const S: usize> Mech<N, S> {
             v[i] = v0[i] + 0.5 * h * a1[i];
         }
         let v2 = v;
-        let a2 = asm.accel(&q, &v2);
+        let a2 = self.accel_of(&asm, &q, &v2);
         for i in 0..N {
             q[i] = q0[i] + 0.5 * h * v2[i];
             v[i] = v0[i] + 0.5 * h * a2[i];
         }
         let v3 = v;
-        let a3 = asm.accel(&q, &v3);
+        let a3 = self.accel_of(&asm, &q, &v3);
         for i in 0..N {
             q[i] = q0[i] + h * v3[i];
             v[i] = v0[i] + h * a3[i];
         }
         let v4 = v;
-        let a4 = asm.accel(&q, &v4);
+        let a4 = self.accel_of(&asm, &q, &v4);
         for i in 0..N {
             self.q[i] = q0[i] + h / 6.0 * (v0[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]);
             self.v[i] = v0[i] + h / 6.0 * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i]);
@@ -223,6 +260,7 @@ mod tests {
             ],
             c: [3e5, 4e5, 1e5],
             d: [30.0, 40.0, 10.0],
+            slack: None,
         };
         let (q, v, u) = ([40.0, 41.0, 0.5], [3.0, -2.0, 0.04], 0.7);
         let a = m.accel(&q, &v, u);

@@ -114,6 +114,9 @@ enum Dynamics {
 #[derive(Clone, Debug)]
 pub struct SimAxis {
     plant: Plant,
+    /// A physical plant as aged ([`PhysicalParams::aged`]): what the
+    /// dynamics run on.
+    aged: Option<Box<PhysicalParams>>,
     config: SimConfig,
     info: AxisInfo,
     dynamics: Dynamics,
@@ -159,8 +162,21 @@ impl SimAxis {
             }
             plant.validate()?;
         }
+        if let (Plant::Physical(p), SimModel::TwoMass) = (&plant, config.model) {
+            if p.wear.belt_pretension_n.is_some() {
+                return Err(Error::invalid(
+                    "wear.belt_pretension_n",
+                    p.wear.belt_pretension_n.unwrap_or(f64::NAN),
+                    "a slack span needs the three-mass model (the two-mass model has one replacement spring)",
+                ));
+            }
+        }
         let info = plant.info();
         let noise = config.noise.unwrap_or_else(|| plant.noise());
+        let aged = match &plant {
+            Plant::Physical(p) => Some(Box::new(p.aged())),
+            Plant::Linear(_) => None,
+        };
         let xi0 = match (&plant, config.initial_cart_position_m) {
             (Plant::Physical(p), None) => 0.5 * p.stroke_m,
             (Plant::Linear(_), None) => 0.0,
@@ -174,6 +190,7 @@ impl SimAxis {
                 x: SVector::zeros(),
             },
             plant,
+            aged,
             rng: Xoshiro256PlusPlus::seed_from_u64(config.seed),
             noise,
             config,
@@ -199,6 +216,7 @@ impl SimAxis {
         require_finite("cart position [m]", xi_m)?;
         match self.plant.clone() {
             Plant::Physical(p) => {
+                let p = self.aged.as_deref().cloned().unwrap_or(p);
                 if !(0.0..=p.stroke_m).contains(&xi_m) {
                     return Err(Error::invalid(
                         "cart position [m]",
@@ -380,10 +398,7 @@ impl SimAxis {
     }
 
     fn advance(&mut self, tau: f64) {
-        let params = match &self.plant {
-            Plant::Physical(p) => Some(p),
-            Plant::Linear(_) => None,
-        };
+        let params = self.aged.as_deref();
         match &mut self.dynamics {
             Dynamics::ThreeMass(m) => {
                 let p = params.expect("three-mass dynamics belong to a physical plant");
@@ -512,6 +527,13 @@ fn three_mass_mech(p: &PhysicalParams, xi_m: f64) -> Mech<3, 3> {
         g: [[it, 0.0, -1.0], [0.0, r, -1.0], [it, -r, 0.0]],
         c: [0.0; 3],
         d: [0.0; 3],
+        // the elongations: l_1 is `xi - i_t phi_m` (the cart end minus the
+        // driving pulley's end, along the belt), l_2 `r phi_2 - xi`, l_3
+        // `i_t phi_m - r phi_2`; they add up to zero around the belt
+        slack: p.wear.belt_pretension_n.map(|pretension_n| mech::Slack {
+            pretension_n,
+            sign: [-1.0, 1.0, 1.0],
+        }),
     };
     set_three_mass_segments(&mut m, p);
     m
@@ -529,6 +551,9 @@ fn set_three_mass_segments(m: &mut Mech<3, 3>, p: &PhysicalParams) {
     let inv3 = 1.0 / (p.pulley_distance_m + le);
     m.c = [p.c_b_n * inv1, p.c_b_n * inv2, p.c_b_n * inv3];
     m.d = [p.d_b_n_s * inv1, p.d_b_n_s * inv2, p.d_b_n_s * inv3];
+    if p.wear.guide_wear_n > 0.0 {
+        m.coulomb[2] = p.f_c_cart_n + p.wear.guide_friction_n(xi);
+    }
 }
 
 /// Two-mass model (2.30), `q = [phi_m, xi]`, one replacement spring (2.26)/(2.27)
@@ -552,6 +577,7 @@ fn two_mass_mech(p: &PhysicalParams, xi_m: f64) -> Mech<2, 1> {
         g: [[it, -1.0]],
         c: [0.0],
         d: [0.0],
+        slack: None,
     };
     set_two_mass_segments(&mut m, p);
     m
@@ -569,7 +595,12 @@ fn set_two_mass_segments(m: &mut Mech<2, 1>, p: &PhysicalParams) {
     let k = 1.0 / e1 + 1.0 / e23;
     m.c = [p.c_b_n * k];
     m.d = [p.d_b_n_s * k];
+    if p.wear.guide_wear_n > 0.0 {
+        m.coulomb[1] = p.f_c_cart_n + p.wear.guide_friction_n(xi);
+    }
 }
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_wear;

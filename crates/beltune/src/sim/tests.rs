@@ -639,9 +639,9 @@ fn invalid_configurations_are_errors() {
 }
 
 /// Table A.10, G_A (11.2 kg payload): total viscous friction at the motor, N m s/rad.
-const TABLE_A10_VISCOUS_NM_S_PER_RAD: f64 = 2.53e-3;
+pub(super) const TABLE_A10_VISCOUS_NM_S_PER_RAD: f64 = 2.53e-3;
 /// Table A.10, G_A: total Coulomb friction at the motor, N m.
-const TABLE_A10_COULOMB_NM: f64 = 0.125;
+pub(super) const TABLE_A10_COULOMB_NM: f64 = 0.125;
 
 /// Mean torque minus (3.36) at the run's mean velocity, N m. The sim's
 /// friction is exact; what remains is the PI loop's settling and the decaying
@@ -649,7 +649,7 @@ const TABLE_A10_COULOMB_NM: f64 = 0.125;
 /// is 0.4 % of the total Coulomb friction, ten times finer than the 5 % an
 /// identification is held to, and far below the 0.05 N m deficit a chattering
 /// probe shows.
-const CONSTANT_VELOCITY_TORQUE_TOL_NM: f64 = 5e-4;
+pub(super) const CONSTANT_VELOCITY_TORQUE_TOL_NM: f64 = 5e-4;
 
 /// Hold the true motor velocity at `w_rad_s` with a PI loop (rigid-body
 /// bandwidth 2 Hz) over `travel_m` of cart travel, starting 20 mm inside the
@@ -663,7 +663,7 @@ const CONSTANT_VELOCITY_TORQUE_TOL_NM: f64 = 5e-4;
 /// the motor then reverses every cycle and its Coulomb friction averages out
 /// (measured: 0.086 N m instead of 0.138 N m at 5 rad/s). The smallest
 /// `|velocity|` returned lets the caller check the run never reversed.
-fn constant_velocity_run(
+pub(super) fn constant_velocity_run(
     plant: &Plant,
     model: SimModel,
     w_rad_s: f64,

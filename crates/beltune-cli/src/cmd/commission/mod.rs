@@ -193,6 +193,8 @@ pub struct Args {
     #[command(flatten)]
     pub limits: super::verdict::LimitArgs,
     #[command(flatten)]
+    pub history: super::history::DbArgs,
+    #[command(flatten)]
     pub config: super::config::ConfigArgs,
 }
 
@@ -267,12 +269,21 @@ pub fn run_on_bus(args: Args, bus: Bus<'_>) -> anyhow::Result<()> {
 fn run_inner(args: Args, bus: Option<Bus<'_>>) -> anyhow::Result<()> {
     let plan = preflight::plan(&args)?;
     let started = Instant::now();
+    // where a health check measures the stiffness near the start (stage 5c's position)
+    let near = |ds: &beltune::commission::DataSheet| {
+        beltune::commission::stages::identification::start_side_position_m(ds, f64::NAN)
+    };
+    let near_m = match &plan.mode {
+        Mode::Simulated(s) => Some(near(&s.datasheet)),
+        Mode::Ethercat(e) => Some(near(&e.datasheet)),
+        Mode::Recorded(_) => None,
+    };
     let (set, in_drive_failure) = match plan.mode {
         Mode::Simulated(s) => (run_simulated(&args, &plan.cfg, *s)?, None),
         Mode::Ethercat(e) => run_ethercat(&args, &plan.cfg, e, bus)?,
         Mode::Recorded(r) => (run_recorded(&args, &plan.cfg, r)?, None),
     };
-    deliver(&set, &plan.target, &args, started)?;
+    deliver(&set, &plan.target, &args, started, &plan.history, near_m)?;
     match in_drive_failure {
         // the result set is written; the drive's own loops missed the limits
         Some(failures) => Err(anyhow::Error::new(Failure::new(
@@ -290,9 +301,35 @@ fn deliver(
     target: &OutputTarget,
     args: &Args,
     started: Instant,
+    history: &beltune::history::Location,
+    near_m: Option<f64>,
 ) -> anyhow::Result<()> {
     let files = set.write(target)?;
     super::diagnostic::remove_stale(target)?;
+    let dir = files
+        .first()
+        .and_then(|f| f.parent())
+        .map(|d| d.display().to_string());
+    let axis = args
+        .history
+        .axis
+        .clone()
+        .unwrap_or_else(|| set.record.plant.clone());
+    let run = beltune::history::NewRun::of_commissioning(&axis, &set.record, dir.clone(), near_m)?;
+    let id = super::history::record(history, &run).map_err(|e| {
+        e.context(format!(
+            "the result is in {} but the history could not record it",
+            dir.clone().unwrap_or_default()
+        ))
+    })?;
+    if !args.quiet {
+        for l in crate::progress::stage_lines(
+            "history",
+            &format!("run {id} of `{axis}` in {}", history.display()),
+        ) {
+            eprintln!("{l}");
+        }
+    }
     let summary = Summary::of(&set.record, files, started.elapsed().as_secs_f64());
     if args.json {
         println!("{}", summary.json()?);

@@ -36,6 +36,8 @@ pub struct Plan {
     pub cfg: CommissioningConfig,
     /// What the run is made on.
     pub mode: Mode,
+    /// The history database (checked, [`super::super::history::DbArgs::check`]).
+    pub history: beltune::history::Location,
 }
 
 /// What a run is made on.
@@ -110,10 +112,12 @@ pub fn plan(args: &Args) -> anyhow::Result<Plan> {
     };
     if let Some(csv) = &args.csv {
         let recorded = recorded(args, csv)?;
+        let history = args.history.check(&target)?;
         return Ok(Plan {
             target,
             cfg,
             mode: Mode::Recorded(recorded),
+            history,
         });
     }
     let plant = load_plant(args)?;
@@ -132,10 +136,13 @@ pub fn plan(args: &Args) -> anyhow::Result<Plan> {
     let datasheet = DataSheet::for_plant(&plant, start_position, args.travel_window);
     datasheet.validate()?;
     if let Some(interface) = &args.ethercat {
+        let mode = Mode::Ethercat(ethercat(args, interface, datasheet)?);
+        let history = args.history.check(&target)?;
         return Ok(Plan {
             target,
             cfg,
-            mode: Mode::Ethercat(ethercat(args, interface, datasheet)?),
+            mode,
+            history,
         });
     }
     let plant_noise = plant.noise();
@@ -150,9 +157,11 @@ pub fn plan(args: &Args) -> anyhow::Result<Plan> {
         initial_cart_position_m: Some(start_position),
         ..SimConfig::default()
     };
+    let history = args.history.check(&target)?;
     Ok(Plan {
         target,
         cfg,
+        history,
         mode: Mode::Simulated(Box::new(Simulated {
             name: args.plant.clone().unwrap_or_else(|| "egc70".to_string()),
             plant,
@@ -218,7 +227,7 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
     ];
     // the EtherCAT flags apply to a bus only (a flag at its default value
     // changes nothing and is not told apart)
-    let ethercat_only: [(&str, bool); 5] = match &default_args() {
+    let ethercat_only: [(&str, bool); 7] = match &default_args() {
         Some(d) => [
             ("--subdevice", args.subdevice != d.subdevice),
             ("--cycle-us", args.cycle_us != d.cycle_us),
@@ -227,9 +236,11 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
                 args.frame_timeout_ms != d.frame_timeout_ms,
             ),
             ("--realtime-priority", args.realtime_priority.is_some()),
+            ("--dc", args.dc),
             ("--no-dc", args.no_dc),
+            ("--drive-profile", args.drive_profile.is_some()),
         ],
-        None => [("", false); 5],
+        None => [("", false); 7],
     };
     if args.ethercat.is_none() {
         let given: Vec<&str> = ethercat_only.iter().filter(|f| f.1).map(|f| f.0).collect();
@@ -307,10 +318,20 @@ pub fn check_flag(flag: &str, v: Option<f64>, lo: f64, hi: f64, open: bool) -> a
 
 /// The plant of `--plant` (default egc70) with `--payload` and `--tilt`.
 fn load_plant(args: &Args) -> anyhow::Result<Plant> {
-    let name = args.plant.as_deref().unwrap_or("egc70");
-    check_flag("--tilt", args.tilt, -90.0, 90.0, false)?;
-    let mut plant = super::super::plant::resolve_plant(name, args.payload)?;
-    if let Some(tilt) = args.tilt {
+    plant_with(args.plant.as_deref(), args.payload, args.tilt)
+}
+
+/// The plant `name` (default egc70) with a payload and a tilt (degrees),
+/// checked (`commission` and `health`).
+pub fn plant_with(
+    name: Option<&str>,
+    payload: Option<f64>,
+    tilt: Option<f64>,
+) -> anyhow::Result<Plant> {
+    let name = name.unwrap_or("egc70");
+    check_flag("--tilt", tilt, -90.0, 90.0, false)?;
+    let mut plant = super::super::plant::resolve_plant(name, payload)?;
+    if let Some(tilt) = tilt {
         match &mut plant {
             Plant::Physical(pp) => pp.tilt_rad = tilt.to_radians(),
             Plant::Linear(_) => {
@@ -368,19 +389,6 @@ fn check_excitation(
 
 /// The EtherCAT settings.
 fn ethercat(args: &Args, interface: &str, datasheet: DataSheet) -> anyhow::Result<Ethercat> {
-    use beltune_ethercat::master::MasterConfig;
-    if interface.is_empty() || interface.len() > MAX_INTERFACE_NAME_BYTES {
-        return Err(bad(format!(
-            "--ethercat `{}`: a network interface name has 1 to {MAX_INTERFACE_NAME_BYTES} bytes",
-            interface.escape_debug()
-        )));
-    }
-    if !(args.frame_timeout_ms.is_finite() && (0.1..=1000.0).contains(&args.frame_timeout_ms)) {
-        return Err(bad(format!(
-            "--frame-timeout-ms {} is outside 0.1 ..= 1000",
-            beltune::error::short_number(args.frame_timeout_ms)
-        )));
-    }
     Ok(Ethercat {
         interface: interface.to_string(),
         drive_profile: match &args.drive_profile {
@@ -391,13 +399,44 @@ fn ethercat(args: &Args, interface: &str, datasheet: DataSheet) -> anyhow::Resul
             None => None,
         },
         datasheet,
-        master: MasterConfig {
-            subdevice: args.subdevice,
-            cycle_s: f64::from(args.cycle_us) * 1e-6,
-            frame_timeout_s: args.frame_timeout_ms * 1e-3,
-            use_dc: args.dc && !args.no_dc,
-            ..MasterConfig::default()
-        },
+        master: master_config(
+            interface,
+            args.subdevice,
+            args.cycle_us,
+            args.frame_timeout_ms,
+            args.dc && !args.no_dc,
+        )?,
+    })
+}
+
+/// The master's settings of `--ethercat IFACE` and its flags, checked
+/// (`commission` and `health`).
+pub fn master_config(
+    interface: &str,
+    subdevice: usize,
+    cycle_us: u32,
+    frame_timeout_ms: f64,
+    use_dc: bool,
+) -> anyhow::Result<beltune_ethercat::master::MasterConfig> {
+    use beltune_ethercat::master::MasterConfig;
+    if interface.is_empty() || interface.len() > MAX_INTERFACE_NAME_BYTES {
+        return Err(bad(format!(
+            "--ethercat `{}`: a network interface name has 1 to {MAX_INTERFACE_NAME_BYTES} bytes",
+            interface.escape_debug()
+        )));
+    }
+    if !(frame_timeout_ms.is_finite() && (0.1..=1000.0).contains(&frame_timeout_ms)) {
+        return Err(bad(format!(
+            "--frame-timeout-ms {} is outside 0.1 ..= 1000",
+            beltune::error::short_number(frame_timeout_ms)
+        )));
+    }
+    Ok(MasterConfig {
+        subdevice,
+        cycle_s: f64::from(cycle_us) * 1e-6,
+        frame_timeout_s: frame_timeout_ms * 1e-3,
+        use_dc,
+        ..MasterConfig::default()
     })
 }
 

@@ -22,7 +22,7 @@ use beltune_rt::trajectory::{Limits, State, Trajectory};
 /// Running-in time discarded at the start of a constant-velocity plateau
 /// (thesis 3.6), s: several time constants of the velocity loop and of the
 /// cart's oscillation after the acceleration phase.
-const RUNNING_IN_S: f64 = 0.05;
+pub const RUNNING_IN_S: f64 = 0.05;
 /// Largest acceleration of the friction runs, m/s^2.
 const RUN_ACCELERATION_M_S2: f64 = 10.0;
 /// Share of the torque left after gravity and Coulomb friction (within

@@ -91,23 +91,24 @@ impl Identification {
     }
 }
 
-/// One open-loop PRBS experiment as recorded.
-struct Excitation {
+/// One open-loop PRBS experiment as recorded (also the health check's,
+/// [`crate::health`]).
+pub(crate) struct Excitation {
     /// Busy time of the axis at the first sample, s.
-    t_start_s: f64,
+    pub t_start_s: f64,
     /// Where the excitation started, m: the requested centre, or where it
     /// was moved to against the drift of an earlier attempt.
-    center_m: f64,
+    pub center_m: f64,
     /// PRBS period, samples.
-    period: usize,
+    pub period: usize,
     /// Torque command (holding torque plus PRBS), N m.
-    cmd: Vec<f64>,
+    pub cmd: Vec<f64>,
     /// Torque the drive reports, N m.
-    act: Vec<f64>,
+    pub act: Vec<f64>,
     /// Motor angle, rad.
-    ang: Vec<f64>,
+    pub ang: Vec<f64>,
     /// Motor-side position, m.
-    pos: Vec<f64>,
+    pub pos: Vec<f64>,
 }
 
 /// Room a closed loop must have to take the axis over from an open-loop
@@ -137,7 +138,7 @@ const EXCITATION_ATTEMPTS: usize = 3;
 ///
 /// [`Runner::closed_loop_handover_clear`]: super::super::runner::Runner::closed_loop_handover_clear
 #[allow(clippy::too_many_arguments)]
-fn excite(
+pub(crate) fn excite(
     st: &mut Stages,
     stage: &str,
     hold: &CascadeConfig<f64>,
@@ -222,7 +223,12 @@ fn excite(
 /// and `skip_periods` transient periods: Clary's method II, the band from
 /// the fit's lower limit to 0.4 f_s (below it the PRBS spectrum and the
 /// Tustin/ZOH effects stay mild) or the PRBS clock frequency.
-fn etfe_config(ts: f64, period: usize, skip_periods: usize, ex: &ExcitationConfig) -> EtfeConfig {
+pub(crate) fn etfe_config(
+    ts: f64,
+    period: usize,
+    skip_periods: usize,
+    ex: &ExcitationConfig,
+) -> EtfeConfig {
     let f_max = 0.4 / ts;
     let clock = ex.clock_samples(ts);
     EtfeConfig {
@@ -237,7 +243,7 @@ fn etfe_config(ts: f64, period: usize, skip_periods: usize, ex: &ExcitationConfi
 
 /// The two-mass fit of `frf` (the data-sheet `Theta_e`), refused when the
 /// fitted model has no resonance inside the measured band.
-fn fit_frf(
+pub(crate) fn fit_frf(
     frf: &Frf,
     ecfg: &EtfeConfig,
     ex: &ExcitationConfig,
@@ -278,7 +284,7 @@ const NONLINEAR_BAND_RESONANCES: f64 = 2.5;
 /// along the stroke, stages 5b/5c: they do not change with the position);
 /// `None`: both are solved.
 #[allow(clippy::too_many_arguments)]
-fn fit_friction_aware(
+pub(crate) fn fit_friction_aware(
     e: &Excitation,
     ecfg: &EtfeConfig,
     fit: &TwoMassFit,
@@ -329,7 +335,7 @@ const THETA_E_RANGE: (f64, f64) = (0.7, 1.5);
 
 /// The model the design uses (see [`Identification::fit`]), the
 /// friction-aware fit if there is one, and why it is not used, if not.
-fn choose_model(
+pub(crate) fn choose_model(
     frf_fit: &TwoMassFit,
     nonlinear: Result<NonlinearFit>,
 ) -> (TwoMassFit, Option<NonlinearFit>, Option<String>) {
