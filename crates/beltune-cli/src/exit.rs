@@ -98,6 +98,11 @@ pub fn status_of(e: &anyhow::Error) -> ExitStatus {
         if let Some(rt) = cause.downcast_ref::<beltune_rt::Error>() {
             return rt_status(rt);
         }
+        if let Some(io) = cause.downcast_ref::<std::io::Error>() {
+            if names_a_wrong_path(io) {
+                return ExitStatus::BadInput;
+            }
+        }
     }
     if let Some(lib) = e.downcast_ref::<beltune::Error>() {
         return library_status(lib);
@@ -121,8 +126,20 @@ pub fn library_status(e: &beltune::Error) -> ExitStatus {
         | E::Parse { .. }
         | E::FitFailed { .. } => ExitStatus::BadInput,
         E::Rt(rt) => rt_status(rt),
+        E::Io { source, .. } if names_a_wrong_path(source) => ExitStatus::BadInput,
         _ => ExitStatus::Error,
     }
+}
+
+/// An I/O error that says the path the user gave is wrong (missing, a
+/// folder where a file belongs or the other way round): bad input, like
+/// every other command's missing input file, not a failure of the machine.
+fn names_a_wrong_path(e: &std::io::Error) -> bool {
+    use std::io::ErrorKind as K;
+    matches!(
+        e.kind(),
+        K::NotFound | K::IsADirectory | K::NotADirectory | K::InvalidFilename
+    )
 }
 
 /// The exit status of a real-time-core error: a bad parameter or target is

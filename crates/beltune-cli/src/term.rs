@@ -4,10 +4,13 @@
 /// Width every line of the command's own output fits in, columns.
 pub const WIDTH: usize = 100;
 
-/// Significant digits a number keeps when [`tidy_numbers`] shortens it: below
-/// the 15-17 of a full `f64`, so that the last-bit noise of decimal fractions
-/// rounds away, far above what any printed quantity resolves.
-const TIDY_DIGITS: usize = 12;
+/// Significant digits a number keeps when [`tidy_numbers`] shortens it (the
+/// library's one message format, [`beltune::error::short_number`]).
+const TIDY_DIGITS: usize = beltune::error::SHORT_NUMBER_DIGITS;
+/// Longest run of digits a number may print with: an integer of more digits
+/// is beyond `u64` (not a count or a seed) and a fraction with more is mostly
+/// zeros (`1e308` or `5e-324` printed in full).
+const MAX_DIGIT_RUN: usize = 20;
 
 /// Lay out `head` and `body` as one or more lines of at most `width` columns:
 /// the head right-aligned in `head_width` columns and a colon, then the body;
@@ -110,16 +113,7 @@ fn words(clause: &str) -> Vec<&str> {
 /// A number for display: `v` rounded to 12 significant digits and printed in
 /// its shortest form (`0.049999999999999996` -> `0.05`, `1e-7` stays `1e-7`).
 pub fn tidy(v: f64) -> String {
-    if !v.is_finite() {
-        return format!("{v}");
-    }
-    let rounded: f64 = format!("{:.*e}", TIDY_DIGITS - 1, v).parse().unwrap_or(v);
-    let debug = format!("{rounded:?}");
-    // Debug prints `5.0`; drop a `.0` before nothing or an exponent.
-    match debug.strip_suffix(".0") {
-        Some(int) => int.to_string(),
-        None => debug.replace(".0e", "e"),
-    }
+    beltune::error::short_number(v)
 }
 
 /// `text` with every decimal number of more than 12 significant digits (the
@@ -149,8 +143,16 @@ pub fn tidy_numbers(text: &str) -> String {
             .bytes()
             .filter(u8::is_ascii_digit)
             .count();
+        let run = token
+            .split(['e', 'E'])
+            .next()
+            .unwrap_or("")
+            .bytes()
+            .filter(u8::is_ascii_digit)
+            .count();
         match token.parse::<f64>() {
             Ok(v) if token.contains('.') && digits > TIDY_DIGITS => out.push_str(&tidy(v)),
+            Ok(v) if run > MAX_DIGIT_RUN => out.push_str(&tidy(v)),
             _ => out.push_str(token),
         }
         i = end;
@@ -208,9 +210,15 @@ mod tests {
             "x 0.0003 y",
             "an exponent is part of the number"
         );
+        // Far beyond any count or seed: the full print of 1e308 and 5e-324.
+        assert_eq!(tidy_numbers(&format!("= {}: no", 1e308)), "= 1e308: no");
+        assert_eq!(tidy_numbers(&format!("{} s", 5e-324)), "5e-324 s");
+        assert_eq!(tidy_numbers(&format!("{} kg", -5e-324)), "-5e-324 kg");
+        assert_eq!(tidy(-0.0), "0");
         // Left alone: integers, short decimals, digits inside words, versions.
         for s in [
             "seed 12345678901234567",
+            "seed 18446744073709551615",
             "f_r 110.81 Hz",
             "sim-b2 v0.1.0",
             "egc70",

@@ -334,7 +334,10 @@ fn a_forced_safety_stop_is_3_and_leaves_a_diagnostic() {
     // diagnostic is the folder beside it.
     assert!(files_in(&out).is_empty(), "{:?}", files_in(&out));
     let diag = dir.join("out-safety-stop");
-    assert_eq!(files_in(&diag), ["safety-stop.csv", "safety-stop.json"]);
+    assert_eq!(
+        files_in(&diag),
+        [".beltune-manifest", "safety-stop.csv", "safety-stop.json"]
+    );
     let d: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(diag.join("safety-stop.json")).unwrap())
             .unwrap();
@@ -359,6 +362,7 @@ fn a_forced_safety_stop_is_3_and_leaves_a_diagnostic() {
     assert_eq!(
         files_in(&out),
         [
+            ".beltune-manifest",
             "commissioning.json",
             "controller.toml",
             "excitation.csv",
@@ -501,6 +505,7 @@ fn limits_not_met_is_5_with_the_results_written() {
     assert_eq!(
         files_in(&out),
         [
+            ".beltune-manifest",
             "commissioning.json",
             "controller.toml",
             "excitation.csv",

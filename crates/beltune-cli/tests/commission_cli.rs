@@ -53,6 +53,7 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
     assert_eq!(
         names,
         [
+            ".beltune-manifest",
             "commissioning.json",
             "controller.toml",
             "excitation.csv",
@@ -173,7 +174,10 @@ fn safety_stop_exits_non_zero_and_writes_only_its_diagnostic() {
     // Only the diagnostic, beside the output folder (tests/cli_output.rs reads it).
     let mut left = files_in(&dir.join("out-safety-stop"));
     left.sort();
-    assert_eq!(left, ["safety-stop.csv", "safety-stop.json"]);
+    assert_eq!(
+        left,
+        [".beltune-manifest", "safety-stop.csv", "safety-stop.json"]
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -284,6 +288,7 @@ fn commission_from_recorded_data_skips_the_axis_stages() {
     assert_eq!(
         names,
         [
+            ".beltune-manifest",
             "commissioning.json",
             "controller.toml",
             "frf.csv",

@@ -421,6 +421,63 @@ fn a_killed_commissioning_leaves_the_old_or_the_new_set() {
 }
 
 #[test]
+fn force_replaces_only_beltunes_files_and_keeps_the_users() {
+    // A result folder a user has worked in: sources, a repository, notes and
+    // the tuning page's saved sets beside the result.
+    let dir = tmpdir("force-keeps");
+    let proj = dir.join("proj");
+    let o = commission_recorded(Some(&proj)).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let users: [(&str, &str); 5] = [
+        ("src/main.c", "int main(void) { return 0; }\n"),
+        (".git/HEAD", "ref: refs/heads/main\n"),
+        ("notes.txt", "belt re-tensioned on Monday\n"),
+        (
+            "tuned-20261203T101010Z/controller.toml",
+            "# saved by the page\n",
+        ),
+        ("tuned-20261203T101010Z/commissioning.json", "{}\n"),
+    ];
+    for (name, text) in users {
+        let p = proj.join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(&p, text).unwrap();
+    }
+    let before = gains_of(&proj);
+    // the same record with its dead time estimated: other gains
+    let o = commission_recorded(Some(&proj))
+        .args(["--force", "--actual-torque", "iq_meas_A"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for (name, text) in users {
+        assert_eq!(
+            std::fs::read_to_string(proj.join(name)).unwrap_or_default(),
+            text,
+            "{name} was not kept"
+        );
+    }
+    assert_ne!(gains_of(&proj), before, "the result itself was replaced");
+    // A user's file under the name of a result file is refused, not replaced,
+    // and the folder stays as it was.
+    std::fs::remove_file(proj.join("frf.csv")).unwrap();
+    let manifest = proj.join(".beltune-manifest");
+    let listed = std::fs::read_to_string(&manifest).unwrap();
+    std::fs::write(&manifest, listed.replace("frf.csv\n", "")).unwrap();
+    std::fs::write(proj.join("frf.csv"), "my own measurement\n").unwrap();
+    let err = expect_bad_input(
+        commission_recorded(Some(&proj)).arg("--force"),
+        &["frf.csv", "move it away"],
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert_eq!(
+        std::fs::read_to_string(proj.join("frf.csv")).unwrap(),
+        "my own measurement\n"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn outputs_write_through_devices_fifos_and_symlinks() {
     let dir = tmpdir("special");
     let traj = |samples: &Path| {
@@ -890,5 +947,217 @@ fn absurd_friction_in_a_design_model_is_refused() {
             &["friction", "plausible"],
         );
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Longest run of digits in `text` (a number printed in full is a run).
+fn longest_digit_run(text: &str) -> usize {
+    text.split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0)
+}
+
+#[test]
+fn numbers_in_messages_are_short_whatever_the_value() {
+    let dir = tmpdir("short-numbers");
+    let e = dir.join("e.csv");
+    let plant = egc70_toml(&dir, "tiny-stroke.toml", |t| {
+        set_key(t, "stroke_m", "5e-324")
+    });
+    let cases: Vec<Vec<String>> = vec![
+        vec![
+            "commission",
+            "--plant",
+            "sim-a",
+            "--travel-window",
+            "1e308,1e308",
+        ],
+        vec![
+            "commission",
+            "--plant",
+            "sim-a",
+            "--max-tracking-error=-1e308",
+        ],
+        vec![
+            "commission",
+            "--plant",
+            "sim-a",
+            "--max-tracking-error",
+            "1e308",
+        ],
+        vec![
+            "commission",
+            "--plant",
+            "sim-a",
+            "--resonance-suppression-db=-1e308",
+        ],
+        vec![
+            "trajectory",
+            "--start",
+            "0,0,0",
+            "--target",
+            "0.1,0,0",
+            "--v-max",
+            "1",
+            "--a-max",
+            "10",
+            "--j-max",
+            "100",
+            "--j-min=-1e308",
+        ],
+        vec![
+            "excitation",
+            "--kind",
+            "prbs",
+            "--ts",
+            "1e-300",
+            "--amplitude",
+            "1",
+            "--out",
+        ],
+        vec![
+            "excitation",
+            "--kind",
+            "prbs",
+            "--ts",
+            "1e-4",
+            "--amplitude=-5e-324",
+            "--out",
+        ],
+    ]
+    .into_iter()
+    .map(|c| c.into_iter().map(String::from).collect())
+    .collect();
+    for mut case in cases {
+        if case.last().is_some_and(|a| a == "--out") {
+            case.push(e.display().to_string());
+        }
+        let err = expect_bad_input(bin().args(&case), &[]);
+        assert!(
+            longest_digit_run(&err) <= 20,
+            "{case:?}: a number printed in full: {err}"
+        );
+        assert!(
+            !err.contains("inf") && !err.contains("NaN"),
+            "{case:?}: {err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{case:?}: {err}");
+    }
+    let err = expect_bad_input(
+        bin().args(["commission", "--plant"]).arg(&plant),
+        &["travel window"],
+    );
+    assert!(longest_digit_run(&err) <= 20, "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_missing_input_file_is_bad_input_in_every_command() {
+    let dir = tmpdir("missing-inputs");
+    let gone = dir.join("gone");
+    let out = dir.join("out.html");
+    let g = |name: &str| gone.join(name).display().to_string();
+    let o = out.display().to_string();
+    let cases: Vec<Vec<String>> = vec![
+        vec!["design".into(), "--model".into(), g("model.toml")],
+        vec![
+            "export".into(),
+            "--controller".into(),
+            g("controller.toml"),
+            "--lang".into(),
+            "c".into(),
+        ],
+        vec!["compare".into(), g("a"), g("b"), "--out".into(), o.clone()],
+        vec!["serve".into(), "--commissioning".into(), g("run")],
+        vec!["commission".into(), "--plant".into(), g("plant.toml")],
+        vec!["health".into(), "--baseline".into(), g("run")],
+    ];
+    for case in cases {
+        let err = expect_bad_input(bin().args(&case), &["gone"]);
+        assert_eq!(err.trim().lines().count(), 1, "{case:?}: {err}");
+    }
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_non_loopback_bind_is_bad_input_before_anything_listens() {
+    expect_bad_input(
+        bin().args(["serve", "--bind", "0.0.0.0", "--port", "0"]),
+        &["--allow-remote"],
+    );
+}
+
+#[test]
+fn excitation_refuses_what_commission_cannot_analyze() {
+    let dir = tmpdir("excitation-limits");
+    let out = dir.join("e.csv");
+    let run = |extra: &[&str], needles: &[&str]| {
+        expect_bad_input(
+            bin()
+                .args(["excitation", "--ts", "1e-4", "--amplitude", "0.1", "--out"])
+                .arg(&out)
+                .args(extra),
+            needles,
+        )
+    };
+    for n in ["2", "3"] {
+        run(&["--kind", "chirp", "--period-samples", n], &["at least 4"]);
+    }
+    // a period shorter than one cycle of the start frequency is no sweep
+    run(
+        &[
+            "--kind",
+            "chirp",
+            "--period-samples",
+            "100",
+            "--f-start-hz",
+            "1",
+        ],
+        &["less than one cycle"],
+    );
+    run(&["--kind", "chirp", "--f-end-hz", "6000"], &["Nyquist"]);
+    // the order's range as the help states it
+    for order in ["1", "21"] {
+        run(&["--kind", "prbs", "--order", order], &["2..=20"]);
+    }
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_dead_time_the_design_cannot_hold_is_refused_before_anything_simulates() {
+    // 1 ms at 1 us sampling is 1000 samples of dead time: the design holds
+    // 256. It used to simulate for over a minute and 390 MB first.
+    let dir = tmpdir("dead-time-samples");
+    let plant = egc70_toml(&dir, "fast-sampling.toml", |t| set_key(t, "ts_s", "1e-6"));
+    let o = run_within(
+        bin()
+            .args(["commission", "--quiet", "--plant"])
+            .arg(&plant)
+            .arg("--out")
+            .arg(dir.join("out")),
+        Duration::from_secs(20),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("dead_time_s") && err.contains("256"), "{err}");
+    assert!(!dir.join("out").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_required_flag_missing_from_a_config_file_is_named() {
+    let dir = tmpdir("config-required");
+    let cfg = dir.join("c.toml");
+    std::fs::write(&cfg, "csv = \"rec.csv\"\n").unwrap();
+    let o = run_within(
+        bin().args(["commission", "--config"]).arg(&cfg),
+        Duration::from_secs(20),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--input") && err.contains("--output"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -251,3 +251,123 @@ fn slow_clients_are_cut_off_and_connections_are_limited() {
         std::thread::sleep(Duration::from_millis(100));
     }
 }
+
+#[test]
+fn malformed_request_heads_get_json_answers() {
+    let s = start("heads");
+    let host = "Host: 127.0.0.1\r\n";
+    // a garbage request line (a TLS hello sent to plain HTTP)
+    let (status, body) = exchange(
+        s.addr,
+        b"\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03\r\n\r\n",
+    );
+    assert_eq!(status, 400, "{body}");
+    json_error(status, &body);
+    // more headers than allowed
+    let many: String = (0..101).map(|k| format!("X-H{k}: v\r\n")).collect();
+    let (status, body) = request(s.addr, "GET", "/api/info", &format!("{host}{many}"), "");
+    assert_eq!(status, 431, "{body}");
+    assert!(json_error(status, &body).contains("headers"));
+    // a 70 KB target, longer than anything read before hyper
+    let long = format!("/{}", "a".repeat(70 * 1024));
+    let (status, body) = request(s.addr, "GET", &long, host, "");
+    assert_eq!(status, 414, "{body}");
+    json_error(status, &body);
+    // request smuggling: two lengths, or a length and a transfer encoding
+    let raw = "POST /api/design HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n\
+               Content-Length: 2\r\nContent-Length: 3\r\nConnection: close\r\n\r\n{}";
+    let (status, body) = exchange(s.addr, raw.as_bytes());
+    assert_eq!(status, 400, "{body}");
+    assert!(json_error(status, &body).contains("Content-Length"));
+    let raw = "POST /api/design HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n\
+               Content-Length: 2\r\nTransfer-Encoding: chunked\r\nConnection: close\r\n\r\n{}";
+    let (status, body) = exchange(s.addr, raw.as_bytes());
+    assert_eq!(status, 400, "{body}");
+    json_error(status, &body);
+    // and a plain request still works
+    let (status, body) = request(s.addr, "GET", "/api/info", host, "");
+    assert_eq!(status, 200, "{body}");
+}
+
+#[test]
+fn clients_that_pipeline_and_never_read_do_not_hold_the_server() {
+    // Every connection slot taken by a client that pipelines requests and
+    // reads nothing: each gets one answer and is closed, so the page is
+    // served again at once (it used to answer 503 for the 5-minute life of
+    // those connections).
+    let s = start("pipeline");
+    let one = "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+    let held: Vec<TcpStream> = (0..serve::MAX_CONNECTIONS)
+        .map(|_| {
+            let mut c = TcpStream::connect(s.addr).unwrap();
+            let _ = c.write_all(one.repeat(40).as_bytes());
+            c
+        })
+        .collect();
+    let deadline = Instant::now() + serve::conn::WRITE_TIMEOUT + Duration::from_secs(5);
+    loop {
+        let (status, _) = request(s.addr, "GET", "/api/info", "Host: 127.0.0.1\r\n", "");
+        if status == 200 {
+            break;
+        }
+        assert_eq!(status, 503);
+        assert!(
+            Instant::now() < deadline,
+            "still busy while the pipelining clients hold their connections"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    drop(held);
+}
+
+#[test]
+fn the_page_cannot_be_framed_or_posted_to_from_another_site() {
+    let s = start("framing");
+    let host = "Host: 127.0.0.1\r\n";
+    let raw = "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n";
+    let mut c = TcpStream::connect(s.addr).unwrap();
+    c.write_all(raw.as_bytes()).unwrap();
+    let mut answer = String::new();
+    c.read_to_string(&mut answer).unwrap();
+    let head = answer
+        .split("\r\n\r\n")
+        .next()
+        .unwrap()
+        .to_ascii_lowercase();
+    assert!(head.contains("x-frame-options: deny"), "{head}");
+    assert!(head.contains("frame-ancestors 'none'"), "{head}");
+    let body = "{}";
+    let json = "Content-Type: application/json\r\n";
+    for extra in [
+        "Origin: http://evil.example\r\n",
+        "Origin: null\r\n",
+        "Origin: http://127.0.0.1:1\r\n",
+        "Sec-Fetch-Site: cross-site\r\n",
+        "Sec-Fetch-Site: same-site\r\n",
+    ] {
+        let (status, answer) = request(
+            s.addr,
+            "POST",
+            "/api/save",
+            &format!("{host}{json}{extra}"),
+            body,
+        );
+        assert_eq!(status, 403, "{extra}: {answer}");
+        json_error(status, &answer);
+    }
+    assert!(
+        std::fs::read_dir(&s.dir).map_or(true, |mut d| d.next().is_none()),
+        "a refused save wrote a file"
+    );
+    // the page's own requests pass the check (the test double answers 500
+    // for a design: it designs nothing)
+    let own = "Origin: http://127.0.0.1\r\nSec-Fetch-Site: same-origin\r\n";
+    let (status, answer) = request(
+        s.addr,
+        "POST",
+        "/api/design",
+        &format!("{host}{json}{own}"),
+        body,
+    );
+    assert_ne!(status, 403, "{answer}");
+}

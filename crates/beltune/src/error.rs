@@ -221,13 +221,33 @@ pub fn require_range(name: &str, x: f64, lo: f64, hi: f64) -> Result<f64> {
     }
 }
 
-/// A number for a message: plain when it is short, else in exponent form
-/// (`1e308`, not 309 digits).
+/// Significant digits [`short_number`] keeps: below the 15-17 of a full
+/// `f64`, so that the last-bit noise of decimal fractions rounds away
+/// (`0.049999999999999996` reads `0.05`), far above what any quantity in a
+/// message resolves.
+pub const SHORT_NUMBER_DIGITS: usize = 12;
+
+/// The one number format of messages: the shortest text that reads back as
+/// the value rounded to [`SHORT_NUMBER_DIGITS`] significant digits, in
+/// exponent form where that is shorter (`1e308`, not 309 digits; `5e-324`,
+/// not 324 zeros; `0.05`, `-2.5`, `5`). `NaN`, `inf` and `-inf` as Rust
+/// prints them.
 pub fn short_number(x: f64) -> String {
-    let plain = format!("{x}");
-    if plain.len() <= 12 {
-        plain
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let rounded: f64 = format!("{:.*e}", SHORT_NUMBER_DIGITS - 1, x)
+        .parse()
+        .unwrap_or(x);
+    // Debug prints the shortest round-trip form: `5.0`, `1e308`, `1e-7`
+    let debug = format!("{rounded:?}");
+    let text = match debug.strip_suffix(".0") {
+        Some(int) => int.to_string(),
+        None => debug.replace(".0e", "e"),
+    };
+    if text == "-0" {
+        "0".into()
     } else {
-        format!("{x:e}")
+        text
     }
 }

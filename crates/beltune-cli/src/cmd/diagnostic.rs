@@ -180,7 +180,10 @@ pub fn remove_stale(target: &OutputTarget) -> anyhow::Result<()> {
         .flatten()
         .map(|e| e.file_name().to_string_lossy().into_owned())
         .collect();
-    if names.iter().all(|n| n == JSON_FILE || n == CSV_FILE) {
+    if names
+        .iter()
+        .all(|n| n == JSON_FILE || n == CSV_FILE || n == beltune::io::MANIFEST_FILE)
+    {
         std::fs::remove_dir_all(&stale)
             .map_err(|e| anyhow::anyhow!("removing the stale {}: {e}", stale.display()))?;
     }
@@ -257,5 +260,6 @@ pub fn write(
     Ok(beltune::io::write_folder_atomic(
         &dir,
         &[(JSON_FILE, text.as_bytes()), (CSV_FILE, csv.as_bytes())],
+        &[JSON_FILE, CSV_FILE],
     )?)
 }

@@ -133,9 +133,9 @@ fn multisine<const N: usize>(a: &Args) -> anyhow::Result<(Vec<f64>, [f64; 2])> {
 fn one_period(a: &Args) -> anyhow::Result<(Vec<f64>, [f64; 2], serde_json::Value)> {
     match a.kind {
         Kind::Prbs => {
-            if a.order > 20 {
+            if !(2..=20).contains(&a.order) {
                 return Err(bad(format!(
-                    "--order {}: at most 20 (a period of {} values)",
+                    "--order {}: must lie in 2..=20 (periods of 3 to {} values)",
                     a.order,
                     (1u64 << 20) - 1
                 )));
@@ -225,14 +225,47 @@ fn check_replaceable_metadata(path: &Path) -> anyhow::Result<()> {
 
 /// The CSV text and the metadata.
 pub fn generate(a: &Args) -> anyhow::Result<(String, Metadata)> {
+    let num = beltune::error::short_number;
     if !(a.ts.is_finite() && (1e-6..=1.0).contains(&a.ts)) {
-        return Err(bad(format!("--ts {}: must lie in 1e-6..=1 s", a.ts)));
+        return Err(bad(format!("--ts {}: must lie in 1e-6..=1 s", num(a.ts))));
     }
     if !(a.amplitude.is_finite() && a.amplitude > 0.0) {
         return Err(bad(format!(
             "--amplitude {}: must be positive",
-            a.amplitude
+            num(a.amplitude)
         )));
+    }
+    if a.kind != Kind::Prbs {
+        let min = beltune::ident::etfe::MIN_PERIOD_SAMPLES;
+        if (a.period_samples as usize) < min {
+            return Err(bad(format!(
+                "--period-samples {}: at least {min} (what `commission --csv` can analyze)",
+                a.period_samples
+            )));
+        }
+    }
+    if a.kind == Kind::Chirp {
+        let nyquist = 0.5 / a.ts;
+        let period_s = f64::from(a.period_samples) * a.ts;
+        let (lo, hi) = (a.f_start_hz.min(a.f_end_hz), a.f_start_hz.max(a.f_end_hz));
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi <= nyquist) {
+            return Err(bad(format!(
+                "chirp band {}..{} Hz: must lie in (0, {}] Hz (the Nyquist frequency of --ts)",
+                num(lo),
+                num(hi),
+                num(nyquist)
+            )));
+        }
+        if lo * period_s < 1.0 {
+            return Err(bad(format!(
+                "chirp: a period of {} samples ({} s) holds less than one cycle of {} Hz; \
+                 raise --period-samples to at least {}",
+                a.period_samples,
+                num(period_s),
+                num(lo),
+                (1.0 / (lo * a.ts)).ceil()
+            )));
+        }
     }
     if a.periods == 0 || a.skip_periods >= a.periods {
         return Err(bad(format!(
@@ -295,7 +328,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         meta.periods,
         meta.period_samples,
         meta.period_samples as f64 * f64::from(meta.periods) * meta.ts_s,
-        meta.peak,
+        // four significant digits
+        beltune::error::short_number(format!("{:.3e}", meta.peak).parse().unwrap_or(meta.peak)),
         meta.band_hz[0],
         meta.band_hz[1],
         meta_path.display()

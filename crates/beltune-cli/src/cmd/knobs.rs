@@ -74,12 +74,12 @@ impl KnobArgs {
         }
         if let Some(v) = self
             .resonance_suppression_db
-            .filter(|v| !(v.is_finite() && *v < 0.0))
+            .filter(|v| !(v.is_finite() && (-100.0..0.0).contains(v)))
         {
             return Err(bad(
                 "--resonance-suppression-db",
                 v,
-                "the open-loop gain at the resonance A_sup must be below 0 dB",
+                "the open-loop gain at the resonance A_sup must lie in [-100, 0) dB",
             ));
         }
         if let Some(v) = self

@@ -33,10 +33,10 @@ pub fn check_bind(bind: IpAddr, allow_remote: bool) -> anyhow::Result<Option<Str
         return Ok(None);
     }
     if !allow_remote {
-        anyhow::bail!(
+        return Err(super::commission::preflight::bad(format!(
             "refusing to bind to non-loopback address {bind}: the tuning page has no \
              authentication; pass --allow-remote to do it anyway"
-        );
+        )));
     }
     Ok(Some(format!(
         "warning: serving on {bind}, reachable from other machines; anyone who can reach \
@@ -103,6 +103,10 @@ mod tests {
         assert_eq!(check_bind("::1".parse().unwrap(), false).unwrap(), None);
         let e = check_bind("0.0.0.0".parse().unwrap(), false).unwrap_err();
         assert!(e.to_string().contains("--allow-remote"), "{e}");
+        assert_eq!(
+            crate::exit::status_of(&e),
+            crate::exit::ExitStatus::BadInput
+        );
         let w = check_bind("0.0.0.0".parse().unwrap(), true)
             .unwrap()
             .unwrap();

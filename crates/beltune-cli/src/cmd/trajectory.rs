@@ -127,38 +127,53 @@ fn check_flags(args: &Args) -> anyhow::Result<()> {
         ))
     };
     let short = beltune::error::short_number;
-    for (flag, v) in [
+    // far beyond any machine axis, so that no printed phase overflows into
+    // hundreds of digits: m/s, m/s^2, m/s^3
+    let bounds = [("velocity", 1e3), ("acceleration", 1e6), ("jerk", 1e9)];
+    for ((flag, v), (what, bound)) in [
         ("--v-max", args.v_max),
         ("--a-max", args.a_max),
         ("--j-max", args.j_max),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
+    ]
+    .into_iter()
+    .zip(bounds)
+    {
+        if !(v.is_finite() && v > 0.0 && v <= bound) {
             return Err(bad(format!(
-                "{flag} must be finite and > 0, got {}",
+                "{flag} must be a {what} above 0 and at most {}, got {}",
+                short(bound),
                 short(v)
             )));
         }
     }
-    for (flag, v) in [
+    for ((flag, v), (what, bound)) in [
         ("--v-min", args.v_min),
         ("--a-min", args.a_min),
         ("--j-min", args.j_min),
-    ] {
+    ]
+    .into_iter()
+    .zip(bounds)
+    {
         if let Some(v) = v {
-            if !(v.is_finite() && v < 0.0) {
+            if !(v.is_finite() && v < 0.0 && v >= -bound) {
                 return Err(bad(format!(
-                    "{flag} must be finite and < 0, got {}",
+                    "{flag} must be a {what} below 0 and at least {}, got {}",
+                    short(-bound),
                     short(v)
                 )));
             }
         }
     }
     for (flag, s) in [("--start", &args.start), ("--target", &args.target)] {
-        if ![s.position, s.velocity, s.acceleration]
+        let within = [s.position, s.velocity, s.acceleration]
             .iter()
-            .all(|x| x.is_finite())
-        {
-            return Err(bad(format!("{flag} must be three finite numbers")));
+            .zip([1e3, bounds[0].1, bounds[1].1])
+            .all(|(x, b)| x.is_finite() && x.abs() <= b);
+        if !within {
+            return Err(bad(format!(
+                "{flag} must be three finite numbers: a position within +-1000 m, a velocity \
+                 within +-1000 m/s and an acceleration within +-1e6 m/s^2"
+            )));
         }
     }
     Ok(())

@@ -5,6 +5,10 @@
 use crate::exit::{ExitStatus, Failure};
 use beltune::verdict::Limits;
 
+/// Largest limit accepted, m: a belt axis' cart error beyond a metre is no
+/// error bound any more (the verdict would pass every move that ran).
+pub const MAX_LIMIT_M: f64 = 1.0;
+
 /// The limits on the command line.
 #[derive(clap::Args, Clone, Debug)]
 pub struct LimitArgs {
@@ -31,11 +35,13 @@ impl LimitArgs {
             ("--max-tracking-error", limits.max_tracking_error_m),
             ("--max-static-error", limits.max_static_error_m),
         ] {
-            if !(v.is_finite() && v > 0.0) {
+            if !(v.is_finite() && v > 0.0 && v <= MAX_LIMIT_M) {
                 return Err(anyhow::Error::new(Failure::new(
                     ExitStatus::BadInput,
                     format!(
-                        "{flag} must be a positive length in m, got {}",
+                        "{flag} must be a length in m above 0 and at most {} (a limit no move \
+                         can miss judges nothing), got {}",
+                        beltune::error::short_number(MAX_LIMIT_M),
                         beltune::error::short_number(v)
                     ),
                 )));
@@ -61,7 +67,7 @@ mod tests {
             max_static_error: None,
         };
         assert_eq!(tight.limits().unwrap().max_tracking_error_m, 2e-5);
-        for bad in [0.0, -1e-3, f64::NAN, f64::INFINITY] {
+        for bad in [0.0, -1e-3, f64::NAN, f64::INFINITY, 1e308, -1e308, 1.5] {
             let l = LimitArgs {
                 max_tracking_error: Some(bad),
                 max_static_error: None,

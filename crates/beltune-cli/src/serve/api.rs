@@ -160,10 +160,14 @@ pub struct ErrorBody {
 fn check(range: KnobRange, value: Option<f64>) -> Result<Option<f64>, ApiError> {
     match value {
         None => Ok(None),
-        Some(v) if v.is_finite() && v >= range.min && v <= range.max => Ok(Some(v)),
+        // `+ 0.0`: a -0 (a slider dragged to zero from below) reads 0, never "-0 kg"
+        Some(v) if v.is_finite() && v >= range.min && v <= range.max => Ok(Some(v + 0.0)),
         Some(v) => Err(ApiError::bad_request(format!(
-            "`{}` = {v} is out of range [{}, {}]",
-            range.name, range.min, range.max
+            "`{}` = {} is out of range [{}, {}]",
+            range.name,
+            beltune::error::short_number(v),
+            range.min,
+            range.max
         ))),
     }
 }
@@ -498,6 +502,17 @@ mod tests {
         let r = DesignRequest::parse(br#"{"dynamics": 0.5, "pm_position_deg": 70}"#).unwrap();
         let e = r.validate().unwrap_err();
         assert!(e.message.contains("pm_position_deg"), "{}", e.message);
+        let zero = DesignRequest::parse(br#"{"payload_kg": -0.0}"#).unwrap();
+        let payload = zero.validate().unwrap().payload_kg.unwrap();
+        assert!(
+            payload == 0.0 && payload.is_sign_positive(),
+            "a -0 payload reads 0"
+        );
+        let e = DesignRequest::parse(br#"{"payload_kg": 1e308}"#)
+            .unwrap()
+            .validate()
+            .unwrap_err();
+        assert!(e.message.contains("= 1e308 is out"), "{}", e.message);
         let ok = DesignRequest::parse(br#"{"dynamics": 0.5, "payload_kg": 3}"#).unwrap();
         assert!(ok.validate().is_ok());
     }

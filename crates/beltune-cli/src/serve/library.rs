@@ -401,6 +401,7 @@ impl LibraryTuner {
     /// would hit its end stop.
     fn move_error_text(&self, e: &beltune::Error, payload_kg: f64) -> String {
         let text = e.to_string();
+        let payload = beltune::error::short_number(payload_kg);
         let stroke_m = match self.move_plant(payload_kg) {
             Ok(p) => p.stroke_m(),
             Err(_) => None,
@@ -408,7 +409,7 @@ impl LibraryTuner {
         if let (Some(stroke_m), Some(at_mm)) = (stroke_m, stop_position_mm(&text)) {
             if at_mm > stroke_m * 1e3 {
                 return format!(
-                    "{payload_kg} kg payload refused: with this controller the simulated axis cannot \
+                    "{payload} kg payload refused: with this controller the simulated axis cannot \
                      be stopped inside its {:.0} mm stroke (a real axis would hit its end stop); the \
                      design assumes {} kg: lower the payload, raise the phase margins, or commission \
                      with the payload on the cart",
@@ -417,7 +418,7 @@ impl LibraryTuner {
                 );
             }
         }
-        format!("simulated move with {payload_kg} kg payload: {text}")
+        format!("simulated move with {payload} kg payload: {text}")
     }
 
     fn frf_overlay(&self) -> Option<FrfOverlay> {

@@ -13,18 +13,27 @@
 //! [`api::MAX_BODY_BYTES`]. Every error answer is JSON `{ "error": "..." }`
 //! (405, 408, 413, 414, 431 and 503 included).
 //!
-//! Against slow or abusive clients ([`serve`]): the request head must arrive
-//! within [`HEADER_READ_TIMEOUT`] and the body within [`BODY_READ_TIMEOUT`];
-//! at most [`MAX_CONNECTIONS`] connections are served at once (more get 503);
-//! a connection lives at most [`CONNECTION_LIFETIME`]; a request target
-//! longer than [`MAX_URI_BYTES`] is 414, a head larger than
-//! [`MAX_HEADER_BYTES`] is 431. With `loopback_only`, a request needs exactly
-//! one `Host` header naming a loopback host (`localhost`, `127.x.y.z`,
-//! `[::1]`) with an optional numeric port.
+//! Against slow or abusive clients ([`serve`], [`conn`]): the request head
+//! must arrive within [`HEADER_READ_TIMEOUT`] and the body within
+//! [`BODY_READ_TIMEOUT`]; a connection carries one request, and a client that
+//! does not read its answer is cut off after [`conn::WRITE_TIMEOUT`]; at most
+//! [`MAX_CONNECTIONS`] connections are served at once (more get 503); a
+//! connection lives at most [`CONNECTION_LIFETIME`]; a request target longer
+//! than [`MAX_URI_BYTES`] is 414, a head larger than [`MAX_HEADER_BYTES`] or
+//! with more than [`conn::MAX_HEADERS`] headers is 431, a garbage request line
+//! or an ambiguous body length is 400. With `loopback_only`, a request needs
+//! exactly one `Host` header naming a loopback host (`localhost`,
+//! `127.x.y.z`, `[::1]`) with an optional numeric port.
+//!
+//! Against other web sites in the same browser: no page may frame this one
+//! (`frame-ancestors 'none'`, `X-Frame-Options: DENY`), and a POST that a
+//! browser marks as coming from another site (`Sec-Fetch-Site` other than
+//! `same-origin`/`none`, or an `Origin` that is not this server's) is 403.
 //! [`router`] is separate from the listener so that tests run the server
 //! in-process on port 0.
 
 pub mod api;
+pub mod conn;
 pub mod library;
 pub mod tuner;
 
@@ -65,7 +74,8 @@ const STYLE_CSS: &str = include_str!("assets/style.css");
 
 /// The page may load only its own script and style sheet.
 const CSP: &str = "default-src 'none'; script-src 'self'; style-src 'self'; \
-                   connect-src 'self'; img-src 'self' data:; base-uri 'none'; form-action 'none'";
+                   connect-src 'self'; img-src 'self' data:; base-uri 'none'; form-action 'none'; \
+                   frame-ancestors 'none'";
 
 /// File name written by `POST /api/save`.
 pub const CONTROLLER_FILE: &str = "controller.toml";
@@ -177,7 +187,12 @@ async fn guard(State(state): State<AppState>, req: Request, next: Next) -> Respo
     let response = next
         .run(Request::from_parts(parts, axum::body::Body::from(bytes)))
         .await;
-    json_errors(response)
+    let mut response = json_errors(response);
+    response.headers_mut().insert(
+        header::X_FRAME_OPTIONS,
+        header::HeaderValue::from_static("DENY"),
+    );
+    response
 }
 
 /// The request-head checks of [`guard`]: target length, head size, `Host`.
@@ -218,6 +233,46 @@ fn check_request_head(state: &AppState, req: &Request) -> Option<ApiError> {
                 message: format!(
                     "Host `{}` is not a loopback name; open the page as http://127.0.0.1:PORT/",
                     host.escape_debug()
+                ),
+            });
+        }
+    }
+    if req.method() == axum::http::Method::POST {
+        return cross_site(req.headers());
+    }
+    None
+}
+
+/// A POST a browser sent on behalf of another site: `Sec-Fetch-Site` other
+/// than `same-origin` or `none` (typed by the user), or an `Origin` that is
+/// not `http://` + this request's `Host`. Clients that are not browsers send
+/// neither header and pass.
+fn cross_site(headers: &HeaderMap) -> Option<ApiError> {
+    let text = |name: &str| {
+        headers
+            .get(name)
+            .map(|v| v.to_str().unwrap_or("(not text)").to_string())
+    };
+    if let Some(site) = text("sec-fetch-site") {
+        if site != "same-origin" && site != "none" {
+            return Some(ApiError {
+                status: 403,
+                message: format!(
+                    "a request from another site (Sec-Fetch-Site: {}) may not change anything",
+                    site.escape_debug()
+                ),
+            });
+        }
+    }
+    if let Some(origin) = text("origin") {
+        let own = text("host").map(|h| format!("http://{h}"));
+        if own.as_deref() != Some(origin.as_str()) {
+            return Some(ApiError {
+                status: 403,
+                message: format!(
+                    "a request from origin `{}` may not change anything; use the page this \
+                     server serves",
+                    origin.escape_debug()
                 ),
             });
         }
@@ -274,41 +329,35 @@ pub async fn serve(listener: tokio::net::TcpListener, state: AppState) -> std::i
             }
         };
         let Ok(permit) = permits.clone().try_acquire_owned() else {
-            tokio::spawn(refuse_busy(stream));
+            tokio::spawn(conn::answer_and_close(
+                stream,
+                503,
+                format!("server busy: more than {MAX_CONNECTIONS} connections; retry"),
+            ));
             continue;
         };
         let service = hyper_util::service::TowerToHyperService::new(app.clone());
         tokio::spawn(async move {
             let _permit = permit;
+            let mut stream = stream;
+            let head = match conn::read_head(&mut stream).await {
+                Ok(head) => head,
+                Err(refused) => {
+                    return conn::answer_and_close(stream, refused.status, refused.message).await
+                }
+            };
             let mut builder = hyper::server::conn::http1::Builder::new();
             builder
                 .timer(TokioTimer::new())
+                .keep_alive(false)
                 .header_read_timeout(HEADER_READ_TIMEOUT)
                 .max_header_size(HYPER_MAX_HEADER_BYTES);
-            let conn = builder.serve_connection(TokioIo::new(stream), service);
+            let io = TokioIo::new(conn::Replay::new(head, stream));
+            let conn = builder.serve_connection(io, service);
             // Dropping the connection closes it.
             let _ = tokio::time::timeout(CONNECTION_LIFETIME, conn).await;
         });
     }
-}
-
-/// Answer 503 (JSON) to a connection beyond [`MAX_CONNECTIONS`] and close it.
-async fn refuse_busy(mut stream: tokio::net::TcpStream) {
-    use tokio::io::AsyncWriteExt;
-    let body = serde_json::to_string(&ErrorBody {
-        error: format!("server busy: more than {MAX_CONNECTIONS} connections; retry"),
-    })
-    .unwrap_or_default();
-    let answer = format!(
-        "HTTP/1.1 503 Service Unavailable\r\ncontent-type: application/json\r\n\
-         content-length: {}\r\nretry-after: 1\r\nconnection: close\r\n\r\n{body}",
-        body.len()
-    );
-    let _ = tokio::time::timeout(Duration::from_secs(1), async {
-        let _ = stream.write_all(answer.as_bytes()).await;
-        let _ = stream.shutdown().await;
-    })
-    .await;
 }
 
 fn error_response(e: ApiError) -> Response {

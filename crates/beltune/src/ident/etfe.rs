@@ -316,9 +316,13 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
     Ok(frf)
 }
 
+/// Fewest samples a period of the excitation may have (fewer hold no line
+/// between the mean and the Nyquist frequency worth estimating).
+pub const MIN_PERIOD_SAMPLES: usize = 4;
+
 fn validate_config(cfg: &EtfeConfig) -> Result<()> {
     crate::error::require_positive("ts_s", cfg.ts_s)?;
-    if cfg.period_samples < 4 {
+    if cfg.period_samples < MIN_PERIOD_SAMPLES {
         return Err(Error::invalid(
             "period_samples",
             cfg.period_samples as f64,

@@ -27,7 +27,11 @@ pub fn check_delay_samples(ts_s: f64, dead_time_s: f64) -> Result<()> {
         return Err(Error::invalid(
             "dead_time_s",
             dead_time_s,
-            format!("must be at most {MAX_DELAY_SAMPLES} sample periods of {ts_s} s"),
+            format!(
+                "must be at most {MAX_DELAY_SAMPLES} sample periods of {} s (what a design \
+                 handles; a longer sampling time or a shorter dead time)",
+                crate::error::short_number(ts_s)
+            ),
         ));
     }
     Ok(())

@@ -497,6 +497,8 @@ impl PhysicalParams {
                 "a current-loop dead time above 1 s is not physical",
             ));
         }
+        // the design's limit, known now: refused before anything simulates
+        crate::lti::discrete::check_delay_samples(self.ts_s, self.dead_time_s)?;
         // Geometry: every belt segment must have positive length over the whole stroke.
         let start = self.segment_lengths(0.0);
         if start.l_1_m <= 0.0 {

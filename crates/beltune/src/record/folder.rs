@@ -21,8 +21,11 @@ pub enum OutputTarget {
         root: PathBuf,
     },
     /// Exactly this folder: new or empty; one holding a result (a
-    /// `commissioning.json`) only with `force`, and then the whole set is
-    /// replaced. A folder with other files is never replaced.
+    /// `commissioning.json`) only with `force`, and then the result's files
+    /// are replaced as a set while everything else in the folder (the user's
+    /// notes, the tuning page's `tuned-*` sets) is kept
+    /// ([`crate::io::write_folder_atomic`]). A folder with other files and no
+    /// result is refused.
     Exact {
         /// The folder.
         dir: PathBuf,
@@ -94,16 +97,7 @@ impl OutputTarget {
 }
 
 fn write_set(dir: &Path, files: &[(&str, &[u8])]) -> Result<Vec<PathBuf>> {
-    crate::io::clean_stale_temporaries(&output_parent(dir));
-    crate::io::write_folder_atomic(dir, files)
-}
-
-/// The folder beside which the temporary of `dir` lives.
-fn output_parent(dir: &Path) -> PathBuf {
-    match dir.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    }
+    crate::io::write_folder_atomic(dir, files, &super::RESULT_FILE_NAMES)
 }
 
 /// `--out DIR` without `--force` must be new or empty; with it, a folder that
@@ -142,6 +136,19 @@ fn check_exact_target(dir: &Path, force: bool) -> Result<()> {
              replace it, or leave out --out to keep every run under commissioning/"
                 .into(),
         ));
+    }
+    // the user's entries stay; one under a result file's name would be replaced
+    let users = crate::io::users_entries(dir, &super::RESULT_FILE_NAMES)?;
+    if let Some(clash) = users.iter().find(|u| {
+        u.to_str()
+            .is_some_and(|u| super::RESULT_FILE_NAMES.contains(&u))
+    }) {
+        return Err(Error::Parse {
+            path: dir.join(clash).display().to_string(),
+            message: "is not beltune's (not in the result's manifest) but bears the name of a \
+                      result file; move it away first"
+                .into(),
+        });
     }
     Ok(())
 }

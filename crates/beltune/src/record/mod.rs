@@ -29,6 +29,20 @@ pub const CONTROLLER_FILE: &str = "controller.toml";
 /// The report page.
 pub const REPORT_FILE: &str = "report.html";
 
+/// Every file a result set may hold (what a folder written before result sets
+/// had manifests is known to hold of beltune's; everything else in it is the
+/// user's).
+pub const RESULT_FILE_NAMES: [&str; 8] = [
+    COMMISSIONING_FILE,
+    CONTROLLER_FILE,
+    REPORT_FILE,
+    crate::report::data_files::FRF_CSV,
+    crate::report::data_files::LOOPS_CSV,
+    crate::report::data_files::MOVES_CSV,
+    crate::report::data_files::EXCITATION_CSV,
+    crate::report::data_files::FRICTION_CSV,
+];
+
 pub mod commissioning;
 pub mod controller;
 pub mod export;

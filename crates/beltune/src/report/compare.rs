@@ -20,6 +20,33 @@ pub fn change_percent(a: Option<f64>, b: Option<f64>) -> Option<f64> {
     }
 }
 
+/// The comparison's summary line: the resonance and antiresonance of A and
+/// B, Hz (`None` where a record has no finite value; such a value, and a
+/// change against 0 Hz, is "unknown", never `NaN` or `inf`).
+fn compare_summary(
+    na: &str,
+    nb: &str,
+    f_r_hz: [Option<f64>; 2],
+    f_z_hz: [Option<f64>; 2],
+) -> String {
+    let hz = |f: Option<f64>| f.map_or("unknown".to_string(), |f| format!("{f:.2} Hz"));
+    let change = |[a, b]: [Option<f64>; 2]| {
+        change_percent(a, b).map_or(String::new(), |c| format!(" ({c:+.1} %)"))
+    };
+    if f_r_hz.iter().chain(&f_z_hz).all(Option::is_none) {
+        return format!("{na} against {nb}.");
+    }
+    format!(
+        "{na} against {nb}. The resonance moved from {} to {}{}; the antiresonance from {} to {}{}.",
+        hz(f_r_hz[0]),
+        hz(f_r_hz[1]),
+        change(f_r_hz),
+        hz(f_z_hz[0]),
+        hz(f_z_hz[1]),
+        change(f_z_hz),
+    )
+}
+
 /// A quantity of a record, in SI units (`None` where the record lacks it).
 type Quantity = fn(&CommissioningRecord) -> Option<f64>;
 
@@ -251,16 +278,12 @@ pub fn compare_report(a: &Path, b: &Path) -> Result<Report> {
             });
         }
     }
-    let summary = match (f_ra, f_rb) {
-        (Some(x), Some(y)) => format!(
-            "{na} against {nb}. The resonance moved from {x:.2} Hz to {y:.2} Hz ({:+.1} %); \
-             the antiresonance from {:.2} Hz to {:.2} Hz.",
-            (y - x) / x * 100.0,
-            ca.record.identified.f_z_hz,
-            cb.record.identified.f_z_hz,
-        ),
-        _ => format!("{na} against {nb}."),
-    };
+    let summary = compare_summary(
+        &na,
+        &nb,
+        [f_ra, f_rb],
+        [&ca, &cb].map(|c| Some(c.record.identified.f_z_hz).filter(|f| f.is_finite())),
+    );
     Ok(Report {
         title: "beltune comparison of two commissionings".into(),
         summary,
@@ -281,6 +304,7 @@ mod tests {
         assert_eq!(change_percent(Some(100.0), Some(90.0)), Some(-10.0));
         assert_eq!(change_percent(Some(0.0), Some(1.0)), None);
         assert_eq!(change_percent(None, Some(1.0)), None);
+
         let record = |m_c: f64| {
             let p = crate::model::TwoMassParams::thesis_table_a4();
             let text = serde_json::json!({"identified": {
@@ -304,5 +328,19 @@ mod tests {
         let e = compare_report(&dir, &dir).unwrap_err().to_string();
         assert!(e.contains("identified"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_summary_never_prints_nan_or_inf() {
+        let s = compare_summary("A", "B", [Some(0.0), Some(50.0)], [None, Some(20.0)]);
+        assert!(!s.contains("NaN") && !s.contains("inf"), "{s}");
+        assert!(s.contains("from unknown to 20.00 Hz"), "{s}");
+        let s = compare_summary(
+            "A",
+            "B",
+            [Some(100.0), Some(90.0)],
+            [Some(50.0), Some(50.0)],
+        );
+        assert!(s.contains("100.00 Hz to 90.00 Hz (-10.0 %)"), "{s}");
     }
 }

@@ -74,7 +74,9 @@ pub struct Args {
     /// run, with commissioning/latest pointing at the newest.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Replace the result already in --out (its files are replaced together).
+    /// Replace the result already in --out: its files (listed in
+    /// .beltune-manifest) are replaced together; everything else in the
+    /// folder (notes, tuned-* sets) is kept.
     #[arg(long, requires = "out")]
     pub force: bool,
     #[command(flatten)]

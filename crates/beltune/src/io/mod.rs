@@ -6,7 +6,13 @@
 //!   a symlink's target is written through instead of being replaced.
 //! - [`read_capped`] / [`read_to_string_capped`]: only regular files, at most
 //!   a given size ([`MAX_TEXT_BYTES`] for TOML/JSON, [`MAX_CSV_BYTES`] for CSV).
-//! - [`clean_stale_temporaries`]: removes temporaries left by a killed process.
+//! - [`write_folder_atomic`] ([`set`]): a result set replaced as a whole,
+//!   keeping everything in the folder that beltune did not write.
+//! - [`clean_stale_temporaries`]: removes temporaries left by a killed process
+//!   (and puts back what a killed set replacement had carried aside).
+
+mod set;
+pub use set::{users_entries, write_folder_atomic, MANIFEST_FILE};
 
 use crate::{Error, Result};
 use std::io::{Read, Write};
@@ -250,8 +256,10 @@ fn temporary_pid(name: &str) -> Option<u32> {
 }
 
 /// Remove temporaries (`.NAME.tmp-PID-...`, files or folders) in `dir` whose
-/// process no longer runs, or older than a day. Best effort: returns what
-/// was removed.
+/// process no longer runs, or older than a day. A temporary folder holding
+/// entries a killed [`write_folder_atomic`] carried aside has them moved back
+/// into `dir/NAME` first, and is kept if that fails. Best effort: returns
+/// what was removed.
 pub fn clean_stale_temporaries(dir: &Path) -> Vec<PathBuf> {
     let mut removed = Vec::new();
     let Ok(entries) = std::fs::read_dir(dir) else {
@@ -272,6 +280,17 @@ pub fn clean_stale_temporaries(dir: &Path) -> Vec<PathBuf> {
             continue;
         }
         let p = e.path();
+        // a replacement killed while it held the user's entries: put them
+        // back first, and keep the temporary if that fails
+        if e.file_type().is_ok_and(|t| t.is_dir()) {
+            let back = match set::folder_of_temporary(dir, &e.file_name()) {
+                Some(folder) => set::carried_back(&p, &folder),
+                None => !p.join(set::CARRIED_FILE).exists(),
+            };
+            if !back {
+                continue;
+            }
+        }
         let gone = match e.file_type() {
             Ok(t) if t.is_dir() => std::fs::remove_dir_all(&p),
             _ => std::fs::remove_file(&p),
@@ -281,102 +300,6 @@ pub fn clean_stale_temporaries(dir: &Path) -> Vec<PathBuf> {
         }
     }
     removed
-}
-
-/// Replace the folder `dir` by a folder holding exactly `files` (name,
-/// contents), atomically: the files are written into a temporary sibling
-/// folder, flushed, and the folder is renamed into place (over a new or empty
-/// `dir`) or exchanged with the old one (Linux `renameat2(RENAME_EXCHANGE)`),
-/// whose contents are then removed. Anyone looking at `dir` sees the old set
-/// or the new one, never a mix. A symlinked `dir` has its target replaced.
-///
-/// The caller decides whether replacing an existing `dir` is allowed.
-pub fn write_folder_atomic(dir: &Path, files: &[(&str, &[u8])]) -> Result<Vec<PathBuf>> {
-    let io = |p: &Path| {
-        let p = p.to_path_buf();
-        move |source| Error::Io { path: p, source }
-    };
-    let dir = match std::fs::symlink_metadata(dir) {
-        Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(dir).map_err(io(dir))?,
-        _ => dir.to_path_buf(),
-    };
-    let parent = parent_of(&dir);
-    std::fs::create_dir_all(&parent).map_err(io(&parent))?;
-    let name = dir
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .ok_or_else(|| Error::Parse {
-            path: dir.display().to_string(),
-            message: "not a folder name".into(),
-        })?;
-    let tmp = parent.join(temporary_name(&name));
-    let result = (|| -> Result<()> {
-        std::fs::create_dir(&tmp).map_err(io(&tmp))?;
-        for (file, bytes) in files {
-            let p = tmp.join(file);
-            let mut f = std::fs::File::create(&p).map_err(io(&p))?;
-            f.write_all(bytes).map_err(io(&p))?;
-            f.sync_all().map_err(io(&p))?;
-        }
-        sync_dir(&tmp);
-        let empty = std::fs::read_dir(&dir).map(|mut d| d.next().is_none());
-        match empty {
-            // New, or an empty folder: a plain rename replaces it atomically.
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                std::fs::rename(&tmp, &dir).map_err(io(&dir))?
-            }
-            Ok(true) => std::fs::rename(&tmp, &dir).map_err(io(&dir))?,
-            Err(e) => return Err(io(&dir)(e)),
-            Ok(false) => {
-                exchange(&tmp, &dir).map_err(io(&dir))?;
-                // `tmp` now holds the old set.
-                let _ = std::fs::remove_dir_all(&tmp);
-            }
-        }
-        sync_dir(&parent);
-        Ok(())
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_dir_all(&tmp);
-    }
-    result?;
-    Ok(files.iter().map(|(f, _)| dir.join(f)).collect())
-}
-
-/// Swap two paths atomically; where the system cannot, move `b` aside, move
-/// `a` to `b` and the old `b` to `a` (a short window without `b`).
-fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::unix::ffi::OsStrExt;
-        let ca = std::ffi::CString::new(a.as_os_str().as_bytes())?;
-        let cb = std::ffi::CString::new(b.as_os_str().as_bytes())?;
-        // SAFETY: two valid NUL-terminated paths; renameat2 has no other
-        // preconditions.
-        let r = unsafe {
-            libc::renameat2(
-                libc::AT_FDCWD,
-                ca.as_ptr(),
-                libc::AT_FDCWD,
-                cb.as_ptr(),
-                libc::RENAME_EXCHANGE,
-            )
-        };
-        if r == 0 {
-            return Ok(());
-        }
-        let e = std::io::Error::last_os_error();
-        if !matches!(e.raw_os_error(), Some(libc::EINVAL) | Some(libc::ENOSYS)) {
-            return Err(e);
-        }
-    }
-    let aside = parent_of(b).join(temporary_name("old"));
-    std::fs::rename(b, &aside)?;
-    if let Err(e) = std::fs::rename(a, b) {
-        let _ = std::fs::rename(&aside, b);
-        return Err(e);
-    }
-    std::fs::rename(&aside, a)
 }
 
 #[cfg(test)]
@@ -486,24 +409,6 @@ mod tests {
         let mut s = Vec::new();
         let r = CappedReader::new(std::io::repeat(0), 100).read_to_end(&mut s);
         assert!(r.is_err() && s.len() == 100);
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn a_folder_is_replaced_as_a_whole() {
-        let dir = temp("folder");
-        let out = dir.join("out");
-        write_folder_atomic(&out, &[("a", b"1"), ("b", b"1")]).unwrap();
-        write_folder_atomic(&out, &[("a", b"2"), ("c", b"2")]).unwrap();
-        let mut names: Vec<_> = std::fs::read_dir(&out)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().into_string().unwrap())
-            .collect();
-        names.sort();
-        assert_eq!(names, ["a", "c"]);
-        assert_eq!(std::fs::read(out.join("a")).unwrap(), b"2");
-        // Nothing but `out` beside it: the old set and the temporary are gone.
-        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
