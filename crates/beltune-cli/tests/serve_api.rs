@@ -727,7 +727,7 @@ fn beltune_cli(args: &[&str]) -> (i32, String) {
 #[test]
 fn cli_refuses_remote_bind_without_the_flag_and_a_missing_folder() {
     let (code, err) = beltune_cli(&["serve", "--bind", "0.0.0.0", "--port", "0"]);
-    assert_eq!(code, 1, "{err}");
+    assert_eq!(code, 2, "bad input, like every refused value: {err}");
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(
         err.starts_with("error: ") && err.contains("--allow-remote"),
@@ -741,7 +741,7 @@ fn cli_refuses_remote_bind_without_the_flag_and_a_missing_folder() {
         "--port",
         "0",
     ]);
-    assert_eq!(code, 1, "{err}");
+    assert_eq!(code, 2, "a missing input is bad input: {err}");
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.contains("commissioning.json"), "{err}");
 
