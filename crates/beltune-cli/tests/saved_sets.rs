@@ -166,6 +166,12 @@ fn a_loaded_egc70_folder_simulates_on_its_plant_and_saves_every_section() {
         !page.contains("<h2>Parameters</h2>"),
         "an empty parameters table"
     );
+    // the saved set's own (simulated) move is compared, not left blank
+    let row = page
+        .split("<tr>")
+        .find(|r| r.contains("max tracking error (nonlinear feedforward)"))
+        .expect("the max tracking error row");
+    assert!(!row.contains("<td>-</td>"), "{row}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -101,16 +101,25 @@ const ROWS: [(&str, &str, Quantity, f64); 20] = [
     (
         "max tracking error (nonlinear feedforward)",
         "mm",
-        |r| r.delivered_move().map(|m| m.max_tracking_error_m),
+        |r| delivered(r).map(|m| m.max_tracking_error_m),
         1e3,
     ),
     (
         "static error (nonlinear feedforward)",
         "um",
-        |r| r.delivered_move().map(|m| m.static_error_m),
+        |r| delivered(r).map(|m| m.static_error_m),
         1e6,
     ),
 ];
+
+/// The delivered controller's move: the commissioning's (nonlinear
+/// feedforward), or the simulated move of a set saved by the tuning page.
+fn delivered(r: &CommissioningRecord) -> Option<&crate::commission::validation::MoveSummary> {
+    r.delivered_move().or(r
+        .tuning
+        .as_ref()
+        .and_then(|t| t.simulated_validation.as_ref()))
+}
 
 /// The parameter-change table of two commissionings.
 pub fn parameter_changes(a: &CommissioningRecord, b: &CommissioningRecord) -> Table {
@@ -190,10 +199,14 @@ fn run_rows(a: &ResultFolder, b: &ResultFolder) -> Table {
         }
     };
     let created = |c: &ResultFolder| -> String {
-        c.record
-            .provenance
-            .as_ref()
-            .map_or("-".to_string(), |p| p.created_utc.clone())
+        match &c.record.tuning {
+            Some(t) => t.provenance.created_utc.clone(),
+            None => c
+                .record
+                .provenance
+                .as_ref()
+                .map_or("-".to_string(), |p| p.created_utc.clone()),
+        }
     };
     let row = |name: &str, f: &dyn Fn(&ResultFolder) -> String| vec![name.to_string(), f(a), f(b)];
     Table {

@@ -72,7 +72,7 @@
   }
   function tickLabel(v) {
     const a = Math.abs(v);
-    if (a !== 0 && (a < 1e-2 || a >= 1e5)) return v.toExponential(0);
+    if (a !== 0 && (a < 1e-3 || a >= 1e5)) return v.toExponential(0);
     return String(Number(v.toPrecision(6)));
   }
 
