@@ -58,6 +58,8 @@ enum Command {
     Export(cmd::export::Args),
     /// Write an excitation signal (PRBS, chirp, multisine) to play on another drive.
     Excitation(cmd::excitation::Args),
+    /// Play an excitation on a simulated axis and write the drive's recording (CSV).
+    Record(cmd::record::Args),
     /// Answer as a virtual CiA 402 servo drive (EtherCAT SubDevice) on a network interface.
     VirtualDrive(cmd::virtual_drive::Args),
     /// Print the shell completion script (bash, zsh, fish, elvish, powershell).
@@ -104,6 +106,7 @@ fn main() {
         Command::Compare(a) => cmd::compare::run(a),
         Command::Export(a) => cmd::export::run(a),
         Command::Excitation(a) => cmd::excitation::run(a),
+        Command::Record(a) => cmd::record::run(a),
         Command::VirtualDrive(a) => cmd::virtual_drive::run(a),
         Command::Completions(a) => cmd::completions::run(a, Cli::command()),
         Command::Man(a) => cmd::man::run(a, Cli::command()),

@@ -56,13 +56,13 @@ impl BarProgress {
 }
 
 /// A finished stage as the lines printed for it: the stage name right-aligned,
-/// the summary wrapped to [`term::WIDTH`] columns, numbers tidied.
+/// the summary wrapped to [`term::width`] columns, numbers tidied.
 pub fn stage_lines(stage: &str, summary: &str) -> Vec<String> {
     term::wrap(
         stage,
         STAGE_WIDTH,
         &term::tidy_numbers(summary),
-        term::WIDTH,
+        term::width(),
     )
 }
 

@@ -1,8 +1,41 @@
 //! Terminal text: lines that fit [`WIDTH`] columns and numbers without float
 //! noise (`0.049999999999999996` prints as `0.05`).
 
-/// Width every line of the command's own output fits in, columns.
+/// Width every line of the command's own output fits in at most, columns.
 pub const WIDTH: usize = 100;
+
+/// Narrowest width the output is wrapped to, columns (a narrower terminal
+/// wraps the lines itself).
+pub const MIN_WIDTH: usize = 40;
+
+/// The width to wrap to: the terminal's width where standard output or
+/// standard error is a terminal (else `COLUMNS` where set), within
+/// [`MIN_WIDTH`]..=[`WIDTH`]; [`WIDTH`] for pipes and files.
+pub fn width() -> usize {
+    let from_terminal = [libc::STDOUT_FILENO, libc::STDERR_FILENO]
+        .into_iter()
+        .find_map(terminal_columns);
+    let columns = from_terminal.or_else(|| {
+        std::env::var("COLUMNS")
+            .ok()
+            .and_then(|c| c.trim().parse::<usize>().ok())
+    });
+    columns.map_or(WIDTH, |c| c.clamp(MIN_WIDTH, WIDTH))
+}
+
+/// The column count of the terminal on `fd`, if it is one.
+fn terminal_columns(fd: libc::c_int) -> Option<usize> {
+    let mut ws = libc::winsize {
+        ws_row: 0,
+        ws_col: 0,
+        ws_xpixel: 0,
+        ws_ypixel: 0,
+    };
+    // SAFETY: TIOCGWINSZ writes one `winsize` into the struct we own; a
+    // descriptor that is no terminal makes the call fail without writing.
+    let r = unsafe { libc::ioctl(fd, libc::TIOCGWINSZ, &mut ws) };
+    (r == 0 && ws.ws_col > 0).then_some(usize::from(ws.ws_col))
+}
 
 /// Significant digits a number keeps when [`tidy_numbers`] shortens it (the
 /// library's one message format, [`beltune::error::short_number`]).

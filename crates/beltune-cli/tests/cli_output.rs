@@ -825,6 +825,29 @@ fn completions_for_each_shell() {
     }
 }
 
+/// Completions offer the values of `--plant`, `--prefilter` and `--dynamics`
+/// (bash lists them in one `compgen -W` word list each).
+#[test]
+fn completions_offer_plant_prefilter_and_dynamics_values() {
+    let o = run(&["completions", "bash"]);
+    assert_eq!(code(&o), 0, "{}", text(&o.stderr));
+    let script = text(&o.stdout);
+    for words in [
+        "egc70 sim-a sim-b sim-c",
+        "butterworth notch none",
+        "conservative standard dynamic",
+    ] {
+        assert!(script.contains(words), "bash completions lack `{words}`");
+    }
+    // parsing keeps its own rules: a plant file is still accepted by name
+    let o = run(&["plant", "show", "--plant", "no-such-plant.toml"]);
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("no-such-plant.toml") && !err.contains("possible values"),
+        "{err}"
+    );
+}
+
 /// `beltune man`: roff with the exit statuses; it renders with groff without
 /// warnings where groff is installed; `--out` writes one page per subcommand.
 #[test]

@@ -171,7 +171,7 @@ fn prbs_walk_through_identifies_sim_a() {
             "--kind",
             "prbs",
             "--amplitude",
-            "1.2",
+            "0.6",
             "--order",
             "9",
             "--clock",
@@ -181,7 +181,8 @@ fn prbs_walk_through_identifies_sim_a() {
     );
 }
 
-/// The PRBS file: values `+-A/2`, period `(2^n - 1) P` (thesis 3.2), the
+/// The PRBS file: values `+-A` (`--amplitude` is the peak; the thesis'
+/// `A_PRBS` = 2 A peak to peak), period `(2^n - 1) P` (thesis 3.2), the
 /// metadata's arguments.
 #[test]
 fn prbs_signal_and_metadata() {
@@ -195,7 +196,7 @@ fn prbs_signal_and_metadata() {
             "--ts",
             "1e-4",
             "--amplitude",
-            "1.2",
+            "0.6",
         ])
         .args(["--order", "9", "--clock", "16", "--periods", "3", "--out"])
         .arg(&csv)
@@ -206,7 +207,7 @@ fn prbs_signal_and_metadata() {
     assert_eq!(u.len(), 3 * n);
     assert!(u.iter().all(|&x| x == 0.6 || x == -0.6));
     assert!((0..2 * n).all(|k| u[k] == u[k + n]));
-    // 2^(n-1) values +A/2 and 2^(n-1) - 1 values -A/2 per period
+    // 2^(n-1) values +A and 2^(n-1) - 1 values -A per period
     let plus = u[..n].iter().filter(|&&x| x > 0.0).count();
     assert_eq!(plus, 256 * 16);
     let meta: serde_json::Value =
@@ -230,7 +231,7 @@ fn multisine_walk_through_identifies_sim_a() {
             "--kind",
             "multisine",
             "--amplitude",
-            "0.01",
+            "0.3",
             "--period-samples",
             "8192",
             "--lines",
@@ -335,4 +336,159 @@ fn bad_excitation_requests_are_one_line_errors() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
     }
+}
+
+/// `--amplitude` is the peak of the file for every kind: a technician who
+/// gives the drive's safe setpoint gets no larger value from any signal.
+#[test]
+fn excitation_amplitude_is_the_peak_for_every_kind() {
+    let dir = temp_dir("amplitude-peak");
+    for (kind, extra) in [
+        ("prbs", vec!["--order", "7", "--clock", "4"]),
+        ("chirp", vec!["--period-samples", "4096"]),
+        (
+            "multisine",
+            vec!["--period-samples", "4096", "--lines", "128"],
+        ),
+    ] {
+        let csv = dir.join(format!("{kind}.csv"));
+        ok(&beltune()
+            .args(["excitation", "--kind", kind, "--ts", "1e-4"])
+            .args(["--amplitude", "0.25", "--periods", "2", "--out"])
+            .arg(&csv)
+            .args(&extra)
+            .output()
+            .unwrap());
+        let u = excitation(&csv);
+        let peak = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        // the chirp's sampled sine may miss its crest by (pi f_end T_s)^2 / 2 < 1.3 %
+        let tol = if kind == "chirp" { 0.013 } else { 1e-12 };
+        assert!(
+            peak <= 0.25 * (1.0 + 1e-12) && peak >= 0.25 * (1.0 - tol),
+            "{kind}: peak {peak} for --amplitude 0.25"
+        );
+        let meta: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(format!("{kind}.json"))).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(meta["peak"].as_f64(), Some(peak));
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The recording walk-through without hardware: `beltune record` plays the
+/// exported PRBS on the simulated `sim-a` drive and writes the recording
+/// (`t_s,setpoint,angle_rad,actual`); `commission --csv` on it with the
+/// metadata's arguments finds the set's resonance and antiresonance
+/// (Table A.11) within the identification tests' 3 %.
+#[test]
+fn record_plays_an_excitation_on_a_simulated_drive() {
+    let dir = temp_dir("record-walk");
+    let csv = dir.join("prbs.csv");
+    ok(&beltune()
+        .args([
+            "excitation",
+            "--kind",
+            "prbs",
+            "--ts",
+            "1e-4",
+            "--amplitude",
+            "0.6",
+        ])
+        .args(["--order", "9", "--clock", "16", "--periods", "4", "--out"])
+        .arg(&csv)
+        .output()
+        .unwrap());
+    let rec = dir.join("rec.csv");
+    ok(&beltune()
+        .args(["record", "--plant", "sim-a", "--excitation"])
+        .arg(&csv)
+        .arg("--out")
+        .arg(&rec)
+        .output()
+        .unwrap());
+    let text = std::fs::read_to_string(&rec).unwrap();
+    assert_eq!(text.lines().next(), Some("t_s,setpoint,angle_rad,actual"));
+    assert_eq!(text.lines().count(), 1 + 4 * 511 * 16);
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("prbs.json")).unwrap()).unwrap();
+    let extra: Vec<String> = meta["commission_args"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap().to_string())
+        .collect();
+    let truth = rigs::builtin("sim-a", None)
+        .unwrap()
+        .linearize(0.0)
+        .unwrap();
+    let out = dir.join("commissioning");
+    ok(&beltune()
+        .args(["commission", "--quiet", "--csv"])
+        .arg(&rec)
+        .args([
+            "--input",
+            "setpoint",
+            "--output",
+            "angle_rad",
+            "--actual-torque",
+            "actual",
+        ])
+        .args(&extra)
+        .args([
+            "--transmission",
+            &truth.i_t.to_string(),
+            "--torque-limit",
+            "3",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap());
+    let cj: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("commissioning.json")).unwrap())
+            .unwrap();
+    let f_r = cj["identified"]["f_r_hz"].as_f64().unwrap();
+    let f_z = cj["identified"]["f_z_hz"].as_f64().unwrap();
+    assert!(
+        (f_r / truth.f_r_hz() - 1.0).abs() < FREQUENCY_TOL,
+        "f_r {f_r} vs {}",
+        truth.f_r_hz()
+    );
+    assert!(
+        (f_z / truth.f_z_hz() - 1.0).abs() < FREQUENCY_TOL,
+        "f_z {f_z} vs {}",
+        truth.f_z_hz()
+    );
+    // an excitation at another sampling time is refused before anything is simulated
+    let slow = dir.join("slow.csv");
+    ok(&beltune()
+        .args([
+            "excitation",
+            "--kind",
+            "prbs",
+            "--ts",
+            "1e-3",
+            "--amplitude",
+            "0.6",
+        ])
+        .args(["--order", "5", "--clock", "2", "--out"])
+        .arg(&slow)
+        .output()
+        .unwrap());
+    let o = beltune()
+        .args(["record", "--plant", "sim-a", "--excitation"])
+        .arg(&slow)
+        .arg("--out")
+        .arg(dir.join("never.csv"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("export the excitation with --ts 0.0001"),
+        "{err}"
+    );
+    assert!(!dir.join("never.csv").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
 }

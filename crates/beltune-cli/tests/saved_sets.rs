@@ -117,6 +117,61 @@ fn a_loaded_egc70_folder_simulates_on_its_plant_and_saves_every_section() {
         assert!(html.contains(section), "saved report lacks {section}");
     }
     assert!(!html.contains("Sections not in this report"));
+
+    // A saved set is a result folder: its moves.csv has a header naming
+    // every column of every row, and `compare BASE BASE/tuned-...` reads it.
+    let saved = beltune_cli::serve::library::write_saved_set(
+        &out,
+        &tuner.save_set(&Knobs::default()).unwrap(),
+    )
+    .unwrap();
+    let moves = std::fs::read_to_string(saved.dir.join("moves.csv")).unwrap();
+    let mut lines = moves.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert!(header.len() >= 4, "{header:?}");
+    for (i, line) in lines.enumerate() {
+        assert_eq!(
+            line.split(',').count(),
+            header.len(),
+            "moves.csv row {i} does not match its header {header:?}"
+        );
+    }
+    let cmp = dir.join("compare.html");
+    run(bench::bin()
+        .arg("compare")
+        .arg(&out)
+        .arg(&saved.dir)
+        .arg("--out")
+        .arg(&cmp));
+    let page = std::fs::read_to_string(&cmp).unwrap();
+    assert!(page.contains("<svg"), "the comparison has no plots");
+    // the compare page says what the two runs are and how each was judged,
+    // and has no empty sections
+    assert!(page.contains("<h2>The two runs</h2>"), "no runs table");
+    assert!(
+        page.contains("payload</td><td>11.2 kg"),
+        "A's payload missing"
+    );
+    assert!(
+        page.contains("PASS (simulated move)"),
+        "B's verdict missing"
+    );
+    assert!(
+        page.contains("saved by the tuning page"),
+        "B's kind missing"
+    );
+    assert!(!page.contains("<td>none</td>"), "a `seed none` row");
+    assert!(!page.contains("<pre id=\"log\"></pre>"), "an empty log");
+    assert!(
+        !page.contains("<h2>Parameters</h2>"),
+        "an empty parameters table"
+    );
+    // the saved set's own (simulated) move is compared, not left blank
+    let row = page
+        .split("<tr>")
+        .find(|r| r.contains("max tracking error (nonlinear feedforward)"))
+        .expect("the max tracking error row");
+    assert!(!row.contains("<td>-</td>"), "{row}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -93,15 +93,27 @@ fn write_model_toml(input: &DesignInput, path: &Path) {
     std::fs::write(path, text).unwrap();
 }
 
-/// Run `beltune design --model MODEL --pm-velocity PM --json OUT`: its JSON (the
-/// summary keys at the top level), or the one-line error on stderr.
-fn beltune_design(model: &Path, pm_velocity_deg: f64, out: &Path) -> Result<Value, String> {
+/// Run `beltune design --model MODEL` with every design knob of `k` given as
+/// its flag, `--json OUT`: its JSON (the summary keys at the top level), or the
+/// one-line error on stderr.
+fn beltune_design(model: &Path, k: &DesignKnobs, out: &Path) -> Result<Value, String> {
+    let prefilter = match k.prefilter {
+        bdesign::PrefilterKind::Butterworth => "butterworth",
+        bdesign::PrefilterKind::Notch => "notch",
+        bdesign::PrefilterKind::None => "none",
+    };
     let o = Command::new(env!("CARGO_BIN_EXE_beltune"))
         .arg("design")
         .arg("--model")
         .arg(model)
-        .arg("--pm-velocity")
-        .arg(pm_velocity_deg.to_string())
+        .arg(format!("--pm-velocity={:?}", k.pm_velocity_deg))
+        .arg(format!("--pm-position={:?}", k.pm_position_deg))
+        .arg(format!(
+            "--resonance-suppression-db={:?}",
+            k.resonance_suppression_db
+        ))
+        .arg(format!("--prefilter={prefilter}"))
+        .arg(format!("--filter-attenuation-db={:?}", k.attenuation_db()))
         .arg("--json")
         .arg(out)
         .output()
@@ -330,6 +342,27 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
             .design
         };
         check_against(&c, &d0).await;
+        // plots that show the result: the 6 dB line is labelled, the filter's
+        // corner is marked, the frequency axis has more labels than the decades,
+        // and the error panel is scaled to the delivered controller's error
+        let six = js(&c, "[...document.querySelectorAll('#plot-sensitivity text.hline-label')].map(t => t.textContent).join('|')").await;
+        assert!(six.as_str().unwrap().contains("6 dB"), "{six}");
+        let corner = js(&c, "document.querySelectorAll('#plot-bode-mag line[data-name=filter-corner]').length").await;
+        assert_eq!(corner.as_u64(), Some(1), "the prefilter's corner is not marked");
+        let ticks = js(&c, "document.querySelectorAll('#plot-bode-mag text.x-tick').length").await;
+        assert!(ticks.as_u64().unwrap() >= 6, "{ticks} frequency labels");
+        let peak_mm: f64 = js(&c, "document.getElementById('plot-error').dataset.peakMm")
+            .await
+            .as_str()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let top = js(&c, "Math.max(...[...document.querySelectorAll('#plot-error text.tick:not(.x-tick)')].map(t => Number(t.textContent)).filter(isFinite))").await;
+        let top = top.as_f64().unwrap();
+        assert!(
+            top < 3.0 * peak_mm.max(0.01),
+            "the error panel reaches {top} mm for a largest error of {peak_mm} mm"
+        );
         let path0 = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "d").await;
         let points: usize = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "data-points")
             .await
@@ -358,20 +391,31 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         // the slider starts at the knobs the design rule chose
         let pm_after_deg = d0.knobs.pm_velocity_deg - PM_STEP_DEG;
         assert_eq!(value, pm_after_deg);
-        let d1 = bdesign::design(
-            &input,
-            &DesignKnobs {
-                pm_velocity_deg: pm_after_deg,
-                ..DesignKnobs::default()
-            },
-        )
-        .unwrap();
+        // one knob moves only itself: the rest of the design state stays as the
+        // design rule chose it (prefilter, attenuation, position margin, A_sup)
+        let knobs1 = DesignKnobs {
+            pm_velocity_deg: pm_after_deg,
+            filter_attenuation_db: Some(d0.knobs.attenuation_db()),
+            ..d0.knobs
+        };
+        let d1 = bdesign::design(&input, &knobs1).unwrap();
         assert!(d1.k_p != d0.k_p, "the design did not change");
         check_against(&c, &d1).await;
+        assert_close(
+            "the position phase margin after moving the velocity margin",
+            number(&c, "pm_position").await,
+            d0.position_margins.phase_margin_deg,
+        );
+        let prefilter = js(&c, "document.getElementById('prefilter').value").await;
+        assert_eq!(
+            prefilter,
+            serde_json::to_value(d0.knobs.prefilter).unwrap(),
+            "the prefilter moved with the velocity margin"
+        );
         // ... and what `beltune design` prints for the same knobs
         let model_toml = root_dir.join("egc70-model.toml");
         write_model_toml(&input, &model_toml);
-        let cli = beltune_design(&model_toml, pm_after_deg, &root_dir.join("design.json"))
+        let cli = beltune_design(&model_toml, &knobs1, &root_dir.join("design.json"))
             .expect("beltune design failed");
         for (id, key) in [
             ("k_p", "k_p"),
@@ -393,7 +437,11 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         }
         // The move numbers and traces are the server's (deterministic, seeded simulation).
         let knobs = serve::api::DesignRequest {
+            prefilter: Some(serde_json::from_value(serde_json::to_value(d0.knobs.prefilter).unwrap()).unwrap()),
             pm_velocity_deg: Some(pm_after_deg),
+            pm_position_deg: Some(d0.knobs.pm_position_deg),
+            resonance_suppression_db: Some(d0.knobs.resonance_suppression_db),
+            filter_attenuation_db: Some(d0.knobs.attenuation_db()),
             ..Default::default()
         }
         .validate()
@@ -423,22 +471,43 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         );
 
         // Infeasible: the velocity phase margin at the slider's lower end (Home key).
-        let lib = bdesign::design(
-            &input,
-            &DesignKnobs {
-                pm_velocity_deg: INFEASIBLE_PM_VELOCITY_DEG,
-                ..DesignKnobs::default()
-            },
-        );
+        let infeasible = DesignKnobs {
+            pm_velocity_deg: INFEASIBLE_PM_VELOCITY_DEG,
+            ..knobs1
+        };
+        let lib = bdesign::design(&input, &infeasible);
         let reason = lib.expect_err("the infeasible setting is feasible for the library").to_string();
         slider.send_keys("\u{E011}").await.unwrap(); // Home
         seq = wait_render(&c, seq).await;
         let shown = js(&c, "document.getElementById('error').hidden ? '' : document.getElementById('error').textContent").await;
         assert_eq!(shown.as_str().unwrap(), reason, "the page does not show the library's reason");
-        let cli = beltune_design(&model_toml, INFEASIBLE_PM_VELOCITY_DEG, &root_dir.join("x.json"));
+        let cli = beltune_design(&model_toml, &infeasible, &root_dir.join("x.json"));
         assert_eq!(cli.unwrap_err(), format!("error: {reason}"), "beltune design says otherwise");
-        // the page still shows the last good design
-        check_against(&c, &d1).await;
+        // no earlier design stays drawn or listed under the banner: the numbers
+        // are blank and every design plot says why, in full
+        for id in ["k_p", "k_i", "k_pp", "pm_velocity", "pm_position"] {
+            let v = js(&c, &format!("document.getElementById('{id}').dataset.value")).await;
+            assert_eq!(v.as_str(), Some(""), "#{id} still shows the refused design's predecessor");
+        }
+        for plot in ["plot-bode-mag", "plot-bode-phase", "plot-error", "plot-torque"] {
+            let why = js(&c, &format!("document.getElementById('{plot}').dataset.empty || ''")).await;
+            assert!(
+                why.as_str().unwrap().contains(&reason),
+                "#{plot} does not say why it is empty: {why}"
+            );
+            // the message is wrapped inside the plot, not clipped at its edges
+            let fits = js(
+                &c,
+                &format!(
+                    "(() => {{ const s = document.getElementById('{plot}'); \
+                     const b = s.querySelector('text').getBBox(); \
+                     const v = s.viewBox.baseVal; \
+                     return b.x >= v.x && b.x + b.width <= v.x + v.width; }})()"
+                ),
+            )
+            .await;
+            assert_eq!(fits, Value::Bool(true), "#{plot}: the message is clipped");
+        }
 
         // Back to a feasible setting: the error goes away and the page keeps working.
         c.execute("document.getElementById('reset').click(); return 0;", vec![]).await.unwrap();

@@ -278,7 +278,12 @@ pub fn judge(input: &VerdictInput) -> Verdict {
     let passed = all && validated_on != ValidatedOn::None;
     let file = input.controller_file;
     let next_step = match (all, validated_on) {
-        (true, ValidatedOn::Axis) => format!("Load {file} into the drive."),
+        (true, ValidatedOn::Axis) => format!(
+            "Enter the gains and the filter of {file} into the drive (the report's drive \
+             settings table lists them as a drive menu shows them; `beltune export --controller \
+             {file} --lang c` writes them for firmware), then repeat the validation move on the \
+             drive before production."
+        ),
         (true, ValidatedOn::Simulation) => format!(
             "The move was simulated, not run: commission the axis with this design before \
              loading {file} for production."
@@ -488,6 +493,8 @@ impl Verdict {
     pub fn word(&self) -> &'static str {
         if !self.limits_met() {
             "FAIL"
+        } else if self.passed && self.validated_on == ValidatedOn::Simulation {
+            "PASS (simulated move)"
         } else if self.passed {
             "PASS"
         } else {

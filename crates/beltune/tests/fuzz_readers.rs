@@ -268,6 +268,7 @@ proptest! {
             pm_position_deg: pm_p,
             resonance_suppression_db: sup,
             filter_attenuation_db: att,
+            dynamics: Default::default(),
         };
         let m = ModelFile::parse(&model_text(&[f64::NAN; 8], false), "egc70").unwrap();
         let input = m.design_input(Some(beltune::design::DEFAULT_TS_S)).unwrap();

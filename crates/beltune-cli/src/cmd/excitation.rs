@@ -3,8 +3,11 @@
 //! metadata `beltune commission --csv` needs to analyze the recording (period
 //! and transient periods to skip) in a JSON file beside it.
 //!
-//! Signals (beltune_rt::prbs): PRBS (thesis 3.2, values `+-A/2`), chirp (peak
-//! `A`) and Schroeder-phase multisine (peak `A` per line).
+//! Signals (beltune_rt::prbs): PRBS (thesis 3.2), chirp and Schroeder-phase
+//! multisine. `--amplitude A` is the peak of the file for every kind (the
+//! largest setpoint the drive receives): PRBS values `+-A` (the thesis'
+//! `A_PRBS` is the peak-to-peak `2 A`), chirp peak `A`, multisine scaled so
+//! that its peak is `A`.
 
 use crate::exit::{ExitStatus, Failure};
 use beltune_rt::prbs::{Chirp, Multisine, Prbs, Sweep};
@@ -18,11 +21,11 @@ pub const MAX_ROWS: u64 = 10_000_000;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Kind {
-    /// Pseudo-random binary sequence (values +-A/2), period (2^n - 1) P samples.
+    /// Pseudo-random binary sequence (values +-A), period (2^n - 1) P samples.
     Prbs,
     /// Periodic sine sweep of peak A.
     Chirp,
-    /// Sum of sines at harmonics of the period, Schroeder phases, peak A per line.
+    /// Sum of sines at harmonics of the period, Schroeder phases, peak A in all.
     Multisine,
 }
 
@@ -45,8 +48,8 @@ pub struct Args {
     /// Sampling time of the drive that plays it, s.
     #[arg(long, allow_negative_numbers = true)]
     pub ts: f64,
-    /// Amplitude in the unit of the drive's setpoint (N m or A): PRBS peak to
-    /// peak (+-A/2), chirp peak, multisine peak per line.
+    /// Peak of the signal in the unit of the drive's setpoint (N m or A), the same for
+    /// every kind: the largest absolute value in the file (PRBS values +-A).
     #[arg(long, allow_negative_numbers = true)]
     pub amplitude: f64,
     /// PRBS order n_PRBS (2..=20).
@@ -94,7 +97,7 @@ pub struct Metadata {
     pub kind: Kind,
     /// Sampling time, s.
     pub ts_s: f64,
-    /// Amplitude as given (see `--amplitude`).
+    /// The requested peak, as given (see `--amplitude`).
     pub amplitude: f64,
     /// Largest absolute value in the file.
     pub peak: f64,
@@ -121,10 +124,17 @@ fn multisine<const N: usize>(a: &Args) -> anyhow::Result<(Vec<f64>, [f64; 2])> {
         a.first_harmonic
             .saturating_add((i as u32).saturating_mul(a.harmonic_step))
     });
-    let mut m = Multisine::<f64, N>::new(a.period_samples, harmonics, a.amplitude)
+    // unit lines, then scaled so that the period's peak is the amplitude
+    let mut m = Multisine::<f64, N>::new(a.period_samples, harmonics, 1.0)
         .map_err(|e| bad(format!("multisine: {e}")))?;
     let mut x = vec![0.0; a.period_samples as usize];
     m.fill(&mut x);
+    let peak = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if !(peak.is_finite() && peak > 0.0) {
+        return Err(bad("multisine: the lines cancel (peak 0)"));
+    }
+    let scale = a.amplitude / peak;
+    x.iter_mut().for_each(|v| *v *= scale);
     let f = |h: u32| f64::from(h) / (f64::from(a.period_samples) * a.ts);
     Ok((x, [f(harmonics[0]), f(harmonics[N - 1])]))
 }
@@ -140,7 +150,8 @@ fn one_period(a: &Args) -> anyhow::Result<(Vec<f64>, [f64; 2], serde_json::Value
                     (1u64 << 20) - 1
                 )));
             }
-            let mut p = Prbs::<f64>::new(a.order, a.clock, a.amplitude)
+            // the generator's amplitude is the thesis' peak-to-peak A_PRBS (values +-A_PRBS/2)
+            let mut p = Prbs::<f64>::new(a.order, a.clock, 2.0 * a.amplitude)
                 .map_err(|e| bad(format!("PRBS: {e}")))?;
             let n = p.period_samples();
             if n > MAX_ROWS {
@@ -149,7 +160,8 @@ fn one_period(a: &Args) -> anyhow::Result<(Vec<f64>, [f64; 2], serde_json::Value
             let mut x = vec![0.0; n as usize];
             p.fill(&mut x);
             let band = [p.f_min_hz(a.ts), p.f_max_hz(a.ts)];
-            let params = serde_json::json!({"order": a.order, "clock_period": a.clock});
+            let params = serde_json::json!({"order": a.order, "clock_period": a.clock,
+                "a_prbs_peak_to_peak": 2.0 * a.amplitude});
             Ok((x, band, params))
         }
         Kind::Chirp => {

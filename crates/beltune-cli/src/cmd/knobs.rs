@@ -1,7 +1,10 @@
 //! The design knobs on the command line, shared by `design` and `commission`.
 //!
-//! Precedence: defaults (thesis: Butterworth, 60 deg / 80 deg, -10 dB), then
-//! `--dynamics` (one-knob mode), then the explicit expert flags.
+//! Without an expert flag the robust rule designs (prefilter and nominal
+//! margins chosen for the margins `--dynamics` guarantees, standard by
+//! default). With one the thesis' conditions hold exactly: defaults
+//! (Butterworth, 60 deg / 80 deg, -10 dB), then `--dynamics`, then the
+//! explicit expert flags.
 
 use beltune::design::robust::DesignRule;
 use beltune::design::{DesignKnobs, Dynamics, PrefilterKind};
@@ -10,22 +13,27 @@ use beltune::design::{DesignKnobs, Dynamics, PrefilterKind};
 #[derive(clap::Args, Clone, Debug)]
 pub struct KnobArgs {
     /// Prefilter in the velocity loop: butterworth, notch or none (default: chosen by the
-    /// robust design rule, which starts from butterworth).
+    /// robust design rule among Butterworth and notch filters). Giving it, or any of the
+    /// margin flags below, designs with exactly these values (the thesis' conditions).
     #[arg(long)]
     pub prefilter: Option<String>,
-    /// Velocity-loop phase margin in degrees (default 60, or from --dynamics).
+    /// Velocity-loop phase margin in degrees (default: chosen by the robust design rule,
+    /// typically 50-60; 60 with any other expert flag).
     #[arg(long, allow_negative_numbers = true)]
     pub pm_velocity: Option<f64>,
-    /// Position-loop phase margin in degrees (default 80, or from --dynamics).
+    /// Position-loop phase margin in degrees (default: chosen by the robust design rule,
+    /// typically 65-80; 80 with any other expert flag).
     #[arg(long, allow_negative_numbers = true)]
     pub pm_position: Option<f64>,
-    /// Open-loop gain at the resonance A_sup in dB (default -10, or from --dynamics).
+    /// Open-loop gain at the resonance A_sup in dB (default -10).
     #[arg(long, allow_negative_numbers = true)]
     pub resonance_suppression_db: Option<f64>,
     /// Prefilter gain at the antiresonance in dB (default -3 Butterworth, -6 notch).
     #[arg(long, allow_negative_numbers = true)]
     pub filter_attenuation_db: Option<f64>,
-    /// One-knob mode: conservative, standard, dynamic, or a number in [0, 1].
+    /// One knob from slow to fast: conservative, standard (the default), dynamic, or a number
+    /// in [0, 1]. It sets the phase margins the design keeps over the identification's
+    /// uncertainty: velocity/position 55/70 deg conservative, 45/60 standard, 35/50 dynamic.
     #[arg(long, allow_hyphen_values = true)]
     pub dynamics: Option<String>,
     /// Design with the thesis' rule on the fit as identified (friction lumped into damping)
@@ -106,15 +114,14 @@ impl KnobArgs {
     }
 
     /// The design rule: the thesis' with `--thesis-design`, exactly the knobs
-    /// when any knob flag is given, else the robust rule
-    /// ([`beltune::design::robust::DesignRule`]).
+    /// when any expert knob flag is given, else the robust rule
+    /// ([`beltune::design::robust::DesignRule`]) at `--dynamics`.
     pub fn rule(&self) -> DesignRule {
         let explicit = self.prefilter.is_some()
             || self.pm_velocity.is_some()
             || self.pm_position.is_some()
             || self.resonance_suppression_db.is_some()
-            || self.filter_attenuation_db.is_some()
-            || self.dynamics.is_some();
+            || self.filter_attenuation_db.is_some();
         if self.thesis_design {
             DesignRule::Thesis
         } else if explicit {

@@ -17,6 +17,7 @@ pub mod man;
 pub mod montecarlo;
 pub mod plant;
 pub mod plant_template;
+pub mod record;
 pub mod serve;
 pub mod summary;
 pub mod trajectory;

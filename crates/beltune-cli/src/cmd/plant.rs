@@ -42,8 +42,23 @@ pub fn run(cmd: PlantCommand) -> anyhow::Result<()> {
 /// current directory (write `./egc70` for the file).
 pub fn resolve_plant(name_or_file: &str, payload_kg: Option<f64>) -> anyhow::Result<Plant> {
     let is_file = name_or_file.ends_with(".toml") || Path::new(name_or_file).exists();
+    let hint = || {
+        similar_builtin(name_or_file)
+            .map(|n| format!("; did you mean `{n}`?"))
+            .unwrap_or_default()
+    };
     if BUILTIN_NAMES.contains(&name_or_file) || !is_file {
-        return Ok(builtin(name_or_file, payload_kg)?);
+        return builtin(name_or_file, payload_kg).map_err(|e| match e {
+            beltune::Error::UnknownPlant { .. } => anyhow::anyhow!("{e}{}", hint()),
+            e => e.into(),
+        });
+    }
+    if Path::new(name_or_file).is_dir() {
+        anyhow::bail!(
+            "--plant {name_or_file}: a folder, not a plant file (TOML) nor a built-in plant              ({}){}",
+            BUILTIN_NAMES.join(", "),
+            hint()
+        );
     }
     let plant = load_toml(Path::new(name_or_file))?;
     match payload_kg {
@@ -140,4 +155,50 @@ fn table(name: &str, s: &PlantSummary) -> String {
         }
     }
     out
+}
+
+/// The built-in plant name `name` was probably meant to be: equal once case,
+/// `-` and `_` are ignored, or at most two edits away (`simc` -> `sim-c`).
+pub fn similar_builtin(name: &str) -> Option<&'static str> {
+    let norm = |s: &str| -> Vec<char> {
+        s.chars()
+            .filter(|c| *c != '-' && *c != '_')
+            .map(|c| c.to_ascii_lowercase())
+            .collect()
+    };
+    let edits = |a: &[char], b: &[char]| -> usize {
+        let mut prev: Vec<usize> = (0..=b.len()).collect();
+        for (i, ca) in a.iter().enumerate() {
+            let mut cur = vec![i + 1];
+            for (j, cb) in b.iter().enumerate() {
+                let sub = prev[j] + usize::from(ca != cb);
+                cur.push(sub.min(prev[j + 1] + 1).min(cur[j] + 1));
+            }
+            prev = cur;
+        }
+        prev[b.len()]
+    };
+    let n = norm(name);
+    BUILTIN_NAMES
+        .iter()
+        .map(|b| (edits(&n, &norm(b)), *b))
+        .filter(|(d, _)| *d <= 2)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, b)| b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_misspelled_plant_name_suggests_the_built_in_one() {
+        assert_eq!(similar_builtin("simc"), Some("sim-c"));
+        assert_eq!(similar_builtin("SIM_A"), Some("sim-a"));
+        assert_eq!(similar_builtin("egc-70"), Some("egc70"));
+        assert_eq!(similar_builtin("egc07"), Some("egc70"));
+        assert_eq!(similar_builtin("linear-motor"), None);
+        let e = resolve_plant("simc", None).unwrap_err().to_string();
+        assert!(e.contains("did you mean `sim-c`"), "{e}");
+    }
 }

@@ -10,9 +10,10 @@ use std::sync::Arc;
 /// Arguments of `beltune serve`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Commissioning folder: the model is read from DIR/commissioning.json and
-    /// controller.toml is saved there. Without it: the built-in egc70 axis, saving
-    /// into the current directory.
+    /// Commissioning folder: the model is read from DIR/commissioning.json; each Save
+    /// writes a new folder DIR/tuned-<UTC time>/ (controller.toml, report, data), the
+    /// commissioning's own files stay as they are. Without it: the built-in egc70 axis,
+    /// saving tuned-*/ folders into the current directory.
     #[arg(long, value_name = "DIR")]
     pub commissioning: Option<PathBuf>,
     /// Address to listen on. Anything but loopback needs --allow-remote.
@@ -21,8 +22,8 @@ pub struct Args {
     /// TCP port (0 = any free port).
     #[arg(long, default_value_t = 8080)]
     pub port: u16,
-    /// Allow a non-loopback --bind: the page has no authentication and can write
-    /// controller.toml, so everyone who can reach the port can do that.
+    /// Allow a non-loopback --bind: the page has no authentication and can save
+    /// controllers (tuned-*/ folders), so everyone who can reach the port can do that.
     #[arg(long)]
     pub allow_remote: bool,
 }
@@ -40,7 +41,7 @@ pub fn check_bind(bind: IpAddr, allow_remote: bool) -> anyhow::Result<Option<Str
     }
     Ok(Some(format!(
         "warning: serving on {bind}, reachable from other machines; anyone who can reach \
-         it can change the design and overwrite controller.toml"
+         it can change the design and save controllers"
     )))
 }
 

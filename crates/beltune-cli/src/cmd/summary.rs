@@ -271,13 +271,17 @@ impl Summary {
         Ok(serde_json::to_string_pretty(self)?)
     }
 
-    /// The summary as text lines of at most [`term::WIDTH`] columns.
+    /// The summary as text lines of at most [`term::width`] columns.
     pub fn lines(&self) -> Vec<String> {
+        self.lines_in(term::width())
+    }
+
+    /// The summary as text lines of at most `width` columns.
+    pub fn lines_in(&self, width: usize) -> Vec<String> {
         let mut out = Vec::new();
         // Every number below has a fixed precision: no float noise to tidy.
-        let mut add = |label: &str, body: String| {
-            out.extend(term::wrap(label, LABEL_WIDTH, &body, term::WIDTH))
-        };
+        let mut add =
+            |label: &str, body: String| out.extend(term::wrap(label, LABEL_WIDTH, &body, width));
         if self.record_units {
             self.record_lines(&mut add);
         } else {
@@ -378,6 +382,10 @@ impl Summary {
         }
         if let Some(v) = &self.verdict {
             add("verdict", v.text());
+            for w in &v.warnings {
+                add("warning", format!("{}: {}", w.topic, w.reason));
+            }
+            add("next step", v.next_step.clone());
         }
         let mut time = Vec::new();
         if let Some(b) = self.axis_busy_s {
@@ -389,5 +397,90 @@ impl Summary {
         for f in &self.files {
             add("wrote", f.display().to_string());
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use beltune::verdict::{ValidatedOn, Warning};
+
+    /// A recorded-data summary (no move) whose fit is noisy.
+    fn noisy_csv_summary() -> Summary {
+        Summary {
+            schema: SCHEMA,
+            source: "rec.csv".into(),
+            status: "not_validated",
+            exit_code: 0,
+            identified: IdentifiedSummary {
+                f_r_hz: 31.0,
+                f_z_hz: 22.0,
+                theta_e_kg_m2: 1e-4,
+                m_c_kg: 12.0,
+                c_n_per_m: 2e5,
+                d_m_n_s_per_m: 40.0,
+                d_c_n_s_per_m: 180.0,
+                dead_time_s: 1e-3,
+                fit_rms_db: 11.2,
+                mean_coherence: 0.84,
+            },
+            truth: None,
+            controller: None,
+            validation: None,
+            verdict: Some(Verdict {
+                passed: false,
+                validated_on: ValidatedOn::None,
+                checks: Vec::new(),
+                warnings: vec![
+                    Warning {
+                        topic: "coherence".into(),
+                        reason: "the measured frequency response is noisy (mean coherence 0.84)"
+                            .into(),
+                    },
+                    Warning {
+                        topic: "fit residual".into(),
+                        reason: "the two-mass model fits the measurement poorly (11.20 dB rms)"
+                            .into(),
+                    },
+                ],
+                next_step: "No validation move was run: run a test move.".into(),
+            }),
+            axis_busy_s: None,
+            computation_s: 0.5,
+            wall_time_s: 0.6,
+            files: vec![PathBuf::from("out/commissioning.json")],
+            record_units: true,
+        }
+    }
+
+    /// The terminal says what the report says: the verdict, each warning and
+    /// the next step, also for recorded data (`--csv`).
+    #[test]
+    fn the_terminal_summary_shows_verdict_warnings_and_next_step() {
+        let text = noisy_csv_summary().lines_in(term::WIDTH).join("\n");
+        for want in [
+            "verdict:",
+            "warning: coherence: the measured frequency response is noisy",
+            "warning: fit residual:",
+            "next step: No validation move was run",
+        ] {
+            assert!(text.contains(want), "`{want}` missing in:\n{text}");
+        }
+    }
+
+    /// Lines fit the width they are wrapped to (an 80-column terminal gets
+    /// lines of at most 80 columns, not the 100 of a pipe).
+    #[test]
+    fn the_summary_wraps_to_the_terminal_width() {
+        let s = noisy_csv_summary();
+        for width in [80, term::WIDTH] {
+            let lines = s.lines_in(width);
+            assert!(
+                lines.iter().all(|l| l.chars().count() <= width),
+                "{lines:#?}"
+            );
+            assert!(lines.iter().any(|l| l.chars().count() > width - 20));
+        }
+        assert!(s.lines_in(80).len() > s.lines_in(100).len());
     }
 }

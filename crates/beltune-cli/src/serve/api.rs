@@ -57,10 +57,12 @@ pub const RESONANCE_SUPPRESSION_DB: KnobRange = KnobRange {
     step: 0.5,
 };
 /// Prefilter attenuation at the antiresonance, dB ((4.2) notch, (4.4) Butterworth).
+/// Up to -0.01 dB: the robust design rule's Butterworth candidates reach -0.02 dB,
+/// and the page sends the design on the screen back with its exact values.
 pub const FILTER_ATTENUATION_DB: KnobRange = KnobRange {
     name: "filter_attenuation_db",
     min: -20.0,
-    max: -0.5,
+    max: -0.01,
     step: 0.5,
 };
 /// One-knob dynamics setting: 0 = conservative, 1 = dynamic.

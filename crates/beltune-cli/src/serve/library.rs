@@ -284,7 +284,6 @@ impl LibraryTuner {
             .prefilter
             .is_some_and(|p| to_design_kind(p) != DesignKnobs::default().prefilter)
             || knobs.filter_attenuation_db.is_some()
-            || knobs.dynamics.is_some()
             || knobs.pm_velocity_deg.is_some()
             || knobs.pm_position_deg.is_some()
             || knobs.resonance_suppression_db.is_some();

@@ -1,6 +1,18 @@
 //! One-knob mode: a single "dynamics" setting `x` in `[0, 1]` (or the presets
-//! conservative = 0, standard = 0.5, dynamic = 1) that sets all three loop
-//! specifications together:
+//! conservative = 0, standard = 0.5, dynamic = 1) that orders the delivered
+//! designs from slow to fast. It acts on both design rules:
+//!
+//! - **The robust rule** (the commissioning's default,
+//!   [`super::robust::robust_design`]): `x` sets the margins the design must
+//!   keep over the identification's uncertainty box,
+//!   `phi_v >= 55 - 20 x` deg and `phi_p >= 70 - 20 x` deg
+//!   ([`Dynamics::guaranteed_velocity_phase_margin_deg`]): 55/70 deg
+//!   conservative, 45/60 deg standard, 35/50 deg dynamic. The candidates
+//!   (prefilters, nominal margins) do not depend on `x`, so a larger `x`
+//!   admits a superset of them and the fastest admissible design can only
+//!   get faster. The default of every command is standard.
+//! - **The thesis' conditions with explicit knobs** ([`super::design`]):
+//!   `x` sets the three loop specifications together,
 //!
 //! | x | velocity PM | position PM | `A_sup` |
 //! | --- | --- | --- | --- |
@@ -9,24 +21,22 @@
 //! | 1 (dynamic) | 50 deg | 75 deg | -6 dB |
 //!
 //! linearly in between: `pm_v = 70 - 20 x`, `pm_p = 85 - 10 x`, `A_sup = -14 + 8 x`.
-//!
-//! Why: "standard" is the thesis' setting (Tables A.6/A.7). Moving towards
-//! "dynamic" lowers both phase margins (more overshoot, faster loops) and relaxes
-//! the resonance suppression, which is what actually limits the velocity
-//! bandwidth: a larger open-loop gain at `w_r` allows a larger `K_I`/`K_P`. All
-//! three move in the direction that raises the bandwidth, so the crossover
-//! frequencies rise monotonically with `x` (tested). The velocity margin stays
-//! within 50-70 deg, around the 30-60 deg range the thesis cites, biased towards
-//! robustness because the model is identified, and -6 dB still keeps the
-//! resonance a factor of 2 below the critical gain. The prefilter and its
-//! attenuation are not changed by the knob.
+//! "standard" is the thesis' setting (Tables A.6/A.7). Moving towards
+//! "dynamic" lowers both phase margins and relaxes the resonance suppression.
+//! The prefilter and its attenuation are not changed by the knob.
 
 use super::DesignKnobs;
 use crate::{Error, Result};
 
-/// The one-knob setting, a validated value in `[0, 1]`.
+/// The one-knob setting, a validated value in `[0, 1]` (default: standard).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Dynamics(f64);
+
+impl Default for Dynamics {
+    fn default() -> Self {
+        Dynamics::STANDARD
+    }
+}
 
 impl Dynamics {
     /// Preset "conservative" (x = 0).
@@ -51,15 +61,30 @@ impl Dynamics {
     }
 
     /// The knobs for this setting, starting from `base` (prefilter and filter
-    /// attenuation are kept).
+    /// attenuation are kept; the setting itself is recorded in
+    /// [`DesignKnobs::dynamics`] for the robust rule).
     pub fn knobs(self, base: &DesignKnobs) -> DesignKnobs {
         let x = self.0;
         DesignKnobs {
             pm_velocity_deg: 70.0 - 20.0 * x,
             pm_position_deg: 85.0 - 10.0 * x,
             resonance_suppression_db: -14.0 + 8.0 * x,
+            dynamics: self,
             ..*base
         }
+    }
+
+    /// Velocity-loop phase margin the robust rule guarantees over the
+    /// identification's uncertainty box, deg: `55 - 20 x` (45 deg standard).
+    pub fn guaranteed_velocity_phase_margin_deg(self) -> f64 {
+        55.0 - 20.0 * self.0
+    }
+
+    /// Position-loop phase margin the robust rule guarantees over the box,
+    /// deg: `70 - 20 x` (60 deg standard; a position loop below 50 deg
+    /// overshoots its target visibly).
+    pub fn guaranteed_position_phase_margin_deg(self) -> f64 {
+        70.0 - 20.0 * self.0
     }
 }
 

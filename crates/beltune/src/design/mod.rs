@@ -115,7 +115,10 @@ impl DesignInput {
 }
 
 /// The expert tuning knobs (thesis 4.2-4.3). Defaults: Butterworth, 60 deg / 80 deg,
-/// `A_sup = -10 dB`, filter attenuation per prefilter default.
+/// `A_sup = -10 dB`, filter attenuation per prefilter default, dynamics standard.
+/// The thesis' conditions ([`design`]) use exactly these values; the robust rule
+/// ([`robust::robust_design`]) takes only `dynamics` from them and chooses
+/// prefilter and nominal margins itself.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DesignKnobs {
     /// Prefilter type.
@@ -129,6 +132,10 @@ pub struct DesignKnobs {
     /// Filter gain at the antiresonance, `A_Notch` (4.2) or `A_bw` (4.4), dB;
     /// `None`: the prefilter's default (-6 dB notch, -3 dB Butterworth).
     pub filter_attenuation_db: Option<f64>,
+    /// The one-knob setting: the margins the robust rule guarantees over the
+    /// identification's uncertainty ([`Dynamics`]); files without it read as standard.
+    #[serde(default)]
+    pub dynamics: Dynamics,
 }
 
 impl Default for DesignKnobs {
@@ -139,6 +146,7 @@ impl Default for DesignKnobs {
             pm_position_deg: 80.0,
             resonance_suppression_db: -10.0,
             filter_attenuation_db: None,
+            dynamics: Dynamics::STANDARD,
         }
     }
 }

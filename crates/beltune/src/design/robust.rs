@@ -31,7 +31,7 @@
 //! rather than on its nominal model only.
 
 use super::VelocityPlant;
-use super::{design, ControllerDesign, DesignInput, DesignKnobs, PrefilterKind};
+use super::{design, ControllerDesign, DesignInput, DesignKnobs, Dynamics, PrefilterKind};
 use crate::lti::C64;
 use crate::model::TwoMassParams;
 use crate::{Error, Result};
@@ -107,8 +107,9 @@ pub struct RobustDesign {
     pub design: ControllerDesign,
     /// Its margins over the uncertainty box.
     pub guaranteed: GuaranteedMargins,
-    /// Whether the guaranteed margins reach [`GUARANTEED_PHASE_MARGIN_DEG`]
-    /// and [`GUARANTEED_POSITION_PHASE_MARGIN_DEG`].
+    /// Whether the guaranteed margins reach the guarantee of the knobs'
+    /// dynamics ([`GUARANTEED_PHASE_MARGIN_DEG`] and
+    /// [`GUARANTEED_POSITION_PHASE_MARGIN_DEG`] at standard).
     pub meets_guarantee: bool,
     /// Designs that exist among the candidates.
     pub candidates_designed: usize,
@@ -117,13 +118,24 @@ pub struct RobustDesign {
     pub candidates_checked: usize,
 }
 
-/// Nominal margins tried besides the configured ones: the configured
-/// velocity / position phase margins lowered by these amounts, deg. The
-/// thesis' 60 / 80 deg are nominal targets on a model the identification
-/// knows only to within its uncertainty; the constraint that matters is the
-/// guarantee over that uncertainty, and every degree of nominal margin above
-/// it costs integral gain.
-const NOMINAL_MARGIN_REDUCTIONS_DEG: [(f64, f64); 3] = [(0.0, 0.0), (5.0, 8.0), (10.0, 15.0)];
+/// The ladder of nominal (velocity, position) phase margins every prefilter
+/// candidate is designed with, deg, from the thesis' 70/85 (conservative
+/// one-knob setting) down to 35/50. The thesis' 60 / 80 deg are nominal
+/// targets on a model the identification knows only to within its
+/// uncertainty; the constraint that matters is the guarantee over that
+/// uncertainty ([`Dynamics`]), and every degree of nominal margin above it
+/// costs integral gain. The ladder does not depend on the knobs, so a
+/// lower guarantee admits a superset of the designs a higher one admits.
+const NOMINAL_MARGIN_LADDER_DEG: [(f64, f64); 8] = [
+    (70.0, 85.0),
+    (65.0, 82.0),
+    (60.0, 80.0),
+    (55.0, 72.0),
+    (50.0, 65.0),
+    (45.0, 60.0),
+    (40.0, 55.0),
+    (35.0, 50.0),
+];
 
 /// Integral stiffness of the cascade, `K_I K_PP`: at low frequency the cascade answers a motor-angle error `e` (rad)
 /// with the torque `K_I K_PP e / s` (N m), so `K_I K_PP` (N m/(rad s)) is the
@@ -137,15 +149,31 @@ fn integral_stiffness(d: &ControllerDesign) -> f64 {
     d.k_i * d.k_pp
 }
 
-/// The design with the largest integral stiffness `K_I K_PP` over the
-/// candidates (prefilters, nominal margins) whose margins over the
-/// uncertainty box (`m_c_sigma_kg`, `c_sigma_n_per_m`: one-sigma
-/// uncertainties of the fit; [`guaranteed_margins`]) reach
-/// [`GUARANTEED_PHASE_MARGIN_DEG`] (velocity) and
-/// [`GUARANTEED_POSITION_PHASE_MARGIN_DEG`] (position). `input` carries the
-/// design model ([`design_model`]), `knobs` the configured prefilter and
-/// margins (always candidates). If no candidate meets the guarantee, the one
-/// with the largest guaranteed margin is returned with
+/// Step of the one-knob setting the robust rule resolves: `x` is rounded to
+/// a multiple of it ([`robust_design`] walks the settings from 0 up in these
+/// steps).
+pub const DYNAMICS_STEP: f64 = 0.05;
+
+/// The robust design at `knobs.dynamics`: over the candidates (prefilters x
+/// [`NOMINAL_MARGIN_LADDER_DEG`]) whose margins over the uncertainty box
+/// (`m_c_sigma_kg`, `c_sigma_n_per_m`: one-sigma uncertainties of the fit;
+/// [`guaranteed_margins`]) reach the guarantee of the setting
+/// ([`Dynamics::guaranteed_velocity_phase_margin_deg`],
+/// [`Dynamics::guaranteed_position_phase_margin_deg`]; 45/60 deg standard),
+/// the one with the largest integral stiffness `K_I K_PP` that is at least
+/// as fast, in both loops, as the design of the next slower setting.
+///
+/// The settings are walked from 0 (conservative) up to `x` (rounded to
+/// [`DYNAMICS_STEP`]): each step's design is the previous step's if nothing
+/// faster qualifies, so the velocity and the position crossover never fall
+/// as `x` rises (by construction; a lower guarantee admits a superset of
+/// the candidates). `input` carries the design model ([`design_model`]); of
+/// `knobs` the configured prefilter is one more candidate and `dynamics` is
+/// used; every candidate has the thesis' `A_sup` of -10 dB (the candidates
+/// must not depend on the setting). A rung of the ladder
+/// below a guarantee cannot meet it (the nominal model is in the box) and is
+/// not considered for it. If no candidate meets a setting's guarantee, the
+/// one with the largest guaranteed margin is kept for it with
 /// [`RobustDesign::meets_guarantee`] false.
 pub fn robust_design(
     input: &DesignInput,
@@ -153,18 +181,29 @@ pub fn robust_design(
     m_c_sigma_kg: f64,
     c_sigma_n_per_m: f64,
 ) -> Result<RobustDesign> {
+    let steps = (knobs.dynamics.value() / DYNAMICS_STEP).round() as usize;
+    let setting = |k: usize| Dynamics::new((k as f64 * DYNAMICS_STEP).min(1.0));
+    let target = setting(steps)?;
+    let (g_v_min, g_p_min) = (
+        target.guaranteed_velocity_phase_margin_deg(),
+        target.guaranteed_position_phase_margin_deg(),
+    );
     let mut prefilters = vec![(knobs.prefilter, knobs.filter_attenuation_db)];
     prefilters.extend(CANDIDATES.iter().map(|&(kind, att)| (kind, Some(att))));
     let mut designs = Vec::new();
     let mut last_error = None;
-    for &(dv, dp) in &NOMINAL_MARGIN_REDUCTIONS_DEG {
+    for &(pm_v, pm_p) in NOMINAL_MARGIN_LADDER_DEG
+        .iter()
+        .filter(|(v, p)| *v >= g_v_min && *p >= g_p_min)
+    {
         for &(kind, att) in &prefilters {
             let k = DesignKnobs {
                 prefilter: kind,
                 filter_attenuation_db: att,
-                pm_velocity_deg: (knobs.pm_velocity_deg - dv).max(GUARANTEED_PHASE_MARGIN_DEG),
-                pm_position_deg: (knobs.pm_position_deg - dp)
-                    .max(GUARANTEED_POSITION_PHASE_MARGIN_DEG),
+                pm_velocity_deg: pm_v,
+                pm_position_deg: pm_p,
+                // the same candidates for every setting: the thesis' A_sup
+                resonance_suppression_db: DesignKnobs::default().resonance_suppression_db,
                 ..*knobs
             };
             match design(input, &k) {
@@ -179,50 +218,83 @@ pub fn robust_design(
         }));
     }
     let designed = designs.len();
-    // Best first; the box is checked lazily until one candidate meets it.
+    // Best first; the box is checked lazily, once per candidate.
     designs.sort_by(|a, b| integral_stiffness(b).total_cmp(&integral_stiffness(a)));
-    let worst = |g: &GuaranteedMargins| {
-        (g.velocity_phase_margin_deg - GUARANTEED_PHASE_MARGIN_DEG)
-            .min(g.position_phase_margin_deg - GUARANTEED_POSITION_PHASE_MARGIN_DEG)
-    };
-    let mut fallback: Option<(ControllerDesign, GuaranteedMargins)> = None;
+    let mut box_margins: Vec<Option<Option<GuaranteedMargins>>> = vec![None; designed];
     let mut checked = 0;
-    for d in designs {
-        checked += 1;
-        let g = match guaranteed_margins(&d, &input.model, m_c_sigma_kg, c_sigma_n_per_m) {
-            Ok(g) if !g.velocity_phase_margin_deg.is_nan() => g,
-            Ok(_) => continue,
-            Err(e) => {
-                last_error = Some(e);
+    let mut floor: Option<(f64, f64)> = None;
+    let mut chosen: Option<(usize, bool)> = None;
+    for k in 0..=steps {
+        let level = setting(k)?;
+        let (g_v, g_p) = (
+            level.guaranteed_velocity_phase_margin_deg(),
+            level.guaranteed_position_phase_margin_deg(),
+        );
+        let worst = |g: &GuaranteedMargins| {
+            (g.velocity_phase_margin_deg - g_v).min(g.position_phase_margin_deg - g_p)
+        };
+        let mut pick: Option<(usize, bool)> = None;
+        let mut fallback: Option<(usize, f64)> = None;
+        for (i, d) in designs.iter().enumerate() {
+            let admissible = d.knobs.pm_velocity_deg >= g_v
+                && d.knobs.pm_position_deg >= g_p
+                && floor.is_none_or(|(fv, fp)| {
+                    d.velocity_margins.crossover_rad_s >= fv
+                        && d.position_margins.crossover_rad_s >= fp
+                });
+            if !admissible {
                 continue;
             }
+            let g = match &box_margins[i] {
+                Some(g) => *g,
+                None => {
+                    checked += 1;
+                    let g = match guaranteed_margins(d, &input.model, m_c_sigma_kg, c_sigma_n_per_m)
+                    {
+                        Ok(g) if !g.velocity_phase_margin_deg.is_nan() => Some(g),
+                        Ok(_) => None,
+                        Err(e) => {
+                            last_error = Some(e);
+                            None
+                        }
+                    };
+                    box_margins[i] = Some(g);
+                    g
+                }
+            };
+            let Some(g) = g else { continue };
+            if g.meets(level) {
+                pick = Some((i, true));
+                break;
+            }
+            if fallback.is_none_or(|(_, w)| worst(&g) > w) {
+                fallback = Some((i, worst(&g)));
+            }
+        }
+        let Some((i, meets)) = pick.or(fallback.map(|(i, _)| (i, false))) else {
+            return Err(last_error.unwrap_or_else(|| Error::Infeasible {
+                reason:
+                    "no controller design has finite margins over the identification's uncertainty"
+                        .into(),
+            }));
         };
-        if g.meets_guarantee() {
-            return Ok(RobustDesign {
-                design: d,
-                guaranteed: g,
-                meets_guarantee: true,
-                candidates_designed: designed,
-                candidates_checked: checked,
-            });
-        }
-        if fallback
-            .as_ref()
-            .is_none_or(|(_, fg)| worst(&g) > worst(fg))
-        {
-            fallback = Some((d, g));
-        }
+        let d = &designs[i];
+        floor = Some((
+            d.velocity_margins.crossover_rad_s,
+            d.position_margins.crossover_rad_s,
+        ));
+        chosen = Some((i, meets));
     }
-    let Some((design, guaranteed)) = fallback else {
-        return Err(last_error.unwrap_or_else(|| Error::Infeasible {
-            reason: "no controller design has finite margins over the identification's uncertainty"
-                .into(),
-        }));
-    };
+    let (i, meets) = chosen.expect("at least setting 0 is walked");
+    let guaranteed = box_margins[i]
+        .flatten()
+        .expect("the chosen design was checked");
+    let mut design = designs.swap_remove(i);
+    design.knobs.dynamics = knobs.dynamics;
     Ok(RobustDesign {
         design,
         guaranteed,
-        meets_guarantee: false,
+        meets_guarantee: meets,
         candidates_designed: designed,
         candidates_checked: checked,
     })
@@ -269,7 +341,7 @@ pub fn design_identified(
     };
     let guaranteed = guaranteed_margins(&d, &model, m_c_sigma_kg, c_sigma_n_per_m)?;
     Ok(RobustDesign {
-        meets_guarantee: guaranteed.meets_guarantee(),
+        meets_guarantee: guaranteed.meets(knobs.dynamics),
         design: d,
         guaranteed,
         candidates_designed: 1,
@@ -402,8 +474,13 @@ impl GuaranteedMargins {
     /// Whether these margins reach [`GUARANTEED_PHASE_MARGIN_DEG`] (velocity)
     /// and [`GUARANTEED_POSITION_PHASE_MARGIN_DEG`] (position); false for NaN.
     pub fn meets_guarantee(&self) -> bool {
-        self.velocity_phase_margin_deg >= GUARANTEED_PHASE_MARGIN_DEG
-            && self.position_phase_margin_deg >= GUARANTEED_POSITION_PHASE_MARGIN_DEG
+        self.meets(Dynamics::STANDARD)
+    }
+
+    /// Whether these margins reach the guarantee of `dynamics`; false for NaN.
+    pub fn meets(&self, dynamics: Dynamics) -> bool {
+        self.velocity_phase_margin_deg >= dynamics.guaranteed_velocity_phase_margin_deg()
+            && self.position_phase_margin_deg >= dynamics.guaranteed_position_phase_margin_deg()
     }
 }
 

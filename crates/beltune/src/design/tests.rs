@@ -492,6 +492,7 @@ fn random_plants_meet_conditions_or_fail_cleanly() {
             pm_position_deg: rng.random_range(60.0..85.0),
             resonance_suppression_db: rng.random_range(-16.0..-4.0),
             filter_attenuation_db: None,
+            dynamics: Dynamics::STANDARD,
         };
         match design(&input, &k) {
             Ok(d) => {

@@ -105,10 +105,27 @@ pub fn loop_plots(des: &ControllerDesign, f_z_hz: f64, f_r_hz: f64) -> Result<Lo
         label: format!("f_r {}", hz_text(f_r_hz)),
         freq_hz: f_r_hz,
     };
+    let mut controller_markers = resonance_markers(f_z_hz, f_r_hz);
+    // the prefilter's corner (Butterworth cut-off; a notch sits at its centre frequency)
+    match des.prefilter {
+        crate::design::Prefilter::Butterworth { omega_bw_rad_s } => {
+            controller_markers.push(FrequencyMarker {
+                label: format!("filter corner f_bw {}", hz_text(hz(omega_bw_rad_s))),
+                freq_hz: hz(omega_bw_rad_s),
+            })
+        }
+        crate::design::Prefilter::Notch { omega_r_rad_s, .. } => {
+            controller_markers.push(FrequencyMarker {
+                label: format!("notch {}", hz_text(hz(omega_r_rad_s))),
+                freq_hz: hz(omega_r_rad_s),
+            })
+        }
+        crate::design::Prefilter::None => {}
+    }
     let controller = BodePlot {
         title: "Controller G_pre G_PI (velocity error -> torque)".into(),
         curves: vec![data.controller.clone()],
-        markers: resonance_markers(f_z_hz, f_r_hz),
+        markers: controller_markers,
         ..BodePlot::default()
     };
     let open_loops = vec![

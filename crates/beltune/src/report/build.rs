@@ -87,12 +87,15 @@ pub fn build_report(inp: &ReportInputs) -> Result<Report> {
     let id = &rec.identified;
     let des = inp.design;
     let frf = match &inp.data.frf {
-        Some(lines) => Some(frf_display(
-            lines,
-            inp.model_tf,
-            id.dead_time_s,
-            resonance_markers(id.f_z_hz, id.f_r_hz),
-        )?),
+        Some(lines) => Some(super::FrfPlot {
+            input_unit: crate::units::labels(id.units).torque.into(),
+            ..frf_display(
+                lines,
+                inp.model_tf,
+                id.dead_time_s,
+                resonance_markers(id.f_z_hz, id.f_r_hz),
+            )?
+        }),
         None => None,
     };
     let loops = loop_plots(des, id.f_z_hz, id.f_r_hz)?;
@@ -101,7 +104,10 @@ pub fn build_report(inp: &ReportInputs) -> Result<Report> {
         plot.viscous_nm_s_per_rad = f.viscous_nm_s_per_rad;
         plot.coulomb_nm = f.coulomb_nm;
     }
-    let mut tables = vec![drive_form_table(des, id.units)];
+    let mut tables = vec![
+        drive_form_table(des, id.units),
+        super::vendor::vendor_table(des, id.units),
+    ];
     if !inp.absent.is_empty() {
         tables.push(Table {
             title: "Sections not in this report".into(),
@@ -505,7 +511,13 @@ pub fn drive_form_table(
                 "(m/min)/mm",
                 format!("{:.4}", f.position_gain_m_per_min_per_mm),
             ),
-            row("speed setpoint filter", "", f.filter_kind.clone()),
+            // in series with the speed controller, inside the speed loop: a drive's
+            // current (torque) setpoint filter, not a speed setpoint filter (outside the loop)
+            row(
+                "current setpoint filter (inside the speed loop)",
+                "",
+                f.filter_kind.clone(),
+            ),
             row("filter frequency", "Hz", opt(f.filter_frequency_hz, 2)),
             row("filter damping", "", opt(f.filter_damping, 3)),
             row(
@@ -544,7 +556,15 @@ pub fn validation_row(label: &str, s: &MoveSummary) -> [String; 4] {
         format!("{:.3} mm", s.max_tracking_error_m * 1e3),
         format!("{:.1} um", s.static_error_m * 1e6),
         match s.settling_time_s {
-            Some(t) => format!("{t:.3} s"),
+            // the error never left the band: say so, a bare "0.000 s" reads as a defect
+            Some(t) if t == 0.0 && s.max_tracking_error_m <= SETTLING_BAND_M => format!(
+                "0 s (within +-{:.0} um throughout the move)",
+                SETTLING_BAND_M * 1e6
+            ),
+            Some(t) => format!(
+                "{t:.3} s after the trajectory ends (to within +-{:.0} um)",
+                SETTLING_BAND_M * 1e6
+            ),
             None => format!("not within {:.0} um", SETTLING_BAND_M * 1e6),
         },
     ]
@@ -616,6 +636,50 @@ mod tests {
         assert!(to.len() <= 22);
         assert!(yo.contains(&1.0) && yo.contains(&-1.0));
         assert!(to.windows(2).all(|w| w[0] <= w[1]));
+    }
+
+    /// The prefilter sits in series with the speed controller, inside the
+    /// speed loop: a drive calls that a current (torque) setpoint filter; a
+    /// "speed setpoint filter" would sit outside the loop.
+    #[test]
+    fn the_drive_table_names_the_prefilter_by_where_it_sits() {
+        let input =
+            crate::design::DesignInput::new(crate::model::TwoMassParams::thesis_table_a4(), 1e-3);
+        let des = crate::design::design(&input, &crate::design::DesignKnobs::default()).unwrap();
+        let t = drive_form_table(&des, crate::ident::ModelUnits::default());
+        let names: Vec<&str> = t.rows.iter().map(|r| r[0].as_str()).collect();
+        assert!(
+            names.contains(&"current setpoint filter (inside the speed loop)"),
+            "{names:?}"
+        );
+        assert!(
+            !names.iter().any(|n| n.contains("speed setpoint")),
+            "{names:?}"
+        );
+    }
+
+    /// A move whose error never left the settling band says so instead of a
+    /// bare "0.000 s"; a real settling time names its reference and band.
+    #[test]
+    fn the_settling_time_says_what_it_measures() {
+        let within = MoveSummary {
+            max_tracking_error_m: 42e-6,
+            settling_time_s: Some(0.0),
+            ..MoveSummary::default()
+        };
+        assert_eq!(
+            validation_row("nonlinear", &within)[3],
+            "0 s (within +-100 um throughout the move)"
+        );
+        let settles = MoveSummary {
+            max_tracking_error_m: 7e-3,
+            settling_time_s: Some(0.125),
+            ..MoveSummary::default()
+        };
+        assert_eq!(
+            validation_row("none", &settles)[3],
+            "0.125 s after the trajectory ends (to within +-100 um)"
+        );
     }
 
     #[test]

@@ -128,16 +128,25 @@ const ROWS: [(&str, &str, Quantity, f64); 20] = [
     (
         "max tracking error (nonlinear feedforward)",
         "mm",
-        |r| r.delivered_move().map(|m| m.max_tracking_error_m),
+        |r| delivered(r).map(|m| m.max_tracking_error_m),
         1e3,
     ),
     (
         "static error (nonlinear feedforward)",
         "um",
-        |r| r.delivered_move().map(|m| m.static_error_m),
+        |r| delivered(r).map(|m| m.static_error_m),
         1e6,
     ),
 ];
+
+/// The delivered controller's move: the commissioning's (nonlinear
+/// feedforward), or the simulated move of a set saved by the tuning page.
+fn delivered(r: &CommissioningRecord) -> Option<&crate::commission::validation::MoveSummary> {
+    r.delivered_move().or(r
+        .tuning
+        .as_ref()
+        .and_then(|t| t.simulated_validation.as_ref()))
+}
 
 /// The parameter-change table of two commissionings.
 pub fn parameter_changes(a: &CommissioningRecord, b: &CommissioningRecord) -> Table {
@@ -166,11 +175,79 @@ pub fn parameter_changes(a: &CommissioningRecord, b: &CommissioningRecord) -> Ta
     }
 }
 
+/// Palette index of run A and of run B: the same in every plot.
+const COLOR_A: usize = 0;
+/// See [`COLOR_A`].
+const COLOR_B: usize = 1;
+
 fn labelled(mut c: BodeCurve, label: String, dots: bool, dashed: bool) -> BodeCurve {
+    c.color_index = Some(if label.starts_with('B') {
+        COLOR_B
+    } else {
+        COLOR_A
+    });
     c.label = label;
     c.dots = dots;
     c.dashed = dashed;
     c
+}
+
+/// One run of a comparison: where it is, what it ran on, its verdict.
+fn run_rows(a: &ResultFolder, b: &ResultFolder) -> Table {
+    let payload = |c: &ResultFolder| -> String {
+        let simulated = match &c.record.axis {
+            Some(crate::record::commissioning::AxisRecord::Simulated { payload_kg, .. }) => {
+                *payload_kg
+            }
+            _ => None,
+        };
+        simulated.map_or("-".to_string(), |p| format!("{p:.1} kg"))
+    };
+    let verdict = |c: &ResultFolder| -> String {
+        c.record
+            .verdict
+            .as_ref()
+            .map_or("-".to_string(), |v| v.text())
+    };
+    let kind = |c: &ResultFolder| -> String {
+        if c.record.tuning.is_some() {
+            "saved by the tuning page (simulated move)".into()
+        } else {
+            match &c.record.axis {
+                Some(crate::record::commissioning::AxisRecord::Simulated { .. }) => {
+                    "commissioning of a simulated axis".into()
+                }
+                Some(crate::record::commissioning::AxisRecord::Recorded { .. }) => {
+                    "commissioning from a recording".into()
+                }
+                Some(_) => "commissioning on a drive".into(),
+                None => "commissioning".into(),
+            }
+        }
+    };
+    let created = |c: &ResultFolder| -> String {
+        match &c.record.tuning {
+            Some(t) => t.provenance.created_utc.clone(),
+            None => c
+                .record
+                .provenance
+                .as_ref()
+                .map_or("-".to_string(), |p| p.created_utc.clone()),
+        }
+    };
+    let row = |name: &str, f: &dyn Fn(&ResultFolder) -> String| vec![name.to_string(), f(a), f(b)];
+    Table {
+        title: "The two runs".into(),
+        header: ["", "A", "B"].map(String::from).to_vec(),
+        rows: vec![
+            row("folder", &|c| c.dir.display().to_string()),
+            row("axis", &|c| c.record.plant.clone()),
+            row("kind", &kind),
+            row("payload", &payload),
+            row("verdict", &verdict),
+            row("created (UTC)", &created),
+        ],
+    }
 }
 
 /// The comparison report of folders `a` and `b`.
@@ -287,7 +364,7 @@ pub fn compare_report(a: &Path, b: &Path) -> Result<Report> {
     Ok(Report {
         title: "beltune comparison of two commissionings".into(),
         summary,
-        tables: vec![table],
+        tables: vec![run_rows(&ca, &cb), table],
         overlays,
         moves,
         provenance: Some(crate::record::provenance::Provenance::of_this_process(None)),

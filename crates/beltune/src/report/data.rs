@@ -19,6 +19,10 @@ pub struct BodeCurve {
     /// Drawn dashed (a "before" or reference curve).
     #[serde(default)]
     pub dashed: bool,
+    /// Colour: index into the report's palette (`None`: the curve's position in
+    /// its plot), so that one run keeps one colour over several plots.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color_index: Option<usize>,
 }
 
 /// Which panel of a Bode diagram a point belongs to.
@@ -85,6 +89,9 @@ pub struct FrfPlot {
     pub model: BodeCurve,
     /// Resonance / antiresonance markers.
     pub markers: Vec<FrequencyMarker>,
+    /// Unit of the input (the magnitude is in dB re 1 rad per this unit):
+    /// "N m", or "A" for a current record; empty: "N m".
+    pub input_unit: String,
 }
 
 /// Friction measurements and the fitted curve.

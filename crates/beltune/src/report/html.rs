@@ -28,7 +28,7 @@ th { background: #f2f2f2; } td:first-child, th:first-child { text-align: left; }
 .next { font-weight: bold; }
 .trace { font-size: 0.85em; color: #555; }
 figure { margin: 0.5em 0; } figure svg { width: 100%; height: auto; }
-pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; overflow-x: auto; }
+pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; white-space: pre-wrap; overflow-wrap: anywhere; }
 @media print {
   body { margin: 0; max-width: none; font-size: 10pt; }
   h2 { break-after: avoid; }
@@ -83,12 +83,12 @@ pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; overflow-x: auto; 
 <tr><th>beltune version</th><td>{{ provenance.beltune_version }}</td></tr>
 <tr><th>created (UTC)</th><td>{{ provenance.created_utc }}</td></tr>
 <tr><th>command</th><td><code>{{ command_line }}</code></td></tr>
-<tr><th>seed</th><td>{{ provenance.seed if provenance.seed is not none else "none" }}</td></tr>
+{% if provenance.seed is not none %}<tr><th>seed</th><td>{{ provenance.seed }}</td></tr>{% endif %}
 </table>{% endif %}
 
-<h2>Log</h2>
-<pre>{% for line in log %}{{ line }}
-{% endfor %}</pre>
+{% if log %}<h2>Log</h2>
+<pre id="log">{% for line in log %}{{ line }}
+{% endfor %}</pre>{% endif %}
 </body>
 </html>
 "#;

@@ -10,6 +10,7 @@
 //! | [`folder`] | a result folder: read one, write one as a set |
 //! | [`compare`] | two result folders side by side |
 //! | [`data`] | what the page shows, as plain data |
+//! | [`vendor`] | the controller in the parameter names and units of drive families' manuals |
 //! | [`plot`], [`html`] | drawing: SVG plots, one self-contained HTML page |
 //!
 //! Computation of results happens upstream (`commission`, `verdict`); this
@@ -25,6 +26,7 @@ pub mod health;
 pub mod html;
 pub mod plot;
 pub mod plot_data;
+pub mod vendor;
 
 pub use data::{
     BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrfPlot, FrictionPlot, MarginPoint,

@@ -331,7 +331,8 @@ fn draw_series_on(chart: &mut Chart, pts: Vec<(f64, f64)>, s: &Style) -> Result<
         chart
             .draw_series(
                 pts.into_iter()
-                    .map(|p| Circle::new(p, px(1) + 1, color.filled())),
+                    // 2.5 display px: a measured line is visible beside a curve
+                    .map(|p| Circle::new(p, px(2) + px(1) / 2, color.filled())),
             )
             .map_err(err)?;
     } else if s.dashed {
@@ -399,6 +400,8 @@ fn bode_panel(
         Panel::Phase => "phase / deg",
     }))
     .axis_style(BLACK.stroke_width(px(1) / 2))
+    // more than the decades: plotters' log axis then labels 1, 2, 5 per decade
+    .x_labels(16)
     .x_label_formatter(&|f| format_hz(*f));
     if panel == Panel::Phase {
         mesh.y_label_formatter(&|v| format!("{v:.0}"));
@@ -428,6 +431,28 @@ fn bode_panel(
     }
     let bounds = plot_bounds(&chart, fr, &yr);
     let (_, th) = text_size("Hg", SMALL);
+    // every reference line but 0 dB / 0 deg says what it is
+    for h in hlines.iter().filter(|h| in_range(**h) && **h != 0.0) {
+        let label = match panel {
+            Panel::Magnitude => format!("{h} dB"),
+            Panel::Phase => format!("{h} deg"),
+        };
+        let (_, y) = chart.backend_coord(&(fr.start, *h));
+        let (tw, _) = text_size(&label, SMALL);
+        let (lx, ly) = labels.place(
+            bounds[2] - tw - px(4) as i32,
+            y - th - px(2) as i32,
+            tw,
+            th,
+            bounds,
+        );
+        root.draw(&Text::new(
+            label,
+            (lx, ly),
+            font(SMALL).color(&BLACK.mix(0.7)),
+        ))
+        .map_err(err)?;
+    }
     let mut sorted: Vec<&FrequencyMarker> = markers
         .iter()
         .filter(|m| m.freq_hz > fr.start && m.freq_hz < fr.end)
@@ -487,7 +512,7 @@ fn styles(plot: &BodePlot) -> Vec<Style> {
         .enumerate()
         .map(|(i, c)| Style {
             label: c.label.clone(),
-            color: PALETTE[i % PALETTE.len()],
+            color: PALETTE[c.color_index.unwrap_or(i) % PALETTE.len()],
             dots: c.dots,
             dashed: c.dashed,
             sets_range: true,
@@ -589,6 +614,7 @@ pub fn frf_svg(plot: &FrfPlot) -> Result<String> {
         phase_deg: filter_by(&plot.measured.phase_deg, &plot.usable, keep),
         dots: true,
         dashed: false,
+        color_index: None,
     };
     let used = pick(true);
     let excluded = pick(false);
@@ -619,8 +645,15 @@ pub fn frf_svg(plot: &FrfPlot) -> Result<String> {
         ),
     ];
     let header = BodePlot {
-        title: "Measured frequency response (torque command -> motor angle) and fitted model"
-            .into(),
+        title: format!(
+            "Measured frequency response (torque command -> motor angle, magnitude in dB re \
+             1 rad/({})) and fitted model",
+            if plot.input_unit.is_empty() {
+                "N m"
+            } else {
+                plot.input_unit.as_str()
+            }
+        ),
         markers: plot.markers.clone(),
         ..BodePlot::default()
     };
@@ -647,7 +680,8 @@ pub fn frf_svg(plot: &FrfPlot) -> Result<String> {
             chart
                 .draw_series(
                     pts.into_iter()
-                        .map(|p| Circle::new(p, px(1) + 1, color.filled())),
+                        // 2.5 display px: a measured line is visible beside a curve
+                        .map(|p| Circle::new(p, px(2) + px(1) / 2, color.filled())),
                 )
                 .map_err(err)?;
         }
@@ -1021,8 +1055,31 @@ pub fn moves_svg(moves: &[MovePlot], torque_limit_nm: Option<f64>) -> Result<Str
         .unwrap_or_default();
     let mut panels = vec![("position / m", desired, 1.0, vec![])];
     let cart = series(&|m| &m.cart_error_m);
-    if !cart.is_empty() {
+    // The delivered controller (the last move, nonlinear feedforward) on a scale
+    // of its own: next to the move without feedforward (millimetres) its error
+    // (tens of micrometres) would be a flat line. The limit is drawn only where
+    // it is within a factor of 3 of the error, else the label names it.
+    let delivered: Vec<TimeSeries> = cart.last().cloned().into_iter().collect();
+    let delivered_peak = delivered
+        .first()
+        .map(|s| s.2.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+        .unwrap_or(0.0);
+    if cart.len() > 1 {
         panels.push(("cart error / mm", cart, 1e3, error_limits.clone()));
+    }
+    if !delivered.is_empty() {
+        let within = 3.0 * delivered_peak >= limit;
+        let desc: &'static str = if within {
+            "delivered: cart error / mm"
+        } else {
+            "delivered: cart error / mm (limit 1 mm off scale)"
+        };
+        panels.push((
+            desc,
+            delivered,
+            1e3,
+            if within { error_limits.clone() } else { vec![] },
+        ));
     }
     panels.push((
         "motor-side error / mm",
@@ -1169,6 +1226,42 @@ mod tests {
     }
 
     #[test]
+    fn the_delivered_controllers_error_has_a_panel_on_its_own_scale() {
+        let t: Vec<f64> = (0..200).map(|k| k as f64 * 0.01).collect();
+        let desired: Vec<f64> = t.iter().map(|x| 0.25 * x).collect();
+        let mv = |label: &str, peak: f64| MovePlot {
+            label: label.into(),
+            time_s: t.clone(),
+            desired_m: desired.clone(),
+            cart_error_m: t.iter().map(|x| peak * (6.0 * x).sin()).collect(),
+            motor_error_m: Vec::new(),
+            torque_nm: vec![0.1; t.len()],
+        };
+        let svg = moves_svg(
+            &[
+                mv("no feedforward", 7e-3),
+                mv("nonlinear feedforward", 42e-6),
+            ],
+            None,
+        )
+        .unwrap();
+        assert!(svg.contains("delivered: cart error / mm (limit 1 mm off scale)"));
+        // its axis is labelled in tens of micrometres, not in millimetres: a
+        // small negative tick (only that panel has one; the others span
+        // millimetres, metres, seconds or newton metres)
+        let ticks: Vec<f64> = svg
+            .split('>')
+            .filter_map(|t| t.split('<').next()?.trim().parse::<f64>().ok())
+            .collect();
+        assert!(
+            ticks
+                .iter()
+                .any(|v| *v < 0.0 && v.abs() > 0.005 && v.abs() < 0.045),
+            "no tick of the delivered panel's scale among {ticks:?}"
+        );
+    }
+
+    #[test]
     fn empty_and_non_finite_data_do_not_panic() {
         let mut c = curve();
         c.magnitude_db[3] = f64::NAN;
@@ -1179,6 +1272,7 @@ mod tests {
             coherence: vec![1.0; 200],
             model: c,
             markers: vec![],
+            input_unit: String::new(),
         })
         .is_ok());
         assert!(friction_svg(&FrictionPlot::default()).is_ok());

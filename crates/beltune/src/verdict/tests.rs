@@ -83,7 +83,14 @@ fn a_good_move_with_guaranteed_margins_passes() {
     assert!(v.passed && v.limits_met(), "{v:?}");
     assert_eq!(v.checks.len(), 5);
     assert_eq!(v.word(), "PASS");
-    assert!(v.next_step.starts_with("Load controller.toml"));
+    // a step a technician can follow: what to enter, where it is listed, how to check it
+    assert!(v
+        .next_step
+        .starts_with("Enter the gains and the filter of controller.toml"));
+    assert!(v
+        .next_step
+        .contains("beltune export --controller controller.toml"));
+    assert!(v.next_step.contains("repeat the validation move"));
 }
 
 #[test]
@@ -212,6 +219,13 @@ fn a_simulated_move_does_not_say_load_into_the_drive() {
     );
     assert!(v.passed);
     assert!(v.next_step.contains("simulated"), "{}", v.next_step);
+    // the verdict itself says where it comes from
+    assert_eq!(v.word(), "PASS (simulated move)");
+    assert!(
+        v.text().starts_with("PASS (simulated move): "),
+        "{}",
+        v.text()
+    );
 }
 
 #[test]

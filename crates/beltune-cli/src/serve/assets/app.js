@@ -7,11 +7,16 @@
   const SLIDERS = ['dynamics', 'pm_velocity_deg', 'pm_position_deg',
     'resonance_suppression_db', 'filter_attenuation_db', 'payload_kg'];
   const DYNAMICS_SET = ['pm_velocity_deg', 'pm_position_deg', 'resonance_suppression_db'];
+  // The design state: moving one of these sends all of them, as the design on the
+  // screen has them, so that one knob moves only itself.
+  const DESIGN_KNOBS = ['pm_velocity_deg', 'pm_position_deg', 'resonance_suppression_db',
+    'filter_attenuation_db'];
   const DEBOUNCE_MS = 30;
   const $ = (id) => document.getElementById(id);
 
   let info = null;
-  let explicit = {}; // knobs the user has set; the rest take the server's defaults
+  let explicit = {}; // the request's knobs; the rest take the server's design rule
+  let shown = null; // the effective knobs of the design on the screen (exact values)
   let timer = null;
   let seq = 0;
   let inflight = null;
@@ -67,7 +72,7 @@
   }
   function tickLabel(v) {
     const a = Math.abs(v);
-    if (a !== 0 && (a < 1e-2 || a >= 1e5)) return v.toExponential(0);
+    if (a !== 0 && (a < 1e-3 || a >= 1e5)) return v.toExponential(0);
     return String(Number(v.toPrecision(6)));
   }
 
@@ -78,9 +83,24 @@
     svg.setAttribute('viewBox', `0 0 ${W} ${H}`);
     svg.replaceChildren();
     if (opts.empty) {
-      svg.appendChild(el('text', { x: W / 2, y: H / 2, 'text-anchor': 'middle', class: 'tick' }, opts.empty));
+      // wrapped into lines of at most ~70 characters, centred: never clipped at the edges
+      const words = String(opts.empty).split(/\s+/);
+      const lines = [''];
+      for (const w of words) {
+        const cur = lines[lines.length - 1];
+        if (cur && (cur + ' ' + w).length > 70) lines.push(w);
+        else lines[lines.length - 1] = cur ? cur + ' ' + w : w;
+      }
+      const t = el('text', { x: W / 2, y: H / 2 - 6 * (lines.length - 1), 'text-anchor': 'middle', class: 'empty-note' });
+      lines.forEach((line, i) => {
+        const span = el('tspan', { x: W / 2, dy: i === 0 ? 0 : 12 }, line);
+        t.appendChild(span);
+      });
+      svg.appendChild(t);
+      svg.dataset.empty = String(opts.empty);
       return;
     }
+    delete svg.dataset.empty;
     const ok = (x, y) => isFinite(x) && isFinite(y) && (!opts.xlog || x > 0);
     let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
     for (const s of opts.series) {
@@ -91,7 +111,10 @@
         y0 = Math.min(y0, s.y[i]); y1 = Math.max(y1, s.y[i]);
       }
     }
-    for (const h of opts.hlines || []) { y0 = Math.min(y0, h.y); y1 = Math.max(y1, h.y); }
+    for (const h of opts.hlines || []) {
+      if (h.norange) continue;
+      y0 = Math.min(y0, h.y); y1 = Math.max(y1, h.y);
+    }
     if (!isFinite(x0)) { plot(svg, { empty: 'no data' }); return; }
     if (opts.yspan && y1 - y0 > opts.yspan) y0 = y1 - opts.yspan;
     if (y1 - y0 < 1e-12) { y0 -= 1; y1 += 1; }
@@ -105,14 +128,21 @@
     // grid and ticks
     const xt = [];
     if (opts.xlog) {
-      for (let k = Math.ceil(a0 - 1e-9); k <= a1 + 1e-9; k++) xt.push(Math.pow(10, k));
+      // 1, 2, 5 per decade labelled (a decade or less: every integer multiple)
+      const few = a1 - a0 <= 1.2;
+      for (let k = Math.floor(a0) - 1; k <= Math.ceil(a1); k++) {
+        for (const m of few ? [1, 2, 3, 4, 5, 6, 7, 8, 9] : [1, 2, 5]) {
+          const v = m * Math.pow(10, k);
+          if (tx(v) >= a0 - 1e-9 && tx(v) <= a1 + 1e-9) xt.push(v);
+        }
+      }
     } else {
       xt.push(...niceTicks(x0, x1, 6));
     }
     for (const v of xt) {
       const X = px(v).toFixed(1);
       svg.appendChild(el('line', { x1: X, x2: X, y1: T, y2: H - B, class: 'grid' }));
-      svg.appendChild(el('text', { x: X, y: H - B + 12, 'text-anchor': 'middle', class: 'tick' }, tickLabel(v)));
+      svg.appendChild(el('text', { x: X, y: H - B + 12, 'text-anchor': 'middle', class: 'tick x-tick' }, tickLabel(v)));
     }
     for (const v of niceTicks(y0, y1, 5)) {
       const Y = py(v).toFixed(1);
@@ -123,9 +153,16 @@
     if (opts.xlabel) {
       svg.appendChild(el('text', { x: W - R, y: H - 2, 'text-anchor': 'end', class: 'tick' }, opts.xlabel));
     }
+    if (opts.ylabel) {
+      svg.appendChild(el('text', { x: L + 3, y: T + H - T - B - 4, class: 'tick y-label' }, opts.ylabel));
+    }
     for (const h of opts.hlines || []) {
+      if (h.y < y0 || h.y > y1) continue; // a line off the scale (e.g. a far limit) is not drawn
       const Y = py(h.y).toFixed(1);
-      svg.appendChild(el('line', { x1: L, x2: W - R, y1: Y, y2: Y, class: h.cls || 'ref' }));
+      svg.appendChild(el('line', { x1: L, x2: W - R, y1: Y, y2: Y, class: h.cls || 'ref', 'data-name': h.name || '' }));
+      if (h.label) {
+        svg.appendChild(el('text', { x: W - R - 3, y: Number(Y) - 3, 'text-anchor': 'end', class: 'hline-label' }, h.label));
+      }
     }
     for (const s of opts.series) {
       if (s.dots) {
@@ -133,7 +170,7 @@
         let n = 0;
         for (let i = 0; i < s.x.length; i++) {
           if (!ok(s.x[i], s.y[i]) || s.y[i] < y0 || s.y[i] > y1) continue;
-          g.appendChild(el('circle', { cx: px(s.x[i]).toFixed(2), cy: py(s.y[i]).toFixed(2), r: 1.6 }));
+          g.appendChild(el('circle', { cx: px(s.x[i]).toFixed(2), cy: py(s.y[i]).toFixed(2), r: 2.6 }));
           n++;
         }
         g.setAttribute('data-points', n);
@@ -184,6 +221,7 @@
       ['plot-frf-phase', 'phase_deg', 'model_phase_deg']]) {
       plot($(id), {
         xlog: true, xlabel: 'Hz',
+        ylabel: id === 'plot-frf-mag' ? `dB re 1 ${info.frf_unit || 'rad/(N m)'}` : 'deg',
         series: [
           { x: f.freq_hz, y: pick(f[key], false), cls: 'excluded', name: 'measured-excluded', dots: true, norange: true },
           { x: f.freq_hz, y: pick(f[key], true), cls: 's0', name: 'measured', dots: true },
@@ -204,13 +242,21 @@
       { x: hz(cp.crossover_rad_s), name: 'crossover-position', label: `fc,p ${fmt(hz(cp.crossover_rad_s), 3)} Hz`, row: 1 },
       { x: fr, name: 'resonance', cls: 'ref', label: `fr ${fmt(fr, 3)} Hz`, row: 2 },
     ];
+    const pf = r.prefilter;
+    const corner = pf.kind === 'butterworth' ? hz(pf.omega_bw_rad_s) : pf.kind === 'notch' ? fr : NaN;
+    if (isFinite(corner) && pf.kind === 'butterworth') {
+      cross.push({ x: corner, name: 'filter-corner', cls: 'filter', label: `fbw ${fmt(corner, 3)} Hz`, row: 3 });
+    } else if (isFinite(corner)) {
+      cross.push({ x: corner, name: 'filter-corner', cls: 'filter', label: `notch ${fmt(corner, 3)} Hz`, row: 3 });
+    }
     plot($('plot-bode-mag'), {
-      xlog: true, xlabel: 'Hz', yspan: 160,
+      xlog: true, xlabel: 'Hz', ylabel: 'dB re 1 (|L|)', yspan: 160,
       series: [
         { x: f, y: ol.magnitude_db, cls: 's0', name: 'open-loop-velocity' },
         { x: f, y: op.magnitude_db, cls: 's1', name: 'open-loop-position' },
       ],
-      hlines: [{ y: 0 }, { y: r.knobs.resonance_suppression_db, cls: 'ref' }],
+      hlines: [{ y: 0 }, { y: r.knobs.resonance_suppression_db, cls: 'ref', name: 'a-sup',
+        label: `A_sup ${fmt(r.knobs.resonance_suppression_db, 3)} dB` }],
       vlines: cross,
     });
     plot($('plot-bode-phase'), {
@@ -231,7 +277,8 @@
         { x: f, y: cl.magnitude_db, cls: 's2', name: 'closed-loop-position' },
         { x: f, y: r.bode.closed_loop_velocity.magnitude_db, cls: 's0', name: 'closed-loop-velocity' },
       ],
-      hlines: [{ y: 0 }, { y: -3, cls: 'ref' }],
+      ylabel: 'dB re 1',
+      hlines: [{ y: 0 }, { y: -3, cls: 'ref', name: 'minus-3-db', label: '-3 dB' }],
     });
     plot($('plot-sensitivity'), {
       xlog: true, xlabel: 'Hz', yspan: 120,
@@ -239,23 +286,30 @@
         { x: f, y: r.bode.sensitivity_velocity.magnitude_db, cls: 's0', name: 'sensitivity-velocity' },
         { x: f, y: r.bode.sensitivity_position.magnitude_db, cls: 's1', name: 'sensitivity-position' },
       ],
-      hlines: [{ y: 0 }, { y: 6, cls: 'ref' }],
+      ylabel: 'dB re 1',
+      hlines: [{ y: 0 }, { y: 6, cls: 'ref', name: 'six-db', label: '6 dB (|S| limit, 50 % gain change)' }],
     });
     const m = r.validation_move;
     if (m) {
       const tEnd = m.settling_time_s;
+      // scaled to the delivered controller's error, not to the limit: a 0.04 mm error
+      // under a 1 mm limit is a curve, not a flat line
+      const peakMm = Math.max(...m.error_m.map((e) => Math.abs(e) * 1e3));
       plot($('plot-error'), {
-        xlabel: 's',
+        xlabel: 's', ylabel: 'mm',
         series: [{ x: m.t_s, y: m.error_m.map((e) => e * 1e3), cls: 's0', name: 'tracking-error' }],
-        hlines: [{ y: 0 }, { y: 1, cls: 'limit' }, { y: -1, cls: 'limit' }],
+        hlines: [{ y: 0 }, { y: 1, cls: 'limit', norange: true, name: 'limit', label: 'limit 1 mm' },
+          { y: -1, cls: 'limit', norange: true, name: 'limit' }],
       });
+      $('plot-error').dataset.peakMm = String(peakMm);
       plot($('plot-torque'), {
         xlabel: 's',
         series: [{ x: m.t_s, y: m.torque_nm, cls: 's2', name: 'torque' }],
         hlines: [{ y: 0 }],
       });
       $('move-note').textContent = `Move ${m.plant} with ${fmt(m.payload_kg, 3)} kg payload` +
-        (tEnd === null ? ' (did not settle).' : '.') + ' Dashed red: the 1 mm limit.';
+        (tEnd === null ? ' (did not settle).' : '.') + ` Largest error ${fmt(peakMm, 3)} mm; ` +
+        (peakMm < 0.5 ? 'the 1 mm limit lies outside this scale.' : 'dashed red: the 1 mm limit.');
     } else {
       const why = r.move_error || 'no simulated move';
       plot($('plot-error'), { empty: why });
@@ -272,8 +326,18 @@
     $(name + '-value').textContent = fmt(Number(s.value), 3);
   }
 
+  // The first design knob the user moves fixes the whole design state at the
+  // design on the screen (prefilter, margins, suppression, attenuation, exact
+  // values, not the sliders' rounded ones); later requests carry all of it.
+  function pinDesignState() {
+    if (!shown || $('use-dynamics').checked) return;
+    for (const n of DESIGN_KNOBS) if (!(n in explicit)) explicit[n] = shown[n];
+    if (!('prefilter' in explicit)) explicit.prefilter = shown.prefilter;
+  }
+
   function render(r) {
     const k = r.knobs;
+    shown = k;
     for (const name of SLIDERS) if (name !== 'dynamics' || k.dynamics !== null) setSlider(name, k[name]);
     $('prefilter').value = k.prefilter;
     setNumber('k_p', r.gains.k_p);
@@ -306,8 +370,22 @@
     drawPlots(r);
   }
 
+  // A refused design: the banner, and no earlier design left drawn or listed
+  // under it (its numbers and curves would read as the current one's).
+  const DESIGN_NUMBERS = ['k_p', 'k_i', 'k_pp', 'prefilter-param', 'crossover_velocity',
+    'pm_velocity', 'gm_velocity', 'gain_at_resonance', 'crossover_position', 'pm_position',
+    'max_error', 'static_error', 'settling_time'];
+  const DESIGN_PLOTS = ['plot-bode-mag', 'plot-bode-phase', 'plot-closed-loop',
+    'plot-sensitivity', 'plot-error', 'plot-torque'];
+  function showFailure(msg) {
+    showError(msg);
+    for (const id of DESIGN_NUMBERS) setNumber(id, null);
+    for (const id of DESIGN_PLOTS) plot($(id), { empty: `no design: ${msg}` });
+    $('move-note').textContent = '';
+  }
+
   function currentRequest() {
-    const req = Object.assign({ prefilter: $('prefilter').value }, explicit);
+    const req = Object.assign({}, explicit);
     if ($('use-dynamics').checked) {
       req.dynamics = Number($('dynamics').value);
       for (const n of DYNAMICS_SET) delete req[n];
@@ -363,7 +441,7 @@
     }
     if (my !== seq) return;
     if (!resp.ok) {
-      showError(body.error || `HTTP ${resp.status}`);
+      showFailure(body.error || `HTTP ${resp.status}`);
       done(my, t0, null);
       return;
     }
@@ -403,10 +481,12 @@
     $('dynamics').disabled = !on;
     for (const n of DYNAMICS_SET) $(n).disabled = on;
     if (on) {
-      for (const n of DYNAMICS_SET) delete explicit[n];
+      // the robust rule chooses prefilter and margins for the knob's guarantee
+      for (const n of DESIGN_KNOBS) delete explicit[n];
+      delete explicit.prefilter;
     } else {
-      // keep the design the knob produced: its margins become explicit
-      for (const n of DYNAMICS_SET) explicit[n] = Number($(n).value);
+      // keep the design the knob produced: its whole state becomes explicit
+      pinDesignState();
     }
   }
 
@@ -441,12 +521,15 @@
     $('prefilter').value = d.prefilter;
     for (const name of SLIDERS) {
       $(name).addEventListener('input', () => {
+        if (DESIGN_KNOBS.includes(name)) pinDesignState();
         if (name !== 'dynamics') explicit[name] = Number($(name).value);
         $(name + '-value').textContent = fmt(Number($(name).value), 3);
         schedule();
       });
     }
     $('prefilter').addEventListener('change', () => {
+      pinDesignState();
+      explicit.prefilter = $('prefilter').value;
       delete explicit.filter_attenuation_db; // each prefilter has its own default
       schedule();
     });
