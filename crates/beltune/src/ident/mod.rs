@@ -32,7 +32,7 @@ pub(crate) mod testutil;
 
 pub use csv_columns::{read_csv_columns, CsvColumns, Sampling};
 pub use dead_time::{estimate_dead_time, DeadTime};
-pub use etfe::{etfe, log_spaced_subset, EtfeConfig, Frf, LineStatus};
+pub use etfe::{etfe, log_spaced_subset, EtfeConfig, Frf, LineCounts, LineStatus};
 pub use features::{frf_features, FrfFeatures};
 pub use fit::{fit_two_mass, FitConfig, FitModel, ModelUnits, ParamUncertainty, TwoMassFit};
 pub use friction::{
