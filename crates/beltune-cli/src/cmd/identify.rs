@@ -255,6 +255,9 @@ fn print_summary(id: &RecordedIdentification) {
     if let Some(d) = dead_time {
         print_dead_time(d);
     }
+    if let Ok(r) = beltune::ident::fit_residual(&id.frf, fit) {
+        println!("  {}", r.words());
+    }
 }
 
 fn print_dead_time(d: &DeadTime) {
@@ -269,27 +272,29 @@ fn print_dead_time(d: &DeadTime) {
 }
 
 fn frf_csv(frf: &beltune::ident::Frf, fit: &TwoMassFit) -> String {
-    let mut s =
-        String::from("freq_hz,magnitude_db,phase_deg,re,im,coherence,status,model_magnitude_db\n");
+    let mut s = String::from(
+        "freq_hz,magnitude_db,phase_deg,re,im,coherence,status,model_magnitude_db,residual_db\n",
+    );
     for i in 0..frf.freq_hz.len() {
         let g = frf.response[i];
         let w = frf.omega_rad_s(i);
-        let (mag, model) = if i == 0 {
-            (String::new(), String::new())
+        let (mag, model, residual) = if i == 0 {
+            (String::new(), String::new(), String::new())
         } else {
-            let m = if g.norm() > 0.0 {
-                format!("{}", frf.magnitude_db(i))
+            let model = model_magnitude_db(&fit.params, fit.model, w);
+            let (m, r) = if g.norm() > 0.0 {
+                (
+                    format!("{}", frf.magnitude_db(i)),
+                    format!("{}", frf.magnitude_db(i) - model),
+                )
             } else {
-                String::new()
+                (String::new(), String::new())
             };
-            (
-                m,
-                format!("{}", model_magnitude_db(&fit.params, fit.model, w)),
-            )
+            (m, format!("{model}"), r)
         };
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{}",
             frf.freq_hz[i],
             mag,
             g.arg().to_degrees(),
@@ -297,7 +302,8 @@ fn frf_csv(frf: &beltune::ident::Frf, fit: &TwoMassFit) -> String {
             g.im,
             frf.coherence[i],
             frf.line_status[i].label(),
-            model
+            model,
+            residual
         );
     }
     s

@@ -11,6 +11,7 @@
 //! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24)
 //! - [`dead_time`]: current-loop dead time (3.25)-(3.30)
 //! - [`csv_columns`]: the columns of a recorded CSV file, validated
+//! - [`residual`]: what the two-mass fit does not explain, per line; a second resonance named
 //! - [`recorded`]: the whole identification from a CSV record (CLI `identify`, `commission --csv`)
 
 pub mod csv_columns;
@@ -21,12 +22,15 @@ pub mod fit;
 pub mod friction;
 pub mod nonlinear;
 pub mod recorded;
+pub mod residual;
 pub mod strategy;
 
 #[cfg(test)]
 mod tests_measured;
 #[cfg(test)]
 mod tests_sim;
+#[cfg(test)]
+mod tests_unmodeled;
 #[cfg(test)]
 pub(crate) mod testutil;
 
@@ -42,4 +46,5 @@ pub use friction::{
 };
 pub use nonlinear::{fit_nonlinear, NonlinearConfig, NonlinearFit};
 pub use recorded::{detect_period, identify_recorded, RecordedExcitation, RecordedIdentification};
+pub use residual::{fit_residual, FitResidual, SecondResonance};
 pub use strategy::{direct_closed_loop, indirect_closed_loop, open_loop};
