@@ -6,8 +6,10 @@
 //! A second resonance (a frame, coupling or motor-shaft mode) shows in the
 //! motor-side FRF as a peak of the residual above the two-mass model,
 //! preceded by its antiresonance. It is named when the running median of the
-//! residual (3 lines either side) rises [`SECOND_MODE_MIN_DB`] above the
-//! residual's median away from the belt resonance; its frequency is the
+//! residual (3 lines either side) rises [`SECOND_MODE_MIN_DB`] (and
+//! [`SECOND_MODE_MIN_SIGMAS`] times the lines' noise) above the residual's
+//! median away from the belt resonance, on contiguous lines (not at the edge
+//! of a gap in the usable lines, such as a PRBS null); its frequency is the
 //! peak's line refined by a parabola, its damping ratio from the half-power
 //! width of the residual's peak on a linear scale (`zeta = df / (2 f)`).
 
@@ -17,6 +19,12 @@ use crate::Result;
 
 /// Smallest height of a residual peak, dB, for a second resonance.
 pub const SECOND_MODE_MIN_DB: f64 = 3.0;
+/// A residual peak must also stand this many standard deviations of the
+/// line's measurement noise (from its coherence, as in the fit's weights)
+/// above the median.
+pub const SECOND_MODE_MIN_SIGMAS: f64 = 4.0;
+/// Usable lines on each side of a residual peak, without a gap.
+const PEAK_SIDE_LINES: usize = 3;
 /// RMS residual over all usable lines above which the model class is not
 /// enough, dB: a two-mass fit of the real bench recording leaves 0.5-0.7 dB,
 /// one of the simulated egc70 with its stick-slip friction 1.7 dB (the
@@ -126,7 +134,15 @@ pub fn fit_residual(frf: &Frf, fit: &TwoMassFit) -> Result<FitResidual> {
         .map(|(k, &r)| (k, r))
         .unwrap_or((0, 0.0));
     let max_abs_hz = freq_hz.get(k_max).copied().unwrap_or(f64::NAN);
-    let second_resonance = second_mode(&freq_hz, &residual_db, fit);
+    let sigma_db: Vec<f64> = idx
+        .iter()
+        .map(|&i| {
+            let g = frf.coherence[i].clamp(1e-6, 1.0);
+            let rho = (1.0 - g) / g;
+            20.0 / std::f64::consts::LN_10 * (rho / (2.0 * frf.n_periods.max(1) as f64)).sqrt()
+        })
+        .collect();
+    let second_resonance = second_mode(&freq_hz, &residual_db, &sigma_db, fit);
     Ok(FitResidual {
         freq_hz,
         residual_db,
@@ -137,10 +153,27 @@ pub fn fit_residual(frf: &Frf, fit: &TwoMassFit) -> Result<FitResidual> {
     })
 }
 
-fn second_mode(f: &[f64], r: &[f64], fit: &TwoMassFit) -> Option<SecondResonance> {
+fn second_mode(
+    f: &[f64],
+    r: &[f64],
+    sigma_db: &[f64],
+    fit: &TwoMassFit,
+) -> Option<SecondResonance> {
     if r.len() < 9 {
         return None;
     }
+    // the frequency grid's step: a peak needs contiguous lines either side
+    // (not the edge of a gap such as a PRBS null, where the last lines are noise)
+    let step = f
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(f64::INFINITY, f64::min);
+    let contiguous = |k: usize| {
+        k >= PEAK_SIDE_LINES
+            && k + PEAK_SIDE_LINES < f.len()
+            && f[k + PEAK_SIDE_LINES] - f[k - PEAK_SIDE_LINES]
+                <= (2 * PEAK_SIDE_LINES) as f64 * step * 1.5
+    };
     let smooth = super::features::running_median(r, 3);
     let far = |x: f64| {
         [fit.f_r_hz, fit.f_z_hz]
@@ -158,13 +191,17 @@ fn second_mode(f: &[f64], r: &[f64], fit: &TwoMassFit) -> Option<SecondResonance
     }
     base.sort_by(f64::total_cmp);
     let median = base[base.len() / 2];
+    let noise = super::features::running_median(sigma_db, 3);
     let k = (1..r.len() - 1)
-        .filter(|&k| far(f[k]) && smooth[k] >= smooth[k - 1] && smooth[k] >= smooth[k + 1])
+        .filter(|&k| {
+            far(f[k])
+                && contiguous(k)
+                && smooth[k] >= smooth[k - 1]
+                && smooth[k] >= smooth[k + 1]
+                && smooth[k] - median >= SECOND_MODE_MIN_DB.max(SECOND_MODE_MIN_SIGMAS * noise[k])
+        })
         .max_by(|&a, &b| smooth[a].total_cmp(&smooth[b]))?;
     let peak_db = smooth[k] - median;
-    if peak_db < SECOND_MODE_MIN_DB {
-        return None;
-    }
     // refine on the raw residual around the smoothed peak
     let lo = k.saturating_sub(3);
     let hi = (k + 4).min(r.len());
@@ -196,4 +233,64 @@ fn second_mode(f: &[f64], r: &[f64], fit: &TwoMassFit) -> Option<SecondResonance
         damping,
         peak_db,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fit_stub() -> TwoMassFit {
+        let p = crate::model::TwoMassParams::thesis_table_a4();
+        TwoMassFit {
+            params: p,
+            start: p,
+            features: crate::ident::FrfFeatures {
+                resonance_hz: p.f_r_hz(),
+                antiresonance_hz: p.f_z_hz(),
+                resonance_magnitude: 1.0,
+                antiresonance_magnitude: 1.0,
+                rigid_inertia: 1.0,
+                asymptote_lines: 1,
+            },
+            uncertainty: None,
+            f_r_hz: 30.0,
+            f_z_hz: 20.0,
+            fit_rms_db: 0.0,
+            n_lines: 0,
+            free_inertia: false,
+            units: crate::ident::ModelUnits::Torque,
+            model: crate::ident::FitModel::Exact,
+        }
+    }
+
+    /// Regression (the README's egc70 run): noisy lines at the edge of a
+    /// PRBS null (617.7 Hz, coherence 0.6-0.9 over two periods) rose 4 dB
+    /// above the model and were named a second resonance. A peak at the edge
+    /// of a gap, or within the lines' noise, is not one; the same peak on
+    /// contiguous, coherent lines is.
+    #[test]
+    fn noise_at_the_edge_of_a_gap_is_not_a_resonance() {
+        let f: Vec<f64> = (0..200).map(|k| 100.0 + k as f64).collect();
+        let mut r = vec![0.0; 200];
+        for (k, v) in r.iter_mut().enumerate() {
+            let x = (f[k] - 250.0) / 3.0;
+            *v = 8.0 / (1.0 + x * x); // a clean 8 dB peak at 250 Hz
+        }
+        let quiet = vec![0.05; 200];
+        let m = second_mode(&f, &r, &quiet, &fit_stub()).expect("a clean peak");
+        assert!((m.f_hz - 250.0).abs() < 0.5, "{m:?}");
+        // the same peak with its top in a gap (a null: 249-262 Hz unused):
+        // only a flank rising to the gap's edge is left
+        let (fg, rg): (Vec<f64>, Vec<f64>) = f
+            .iter()
+            .zip(&r)
+            .filter(|(&x, _)| !(249.0..263.0).contains(&x))
+            .map(|(&x, &y)| (x, y))
+            .unzip();
+        let qg = vec![0.05; fg.len()];
+        assert!(second_mode(&fg, &rg, &qg, &fit_stub()).is_none());
+        // within the noise: 2.5 dB sigma per line
+        let noisy = vec![2.5; 200];
+        assert!(second_mode(&f, &r, &noisy, &fit_stub()).is_none());
+    }
 }
