@@ -492,3 +492,165 @@ fn record_plays_an_excitation_on_a_simulated_drive() {
     assert!(!dir.join("never.csv").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+/// `identify` and `commission --csv` detect the period of every excitation
+/// `beltune excitation` writes (`beltune::ident::detect_period`), for each
+/// kind, with the thesis' PRBS defaults (order 9, clock 16: the file starts
+/// with 80 equal samples, which used to be taken as a period of 8) and
+/// around them. The reference is the signal's construction, not the code:
+/// an m-sequence of order `n` has the period `2^n - 1` values, so the PRBS
+/// `(2^n - 1) P_PRBS` samples; a chirp repeats after `--period-samples`; a
+/// multisine of harmonics `h_i` after `N / gcd(N, h_i)` samples. A period
+/// shorter than 8 samples is reported as its smallest multiple of at least 8.
+#[test]
+fn detect_period_finds_every_written_excitation() {
+    let dir = temp_dir("periods");
+    let csv = dir.join("x.csv");
+    // (arguments, expected period, period written by `excitation`)
+    let mut cases: Vec<(Vec<String>, u64, u64)> = Vec::new();
+    let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    for order in [2u32, 3, 5, 7, 9, 11] {
+        for clock in [1u32, 2, 5, 16] {
+            let mut n = ((1u64 << order) - 1) * u64::from(clock);
+            let base = n;
+            while n < 8 {
+                n += base;
+            }
+            let mut a = s(&["--kind", "prbs", "--amplitude", "1.2"]);
+            a.extend(s(&[
+                "--order",
+                &order.to_string(),
+                "--clock",
+                &clock.to_string(),
+            ]));
+            cases.push((a, n, base));
+        }
+    }
+    for sweep in ["linear", "log"] {
+        for n in ["1000", "8192"] {
+            cases.push((
+                s(&[
+                    "--kind",
+                    "chirp",
+                    "--amplitude",
+                    "0.5",
+                    "--sweep",
+                    sweep,
+                    "--period-samples",
+                    n,
+                    "--f-start-hz",
+                    "5",
+                    "--f-end-hz",
+                    "600",
+                ]),
+                n.parse().unwrap(),
+                n.parse().unwrap(),
+            ));
+        }
+    }
+    // full, odd (every other line left out), sparse and shifted multisines
+    for (lines, first, step, n) in [
+        (128u64, 1u64, 1u64, 8192u64),
+        (512, 1, 1, 8192),
+        (64, 1, 2, 4096),
+        (32, 3, 4, 4096),
+        (16, 5, 7, 2500),
+        (512, 2, 1, 8192),
+        (64, 2, 2, 4096),
+        (8, 4, 8, 1024),
+    ] {
+        let mut g = gcd(n, first);
+        if lines > 1 {
+            g = gcd(g, step);
+        }
+        cases.push((
+            s(&[
+                "--kind",
+                "multisine",
+                "--amplitude",
+                "0.01",
+                "--lines",
+                &lines.to_string(),
+                "--first-harmonic",
+                &first.to_string(),
+                "--harmonic-step",
+                &step.to_string(),
+                "--period-samples",
+                &n.to_string(),
+            ]),
+            n / g,
+            n,
+        ));
+    }
+    for (args, expected, written) in &cases {
+        // at least two detected periods and three written ones
+        let periods = (2 * expected).div_ceil(*written).max(3).to_string();
+        ok(&beltune()
+            .args(["excitation", "--ts", "1e-4", "--periods", &periods, "--out"])
+            .arg(&csv)
+            .args(args)
+            .output()
+            .unwrap());
+        let u = excitation(&csv);
+        assert_eq!(
+            beltune::ident::detect_period(&u),
+            Some(*expected as usize),
+            "{args:?}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The README walk-through with the thesis PRBS defaults, identified without
+/// `--period-samples` (the period detected from the input column):
+/// `identify` used to stop with "no excitation: the input is constant".
+#[test]
+fn prbs_defaults_identify_without_the_period() {
+    let dir = temp_dir("prbs-detect");
+    let csv = dir.join("excitation.csv");
+    ok(&beltune()
+        .args(["excitation", "--ts", "1e-4", "--periods", "4", "--out"])
+        .arg(&csv)
+        .args(["--kind", "prbs", "--amplitude", "1.2"])
+        .output()
+        .unwrap());
+    let u = excitation(&csv);
+    let rec = dir.join("recorded.csv");
+    let (_, truth) = record_on("sim-a", &u, &rec);
+    let out = ok(&beltune()
+        .args(["identify", "--csv"])
+        .arg(&rec)
+        .args([
+            "--time",
+            "t_s",
+            "--input",
+            "torque_nm",
+            "--output",
+            "angle_rad",
+            "--transmission",
+            &truth.i_t.to_string(),
+        ])
+        .output()
+        .unwrap());
+    assert!(out.contains("period 8176 samples (detected)"), "{out}");
+    let f_r: f64 = out
+        .split("f_r = ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("{out}"));
+    assert!(
+        (f_r / truth.f_r_hz() - 1.0).abs() < FREQUENCY_TOL,
+        "f_r {f_r} vs {}",
+        truth.f_r_hz()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

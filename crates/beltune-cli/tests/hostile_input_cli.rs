@@ -1105,18 +1105,6 @@ fn excitation_refuses_what_commission_cannot_analyze() {
     for n in ["2", "3"] {
         run(&["--kind", "chirp", "--period-samples", n], &["at least 4"]);
     }
-    // a period shorter than one cycle of the start frequency is no sweep
-    run(
-        &[
-            "--kind",
-            "chirp",
-            "--period-samples",
-            "100",
-            "--f-start-hz",
-            "1",
-        ],
-        &["less than one cycle"],
-    );
     run(&["--kind", "chirp", "--f-end-hz", "6000"], &["Nyquist"]);
     // the order's range as the help states it
     for order in ["1", "21"] {

@@ -97,6 +97,52 @@ fn the_seeded_ci_sample_has_no_defects_and_keeps_its_margins() {
     );
 }
 
+/// Plants of the CI sample drawn with the dynamics beyond the model.
+const UNMODELED_PLANTS: u64 = 24;
+
+/// With the dynamics real axes have drawn (current loop, frame mode,
+/// cogging, ripple, encoder line errors, tooth mesh: `Ranges::unmodeled`)
+/// the commissioning stays safe on the first 24 plants of the CI seed: the
+/// true cart never leaves its window and every delivered controller keeps
+/// 30 deg on the true linearized plant. (It does not yet stay free of
+/// defects: seed 12's 96-plant sample had 7 feasible plants miss their
+/// limits, e.g. #38's max cart error 1.08 mm; docs/robustness.md.)
+#[test]
+fn with_unmodeled_dynamics_drawn_the_commissioning_stays_safe() {
+    let cfg = CommissioningConfig::default();
+    let ranges = Ranges {
+        unmodeled: true,
+        ..Ranges::default()
+    };
+    let outcomes: Vec<_> = (0..UNMODELED_PLANTS)
+        .into_par_iter()
+        .map(|i| run_plant(SEED, i, &ranges, &cfg).unwrap())
+        .collect();
+    eprintln!("{}", Table::new(&outcomes).markdown());
+    for o in &outcomes {
+        assert!(
+            !o.plant.params.unmodeled.is_off(),
+            "plant #{} drew nothing",
+            o.index
+        );
+        assert!(
+            !o.travel_violation,
+            "plant #{}: the cart left the window by {:.1} mm ({})",
+            o.index,
+            o.travel_excess_m * 1e3,
+            o.message
+        );
+        if let Some(pm) = o.true_velocity_phase_margin_deg {
+            assert!(
+                pm >= MIN_TRUE_PHASE_MARGIN_DEG,
+                "plant #{}: {pm:.1} deg on the true plant ({})",
+                o.index,
+                o.message
+            );
+        }
+    }
+}
+
 /// The seeds of docs/robustness.md's table.
 const PAGE_SEEDS: [u64; 2] = [12, 13];
 /// Plants per seed of the full study.

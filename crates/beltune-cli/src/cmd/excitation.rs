@@ -258,7 +258,6 @@ pub fn generate(a: &Args) -> anyhow::Result<(String, Metadata)> {
     }
     if a.kind == Kind::Chirp {
         let nyquist = 0.5 / a.ts;
-        let period_s = f64::from(a.period_samples) * a.ts;
         let (lo, hi) = (a.f_start_hz.min(a.f_end_hz), a.f_start_hz.max(a.f_end_hz));
         if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi <= nyquist) {
             return Err(bad(format!(
@@ -266,16 +265,6 @@ pub fn generate(a: &Args) -> anyhow::Result<(String, Metadata)> {
                 num(lo),
                 num(hi),
                 num(nyquist)
-            )));
-        }
-        if lo * period_s < 1.0 {
-            return Err(bad(format!(
-                "chirp: a period of {} samples ({} s) holds less than one cycle of {} Hz; \
-                 raise --period-samples to at least {}",
-                a.period_samples,
-                num(period_s),
-                num(lo),
-                (1.0 / (lo * a.ts)).ceil()
             )));
         }
     }

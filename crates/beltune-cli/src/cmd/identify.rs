@@ -5,7 +5,7 @@
 use super::util::write_atomic;
 use beltune::ident::{
     fit::model_magnitude_db, identify_recorded, DeadTime, EtfeConfig, FitConfig, ModelUnits,
-    RecordedExcitation, TwoMassFit,
+    RecordedExcitation, RecordedIdentification, TwoMassFit,
 };
 use beltune::record::model::{IdentifiedModel, ModelFile, DEFAULT_DEAD_TIME_S};
 use beltune::record::provenance::Provenance;
@@ -60,6 +60,10 @@ pub struct Args {
     /// Lines whose input power is this many dB below the strongest are "not excited".
     #[arg(long, default_value_t = -40.0, allow_hyphen_values = true)]
     pub excitation_floor_db: f64,
+    /// Lines whose input power is this many dB below the strongest of their 8
+    /// neighbours either side are "not excited" (the gaps of a sparse multisine).
+    #[arg(long, default_value_t = -20.0, allow_hyphen_values = true)]
+    pub local_floor_db: f64,
     /// Write the FRF with coherence and line status here (CSV).
     #[arg(long)]
     pub frf_csv: Option<PathBuf>,
@@ -159,6 +163,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         etfe: EtfeConfig {
             integrator: true,
             excitation_floor_db: args.excitation_floor_db,
+            local_floor_db: args.local_floor_db,
             min_coherence: args.min_coherence,
             band_hz: band,
             ..EtfeConfig::default()
@@ -176,7 +181,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
     })?;
     let (frf, fit, dead_time) = (&id.frf, &id.fit, id.dead_time);
-    print_summary(fit, dead_time.as_ref(), frf.n_periods);
+    print_summary(&id);
     if let Some(path) = &args.frf_csv {
         write_atomic(path, frf_csv(frf, fit).as_bytes())?;
     }
@@ -211,7 +216,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn print_summary(fit: &TwoMassFit, dead_time: Option<&DeadTime>, n_periods: usize) {
+fn print_summary(id: &RecordedIdentification) {
+    let (fit, dead_time, n_periods) = (&id.fit, id.dead_time.as_ref(), id.frf.n_periods);
     let p = fit.params;
     let u = if fit.units == ModelUnits::Current {
         " (current units: N m read as A)"
@@ -221,6 +227,16 @@ fn print_summary(fit: &TwoMassFit, dead_time: Option<&DeadTime>, n_periods: usiz
     println!(
         "two-mass model{u}, {n_periods} periods averaged, {} lines fitted",
         fit.n_lines
+    );
+    println!("  lines: {}", id.frf.line_summary());
+    println!(
+        "  period {} samples ({})",
+        id.period_samples,
+        if id.period_detected {
+            "detected"
+        } else {
+            "given"
+        }
     );
     println!(
         "  f_r = {:.3} Hz, f_z = {:.3} Hz, fit RMS {:.3} dB",
@@ -237,32 +253,48 @@ fn print_summary(fit: &TwoMassFit, dead_time: Option<&DeadTime>, n_periods: usiz
     println!("  d_c     = {:.6e} +- {}", p.d_c, sig(|s| s.d_c));
     println!("  i_t     = {:.6e}", p.i_t);
     if let Some(d) = dead_time {
+        print_dead_time(d);
+    }
+    if let Ok(r) = beltune::ident::fit_residual(&id.frf, fit) {
+        println!("  {}", r.words());
+    }
+}
+
+fn print_dead_time(d: &DeadTime) {
+    if d.fractional_samples == d.samples as f64 {
         println!("  dead time {} samples = {:.6e} s", d.samples, d.seconds);
+    } else {
+        println!(
+            "  dead time {:.2} +- {:.2} samples = {:.6e} s (whole-sample (3.29): {})",
+            d.fractional_samples, d.sigma_samples, d.seconds, d.samples
+        );
     }
 }
 
 fn frf_csv(frf: &beltune::ident::Frf, fit: &TwoMassFit) -> String {
-    let mut s =
-        String::from("freq_hz,magnitude_db,phase_deg,re,im,coherence,status,model_magnitude_db\n");
+    let mut s = String::from(
+        "freq_hz,magnitude_db,phase_deg,re,im,coherence,status,model_magnitude_db,residual_db\n",
+    );
     for i in 0..frf.freq_hz.len() {
         let g = frf.response[i];
         let w = frf.omega_rad_s(i);
-        let (mag, model) = if i == 0 {
-            (String::new(), String::new())
+        let (mag, model, residual) = if i == 0 {
+            (String::new(), String::new(), String::new())
         } else {
-            let m = if g.norm() > 0.0 {
-                format!("{}", frf.magnitude_db(i))
+            let model = model_magnitude_db(&fit.params, fit.model, w);
+            let (m, r) = if g.norm() > 0.0 {
+                (
+                    format!("{}", frf.magnitude_db(i)),
+                    format!("{}", frf.magnitude_db(i) - model),
+                )
             } else {
-                String::new()
+                (String::new(), String::new())
             };
-            (
-                m,
-                format!("{}", model_magnitude_db(&fit.params, fit.model, w)),
-            )
+            (m, format!("{model}"), r)
         };
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{}",
             frf.freq_hz[i],
             mag,
             g.arg().to_degrees(),
@@ -270,7 +302,8 @@ fn frf_csv(frf: &beltune::ident::Frf, fit: &TwoMassFit) -> String {
             g.im,
             frf.coherence[i],
             frf.line_status[i].label(),
-            model
+            model,
+            residual
         );
     }
     s

@@ -36,6 +36,11 @@ pub struct Args {
     /// the robust design rule (to compare the two).
     #[arg(long)]
     pub thesis_design: bool,
+    /// Also draw the dynamics real axes have beyond the model (current loop,
+    /// frame mode, cogging, ripple, encoder line errors, tooth mesh;
+    /// docs/robustness.md gives the ranges).
+    #[arg(long)]
+    pub unmodeled: bool,
 }
 
 /// Most worker threads (`--threads`): beyond the cores they only cost memory.
@@ -81,7 +86,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     bar.set_style(ProgressStyle::with_template(
         "{bar:40} {pos}/{len} plants, {elapsed} (eta {eta}) {msg}",
     )?);
-    let ranges = Ranges::default();
+    let ranges = Ranges {
+        unmodeled: args.unmodeled,
+        ..Ranges::default()
+    };
     let cfg = CommissioningConfig {
         design_rule: if args.thesis_design {
             beltune::design::robust::DesignRule::Thesis

@@ -135,6 +135,37 @@ const WEAR: &str = "
 # guide_wear_section_m = [0.2, 0.4]
 ";
 
+/// The optional `[unmodeled]` table of a physical plant, commented out (every
+/// key 0 is off: the plant is the two-mass/three-mass model alone). The
+/// values shown are physical starting points for an egc70-class axis.
+const UNMODELED: &str = "
+# ---- dynamics real axes have beyond the model (optional table, simulator; every key
+# ---- 0 or absent is off; docs/robustness.md gives the Monte Carlo ranges) ----
+# [unmodeled]
+# closed current loop as a 2nd-order low-pass behind dead_time_s: bandwidth, Hz
+# (servo drives 1-4 kHz), damping ratio (0: 0.707)
+# current_loop_bandwidth_hz = 2000.0
+# current_loop_damping = 0.7
+# second mechanical mode: a compliant frame the motor stator sits on, Hz (2-6 x f_r),
+# its damping ratio (0: 0.02) and its inertia as a multiple of Theta_e
+# frame_mode_hz = 400.0
+# frame_mode_damping = 0.02
+# frame_inertia_ratio = 5.0
+# cogging torque amplitude, N m (0.5-2 % of rated), periods per revolution (0: 24)
+# cogging_torque_nm = 0.01
+# cogging_per_rev = 24.0
+# torque ripple, fraction of the torque (0.5-3 %), periods per revolution (0: 24)
+# torque_ripple = 0.01
+# torque_ripple_per_rev = 24.0
+# encoder line errors once and twice per revolution, amplitude, rad (1e-5 .. 5e-4)
+# encoder_error_once_rad = 1e-4
+# encoder_error_twice_rad = 5e-5
+# belt tooth-mesh force amplitude, N, periodic in belt travel with the tooth pitch, m
+# (0: 5 mm)
+# tooth_mesh_force_n = 2.0
+# tooth_pitch_m = 0.005
+";
+
 /// A float as TOML: 12 significant digits ([`term::tidy`]), always with a
 /// fraction or an exponent so that it reads back as a float.
 fn toml_float(v: f64) -> String {
@@ -206,8 +237,14 @@ pub fn template(plant: &Plant, name: &str) -> anyhow::Result<String> {
     );
     match plant {
         Plant::Physical(_) => {
-            section(&mut out, PHYSICAL, &table, &["kind", "noise", "wear"])?;
+            section(
+                &mut out,
+                PHYSICAL,
+                &table,
+                &["kind", "noise", "wear", "unmodeled"],
+            )?;
             noise_section(&mut out, &table)?;
+            out.push_str(UNMODELED);
             out.push_str(WEAR);
         }
         Plant::Linear(_) => {
@@ -334,6 +371,43 @@ mod tests {
                 guide_wear_section_m: Some((0.2, 0.4)),
             }
         );
+    }
+
+    /// The commented `[unmodeled]` table of the template, uncommented, is
+    /// read as the dynamics it describes, and they validate and simulate.
+    #[test]
+    fn the_unmodeled_table_of_the_template_reads_back() {
+        let plant = beltune::model::builtin("egc70", None).unwrap();
+        let text = template(&plant, "egc70").unwrap();
+        let start = text.find("# [unmodeled]").unwrap();
+        let end = text.find("# ---- ageing").unwrap();
+        let on: String = text[..start].to_string()
+            + &text[start..end]
+                .lines()
+                .map(|l| {
+                    if l.starts_with("# [") || l.contains(" = ") {
+                        l.trim_start_matches("# ").to_string()
+                    } else {
+                        l.to_string()
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join("\n")
+            + "\n"
+            + &text[end..];
+        let back: Plant = toml::from_str(&on).unwrap_or_else(|e| panic!("{e}\n{on}"));
+        back.validate().unwrap();
+        let Plant::Physical(p) = &back else {
+            panic!("physical")
+        };
+        assert_eq!(p.unmodeled.current_loop_bandwidth_hz, 2000.0);
+        assert_eq!(p.unmodeled.frame_mode_hz, 400.0);
+        assert_eq!(p.unmodeled.tooth_pitch_m, 0.005);
+        let mut axis = beltune::sim::SimAxis::new(&back, Default::default()).unwrap();
+        for k in 0..2000 {
+            let m = axis.step(if k % 200 < 100 { 0.3 } else { -0.3 });
+            assert!(m.torque_actual_nm.is_finite());
+        }
     }
 
     #[test]

@@ -14,6 +14,22 @@
 //! every period this is the mean of the per-period ETFEs), and the coherence
 //! is `gamma^2 = |sum V conj U|^2 / (sum |U|^2 sum |V|^2)`: 1 for a noise-free
 //! linear response, lower where noise or nonlinearity dominates.
+//!
+//! Line selection by the excitation itself: only lines the input really
+//! excites enter the FRF's usable set (and so the fit and the dead time):
+//! - the line's input power lies within `excitation_floor_db` of the
+//!   strongest line (a PRBS' spectral nulls at multiples of its clock
+//!   frequency, the lines outside a chirp's sweep);
+//! - and within `local_floor_db` of the strongest line within
+//!   [`LOCAL_WINDOW_LINES`] lines either side: a sparse multisine (odd, or
+//!   random-phase with lines left out on purpose to see nonlinear
+//!   distortion) leaves lines between excited ones that carry only leakage,
+//!   quantization or distortion of the input, however far above the global
+//!   floor; a smooth spectrum (PRBS, chirp, full multisine) loses nothing;
+//! - and, with several periods, the input at the line is periodic: its
+//!   periodic part `|mean_p U_p|^2` stands well above the variance of that
+//!   mean estimated from the periods' scatter ([`input_periodic_threshold`]) (a measured current carries noise at lines
+//!   its reference never excited, which a foreign recording may use as input).
 
 use crate::error::require_all_finite;
 use crate::lti::C64;
@@ -36,6 +52,10 @@ pub struct EtfeConfig {
     /// Lines whose averaged input power is more than this many dB below the
     /// strongest line are marked [`LineStatus::NotExcited`] (a value `< 0`).
     pub excitation_floor_db: f64,
+    /// Lines whose input power is more than this many dB below the strongest
+    /// line within [`LOCAL_WINDOW_LINES`] either side are marked
+    /// [`LineStatus::NotExcited`] (a value `< 0`; sparse multisines).
+    pub local_floor_db: f64,
     /// Lines with a coherence below this are marked [`LineStatus::LowCoherence`].
     pub min_coherence: f64,
     /// Optional band `(low, high)` in Hz; lines outside are marked
@@ -51,6 +71,7 @@ impl Default for EtfeConfig {
             skip_periods: 1,
             integrator: true,
             excitation_floor_db: -40.0,
+            local_floor_db: -20.0,
             min_coherence: 0.5,
             band_hz: None,
         }
@@ -66,8 +87,12 @@ pub enum LineStatus {
     Dc,
     /// Outside the requested band.
     OutsideBand,
-    /// The input has (almost) no power at this line.
+    /// The input has (almost) no power at this line, globally or against
+    /// its neighbours.
     NotExcited,
+    /// The input's power at this line is not periodic (noise in a measured
+    /// input, not excitation).
+    InputNoise,
     /// The coherence is below the threshold.
     LowCoherence,
 }
@@ -80,9 +105,56 @@ impl LineStatus {
             LineStatus::Dc => "dc",
             LineStatus::OutsideBand => "outside_band",
             LineStatus::NotExcited => "not_excited",
+            LineStatus::InputNoise => "input_noise",
             LineStatus::LowCoherence => "low_coherence",
         }
     }
+
+    /// Why a line is left out, in words (for summaries).
+    pub fn reason(self) -> &'static str {
+        match self {
+            LineStatus::Usable => "used",
+            LineStatus::Dc => "the DC line",
+            LineStatus::OutsideBand => "outside the requested band",
+            LineStatus::NotExcited => "not excited by the input",
+            LineStatus::InputNoise => "input not periodic there (noise)",
+            LineStatus::LowCoherence => "coherence below the threshold",
+        }
+    }
+}
+
+/// Half-width, in lines, of the neighbourhood of the local floor.
+pub const LOCAL_WINDOW_LINES: usize = 8;
+/// Probability with which a line of pure input noise passes the periodicity
+/// test. For `n_m` periods of Gaussian noise the ratio
+/// `(n_m - 1) |sum U|^2 / n_m / sum |U_p - mean|^2` follows an F(2, 2 (n_m - 1))
+/// distribution, so the threshold is `(n_m - 1) (P^(-1/(n_m - 1)) - 1)`:
+/// 12 (10.8 dB) for 19 periods, 22 for 7.
+pub const INPUT_NOISE_FALSE_PASS: f64 = 1e-4;
+/// Cap of that threshold (30 dB; two periods would otherwise need 40 dB).
+pub const MAX_INPUT_PERIODIC_SNR: f64 = 1000.0;
+
+/// The periodicity threshold for `n_m` periods (see [`INPUT_NOISE_FALSE_PASS`]).
+pub fn input_periodic_threshold(n_m: usize) -> f64 {
+    let d = n_m.saturating_sub(1).max(1) as f64;
+    (d * (INPUT_NOISE_FALSE_PASS.powf(-1.0 / d) - 1.0)).min(MAX_INPUT_PERIODIC_SNR)
+}
+
+/// How many lines carry each [`LineStatus`], in the order of the enum.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct LineCounts {
+    /// Lines used by the fit.
+    pub usable: usize,
+    /// The DC line (0 or 1).
+    pub dc: usize,
+    /// Outside the requested band.
+    pub outside_band: usize,
+    /// Not excited (global or local floor).
+    pub not_excited: usize,
+    /// Input not periodic.
+    pub input_noise: usize,
+    /// Coherence too low.
+    pub low_coherence: usize,
 }
 
 /// A measured frequency response function on the FFT grid `k / (N T_s)`,
@@ -110,6 +182,48 @@ impl Frf {
     /// Whether line `i` is used by the fit.
     pub fn is_usable(&self, i: usize) -> bool {
         self.line_status[i] == LineStatus::Usable
+    }
+
+    /// How many lines carry each status.
+    pub fn line_counts(&self) -> LineCounts {
+        let mut c = LineCounts::default();
+        for s in &self.line_status {
+            *match s {
+                LineStatus::Usable => &mut c.usable,
+                LineStatus::Dc => &mut c.dc,
+                LineStatus::OutsideBand => &mut c.outside_band,
+                LineStatus::NotExcited => &mut c.not_excited,
+                LineStatus::InputNoise => &mut c.input_noise,
+                LineStatus::LowCoherence => &mut c.low_coherence,
+            } += 1;
+        }
+        c
+    }
+
+    /// One line of text: which lines are used and why the others are not.
+    pub fn line_summary(&self) -> String {
+        let c = self.line_counts();
+        let used = self.usable_indices();
+        let band = match (used.first(), used.last()) {
+            (Some(&a), Some(&b)) => format!(
+                " ({} to {} Hz)",
+                crate::error::short_number(self.freq_hz[a]),
+                crate::error::short_number(self.freq_hz[b])
+            ),
+            _ => String::new(),
+        };
+        let mut out = format!("{} of {} lines used{band}", c.usable, self.freq_hz.len());
+        for (n, s) in [
+            (c.not_excited, LineStatus::NotExcited),
+            (c.input_noise, LineStatus::InputNoise),
+            (c.low_coherence, LineStatus::LowCoherence),
+            (c.outside_band, LineStatus::OutsideBand),
+        ] {
+            if n > 0 {
+                out.push_str(&format!("; {n} {}", s.reason()));
+            }
+        }
+        out
     }
 
     /// Indices of all usable lines, ascending.
@@ -228,6 +342,7 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
     let mut suu = vec![0.0; n_lines];
     let mut svv = vec![0.0; n_lines];
     let mut svu = vec![C64::new(0.0, 0.0); n_lines];
+    let mut su = vec![C64::new(0.0, 0.0); n_lines];
     let mut buf = fft.make_input_vec();
     let mut u_spec = fft.make_output_vec();
     let mut v_spec = fft.make_output_vec();
@@ -247,6 +362,7 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
             suu[k] += u_spec[k].norm_sqr();
             svv[k] += v_spec[k].norm_sqr();
             svu[k] += v_spec[k] * u_spec[k].conj();
+            su[k] += u_spec[k];
         }
     }
 
@@ -274,10 +390,22 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
         ts_s: ts,
         n_periods,
     };
+    let local_ratio = 10f64.powf(cfg.local_floor_db / 10.0);
+    let periodic_threshold = input_periodic_threshold(n_periods);
+    let m = n_periods as f64;
     for k in 0..n_lines {
         let f = k as f64 * df;
         let w = 2.0 * PI * f;
-        let excited = suu[k] > floor && suu[k] > 0.0;
+        let lo = k.saturating_sub(LOCAL_WINDOW_LINES).max(1);
+        let hi = (k + LOCAL_WINDOW_LINES + 1).min(n_lines);
+        let local_max = suu[lo.min(hi)..hi].iter().cloned().fold(0.0, f64::max);
+        let excited =
+            suu[k] > floor && suu[k] > 0.0 && (k == 0 || suu[k] >= local_ratio * local_max);
+        // periodic part |sum U|^2 / n_m against the scatter sum |U_p - mean|^2
+        let periodic = su[k].norm_sqr() / m;
+        let scatter = (suu[k] - periodic).max(0.0);
+        let input_periodic =
+            scatter <= 1e-12 * suu[k] || (m - 1.0) * periodic >= periodic_threshold * scatter;
         let coh = if excited && svv[k] > 0.0 {
             (svu[k].norm_sqr() / (suu[k] * svv[k])).clamp(0.0, 1.0)
         } else {
@@ -297,6 +425,8 @@ pub fn etfe(input: &[f64], output: &[f64], cfg: &EtfeConfig) -> Result<Frf> {
             LineStatus::OutsideBand
         } else if !excited {
             LineStatus::NotExcited
+        } else if !input_periodic {
+            LineStatus::InputNoise
         } else if coh < cfg.min_coherence {
             LineStatus::LowCoherence
         } else {
@@ -343,6 +473,13 @@ fn validate_config(cfg: &EtfeConfig) -> Result<()> {
         return Err(Error::invalid(
             "excitation_floor_db",
             cfg.excitation_floor_db,
+            "must be finite and < 0 dB",
+        ));
+    }
+    if !(cfg.local_floor_db.is_finite() && cfg.local_floor_db < 0.0) {
+        return Err(Error::invalid(
+            "local_floor_db",
+            cfg.local_floor_db,
             "must be finite and < 0 dB",
         ));
     }
@@ -442,6 +579,153 @@ mod tests {
         assert!(mean(&clean) > 0.999);
         assert!(mean(&dirty) < 0.9, "{}", mean(&dirty));
         assert!(dirty.line_status.contains(&LineStatus::LowCoherence));
+    }
+
+    /// The PRBS' spectral nulls: with the clock period 4 every 127th line of
+    /// a 508-sample period carries exactly no power (`sinc^2` of the held
+    /// value, thesis 3.2); those lines, and only lines next to them, are left
+    /// out on a noise-free record.
+    #[test]
+    fn prbs_nulls_are_not_excited() {
+        let n = 127 * 4;
+        let u = prbs(7, 4, 1.0, 4);
+        let y = simulate_discrete(&u, 0.5, 1.0);
+        let cfg = EtfeConfig {
+            ts_s: 1e-3,
+            period_samples: n,
+            skip_periods: 1,
+            integrator: false,
+            ..Default::default()
+        };
+        let frf = etfe(&u, &y, &cfg).unwrap();
+        assert_eq!(frf.line_status[127], LineStatus::NotExcited);
+        assert_eq!(frf.line_status[254], LineStatus::NotExcited);
+        for k in 1..=254usize {
+            let d = (k % 127).min(127 - k % 127);
+            if d >= 2 {
+                assert_eq!(frf.line_status[k], LineStatus::Usable, "line {k}");
+            }
+        }
+        assert!(
+            frf.line_summary().contains("not excited"),
+            "{}",
+            frf.line_summary()
+        );
+    }
+
+    /// A random-phase odd multisine with detection lines left out on purpose
+    /// (every fourth odd line, seeded), played through a system with a cubic
+    /// output nonlinearity and measured with noise on the input (a measured
+    /// current) and the output: only the excited lines are used, although the
+    /// input noise at the others stands 30 dB below the excited lines (above
+    /// the global -40 dB floor) and the output carries distortion there.
+    #[test]
+    fn sparse_multisine_uses_only_the_excited_lines() {
+        use rand::{Rng, SeedableRng};
+        let n = 1024;
+        let periods = 6;
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(28);
+        let odd: Vec<usize> = (1..200).step_by(2).collect();
+        let excited: Vec<usize> = odd
+            .iter()
+            .copied()
+            .filter(|_| rng.random::<f64>() > 0.25)
+            .collect();
+        let amp = 1.0;
+        let phases: Vec<f64> = excited
+            .iter()
+            .map(|_| 2.0 * PI * rng.random::<f64>())
+            .collect();
+        let one: Vec<f64> = (0..n)
+            .map(|t| {
+                excited
+                    .iter()
+                    .zip(&phases)
+                    .map(|(&h, &ph)| amp * (2.0 * PI * (h * t) as f64 / n as f64 + ph).cos())
+                    .sum()
+            })
+            .collect();
+        let u_ref: Vec<f64> = one.iter().cycle().take(n * periods).copied().collect();
+        let lin = simulate_discrete(&u_ref, 0.9, 0.1);
+        let peak = lin.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        // sigma = amp sqrt(N 1e-3) / 2: per-line input noise power 30 dB below an excited line
+        let sigma_u = 0.5 * amp * (n as f64 * 1e-3).sqrt();
+        let gauss = |rng: &mut rand_xoshiro::Xoshiro256PlusPlus| {
+            // Box-Muller
+            let (a, b): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
+            (-2.0 * a.ln()).sqrt() * (2.0 * PI * b).cos()
+        };
+        let u_meas: Vec<f64> = u_ref
+            .iter()
+            .map(|&x| x + sigma_u * gauss(&mut rng))
+            .collect();
+        let y: Vec<f64> = lin
+            .iter()
+            .map(|&v| v + 0.3 * v.powi(3) / peak.powi(2) + 1e-3 * peak * gauss(&mut rng))
+            .collect();
+        let cfg = EtfeConfig {
+            ts_s: 1e-3,
+            period_samples: n,
+            skip_periods: 1,
+            integrator: false,
+            ..Default::default()
+        };
+        let frf = etfe(&u_meas, &y, &cfg).unwrap();
+        let used = frf.usable_indices();
+        let strongest = frf.input_power[1..].iter().cloned().fold(0.0, f64::max);
+        let above_global = (1..=n / 2)
+            .filter(|k| !excited.contains(k) && frf.input_power[*k] > 1e-4 * strongest)
+            .count();
+        assert!(
+            above_global > 100,
+            "the test must put noise above the global floor: {above_global}"
+        );
+        for &k in &used {
+            assert!(excited.contains(&k), "line {k} used but not excited");
+        }
+        for &k in &excited {
+            assert_eq!(frf.line_status[k], LineStatus::Usable, "excited line {k}");
+        }
+        // the exactly periodic reference as input: the same selection
+        let frf_ref = etfe(&u_ref, &y, &cfg).unwrap();
+        assert_eq!(frf_ref.usable_indices(), excited);
+    }
+
+    /// A full multisine over lines 1..=100 and a measured input whose noise
+    /// beyond the band is 30 dB below the excitation (above the global floor,
+    /// far from any excited neighbour): those lines are input noise.
+    #[test]
+    fn input_noise_beyond_the_band_is_recognized() {
+        use rand::{Rng, SeedableRng};
+        let n = 1024;
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(29);
+        let one: Vec<f64> = (0..n)
+            .map(|t| {
+                (1..=100usize)
+                    .map(|h| (2.0 * PI * (h * t) as f64 / n as f64 + 0.01 * (h * h) as f64).cos())
+                    .sum()
+            })
+            .collect();
+        let sigma_u = 0.5 * (n as f64 * 1e-3).sqrt();
+        let u: Vec<f64> = one
+            .iter()
+            .cycle()
+            .take(n * 8)
+            .map(|&x| x + sigma_u * (rng.random::<f64>() - 0.5) * 12f64.sqrt())
+            .collect();
+        let y = simulate_discrete(&u, 0.9, 0.1);
+        let cfg = EtfeConfig {
+            ts_s: 1e-3,
+            period_samples: n,
+            skip_periods: 1,
+            integrator: false,
+            ..Default::default()
+        };
+        let frf = etfe(&u, &y, &cfg).unwrap();
+        assert_eq!(frf.usable_indices(), (1..=100).collect::<Vec<_>>());
+        let c = frf.line_counts();
+        assert!(c.input_noise > 300, "{c:?}");
+        assert!(frf.line_summary().contains("input not periodic"));
     }
 
     #[test]

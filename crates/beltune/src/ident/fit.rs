@@ -9,6 +9,11 @@
 //! - Start values from the FRF itself ([`frf_features`]): the antiresonance
 //!   dip gives `c/m_c` and `d_c`, the resonance peak the inertia ratio and
 //!   the resonance damping, the low-frequency asymptote the rigid inertia.
+//! - Global stage ([`multi_start`]): the cost is sampled at seeded random
+//!   points around the start values, and Levenberg-Marquardt runs from the
+//!   start values and from the best of those points; the lowest optimum wins
+//!   (the log-magnitude cost has local minima where the peak or the dip of
+//!   the model sits on a neighbouring wiggle of the measured FRF).
 //! - Uncertainty: `cov(q) = s^2 (J^T J)^-1` with `s^2 = J*/(n_o - n_p)` at the
 //!   optimum (`q = ln p`), mapped to `sigma_p = p sigma_q`.
 //!
@@ -54,6 +59,9 @@ pub struct FitConfig {
     pub units: ModelUnits,
     /// Which transfer function is fitted.
     pub model: FitModel,
+    /// Points of the global stage before Levenberg-Marquardt (see
+    /// [`multi_start`]); 0: one local run from the FRF's start values.
+    pub global_samples: usize,
 }
 
 /// The model structure whose magnitude is fitted.
@@ -98,6 +106,7 @@ impl Default for FitConfig {
             n_log_lines: 150,
             units: ModelUnits::Torque,
             model: FitModel::Exact,
+            global_samples: GLOBAL_SAMPLES,
         }
     }
 }
@@ -227,17 +236,7 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
         model: cfg.model,
         q: DVector::zeros(n_q),
     };
-    let (solved, report) = LevenbergMarquardt::new()
-        .with_patience(400)
-        .minimize(problem);
-    if !report.termination.was_successful() {
-        return Err(Error::FitFailed {
-            reason: format!(
-                "the least-squares fit stopped: {}",
-                describe_termination(&report.termination)
-            ),
-        });
-    }
+    let solved = multi_start(problem, cfg.global_samples)?;
     let params = solved.to_params(&solved.q);
     if let Some(k) = solved
         .at_bound(&[0, 1])
@@ -386,6 +385,7 @@ pub fn model_magnitude_db(p: &TwoMassParams, model: FitModel, w_rad_s: f64) -> f
 ///
 /// Each parameter is `p = p0 exp(h tanh(q / h))`: positive, within a factor
 /// `e^h` of its start value `p0`, smooth in the unconstrained `q`.
+#[derive(Clone)]
 struct LogMagnitudeProblem {
     omega: Vec<f64>,
     measured_db: Vec<f64>,
@@ -497,15 +497,21 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for LogMagnitudeProblem {
     }
 }
 
-/// Noise-to-signal floor of the coherence weighting: lines better than this
-/// count as equal (the model's own error, about 0.3 dB, dominates there).
-const NOISE_RATIO_FLOOR: f64 = 1e-3;
+/// The model's own error on a real axis, dB: the part of the residual the
+/// two-mass class cannot explain (about 0.3-0.5 dB on the bench recording).
+/// A line whose measurement noise is well below it counts as much as any
+/// other: weighting such lines by their coherence would trade the model's
+/// fit on well-measured lines for noise that is not there.
+pub const MODEL_ERROR_DB: f64 = 0.3;
 
-/// Weights of the fitted `lines` from the coherence: the variance of an
-/// averaged ETFE line is proportional to `(1 - gamma^2) / gamma^2`, so a line
-/// weighs `1 / sqrt(rho + floor)` with that noise-to-signal ratio `rho`,
-/// taken as the running median over neighbouring usable lines (the coherence
-/// of few averaged periods scatters line by line). Mean square 1.
+/// Weights of the fitted `lines` from the coherence: an ETFE line averaged
+/// over `n_m` periods has the relative variance `rho / n_m` with the
+/// noise-to-signal ratio `rho = (1 - gamma^2) / gamma^2`, i.e. a log-magnitude
+/// standard deviation `sigma_i = (20 / ln 10) sqrt(rho / (2 n_m))` dB; with
+/// the model error [`MODEL_ERROR_DB`] added in quadrature, a line weighs
+/// `1 / sqrt(sigma_i^2 + MODEL_ERROR_DB^2)`. `rho` is the running median over
+/// neighbouring usable lines (the coherence of few averaged periods scatters
+/// line by line). Mean square 1.
 fn coherence_weights(frf: &Frf, lines: &[usize]) -> Vec<f64> {
     let usable = frf.usable_indices();
     let rho: Vec<f64> = usable
@@ -516,17 +522,103 @@ fn coherence_weights(frf: &Frf, lines: &[usize]) -> Vec<f64> {
         })
         .collect();
     let smooth = super::features::running_median(&rho, 3);
+    let n_m = frf.n_periods.max(1) as f64;
+    let db = 20.0 / std::f64::consts::LN_10;
     let w: Vec<f64> = lines
         .iter()
         .map(|i| {
             let k = usable.binary_search(i).unwrap_or(0);
-            1.0 / (smooth[k] + NOISE_RATIO_FLOOR).sqrt()
+            let sigma = db * (smooth[k] / (2.0 * n_m)).sqrt();
+            1.0 / (sigma * sigma + MODEL_ERROR_DB * MODEL_ERROR_DB).sqrt()
         })
         .collect();
     let ms = (w.iter().map(|x| x * x).sum::<f64>() / w.len().max(1) as f64).sqrt();
     w.into_iter()
         .map(|x| x / ms.max(f64::MIN_POSITIVE))
         .collect()
+}
+
+/// Points the global stage samples by default.
+pub const GLOBAL_SAMPLES: usize = 400;
+/// Local Levenberg-Marquardt runs from the best sampled points (besides the
+/// run from the start values).
+pub const LOCAL_STARTS: usize = 6;
+/// Half-width of the sampled box around the start values, as a factor, for
+/// the inertias and the stiffness (the FRF's peak and dip fix them to tens
+/// of percent) ...
+const GLOBAL_FACTOR_MASS: f64 = 2.0;
+/// ... and for the damping coefficients (the peak height fixes them far
+/// less well).
+const GLOBAL_FACTOR_DAMPING: f64 = 30.0;
+/// Seed of the global stage (the fit is deterministic).
+const GLOBAL_SEED: u64 = 0x6265_6c74_7475_6e65;
+
+/// The global stage and the local runs: the cost `sum r_i^2` at
+/// `samples` seeded uniform points in `ln p` (inside a factor
+/// [`GLOBAL_FACTOR_MASS`] of the start values for inertias and stiffness,
+/// [`GLOBAL_FACTOR_DAMPING`] for dampings), Levenberg-Marquardt from the start
+/// values and from the [`LOCAL_STARTS`] best points, and the lowest optimum
+/// that did not run to the edge of the parameter range (if all did, the
+/// lowest, which the caller reports).
+fn multi_start(problem: LogMagnitudeProblem, samples: usize) -> Result<LogMagnitudeProblem> {
+    use rand::{Rng, SeedableRng};
+    let n_q = problem.q.len();
+    // q of the point whose parameter is p0 * exp(x): inverse of `value`
+    let to_q = |k: usize, x: f64| {
+        let h = problem.half_width[k];
+        h * (x / h).clamp(-0.999, 0.999).atanh()
+    };
+    let box_ln = |k: usize| {
+        if k == 2 || k == 3 || (problem.model == FitModel::WithBeltDamping && k == n_q - 1) {
+            GLOBAL_FACTOR_DAMPING.ln()
+        } else {
+            GLOBAL_FACTOR_MASS.ln()
+        }
+    };
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(GLOBAL_SEED);
+    let mut scored: Vec<(f64, DVector<f64>)> = (0..samples)
+        .filter_map(|_| {
+            let q = DVector::from_iterator(
+                n_q,
+                (0..n_q).map(|k| to_q(k, box_ln(k) * (2.0 * rng.random::<f64>() - 1.0))),
+            );
+            let c = problem.residual_vec(&q)?.norm_squared();
+            c.is_finite().then_some((c, q))
+        })
+        .collect();
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut starts = vec![DVector::zeros(n_q)];
+    starts.extend(scored.into_iter().take(LOCAL_STARTS).map(|(_, q)| q));
+    let mut best: Option<(bool, f64, LogMagnitudeProblem)> = None;
+    let mut last_failure = None;
+    for q0 in starts {
+        let mut p = problem.clone();
+        p.q = q0;
+        let (solved, report) = LevenbergMarquardt::new().with_patience(400).minimize(p);
+        if !report.termination.was_successful() {
+            last_failure = Some(describe_termination(&report.termination));
+            continue;
+        }
+        let Some(cost) = solved.residual_vec(&solved.q).map(|r| r.norm_squared()) else {
+            continue;
+        };
+        let inside = solved.at_bound(&[0, 1]).is_none()
+            && (!solved.free || solved.at_bound(&[4]).is_none())
+            && solved.to_params(&solved.q).validate().is_ok();
+        let better = match &best {
+            None => true,
+            Some((b_in, b_cost, _)) => (inside, -cost) > (*b_in, -*b_cost),
+        };
+        if better {
+            best = Some((inside, cost, solved));
+        }
+    }
+    best.map(|(_, _, p)| p).ok_or_else(|| Error::FitFailed {
+        reason: format!(
+            "the least-squares fit stopped: {}",
+            last_failure.unwrap_or_else(|| "the model is not finite at any start".into())
+        ),
+    })
 }
 
 /// Why Levenberg-Marquardt stopped, in words (not a Debug dump).

@@ -11,6 +11,7 @@
 //! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24)
 //! - [`dead_time`]: current-loop dead time (3.25)-(3.30)
 //! - [`csv_columns`]: the columns of a recorded CSV file, validated
+//! - [`residual`]: what the two-mass fit does not explain, per line; a second resonance named
 //! - [`recorded`]: the whole identification from a CSV record (CLI `identify`, `commission --csv`)
 
 pub mod csv_columns;
@@ -21,6 +22,7 @@ pub mod fit;
 pub mod friction;
 pub mod nonlinear;
 pub mod recorded;
+pub mod residual;
 pub mod strategy;
 
 #[cfg(test)]
@@ -28,11 +30,13 @@ mod tests_measured;
 #[cfg(test)]
 mod tests_sim;
 #[cfg(test)]
+mod tests_unmodeled;
+#[cfg(test)]
 pub(crate) mod testutil;
 
 pub use csv_columns::{read_csv_columns, CsvColumns, Sampling};
 pub use dead_time::{estimate_dead_time, DeadTime};
-pub use etfe::{etfe, log_spaced_subset, EtfeConfig, Frf, LineStatus};
+pub use etfe::{etfe, log_spaced_subset, EtfeConfig, Frf, LineCounts, LineStatus};
 pub use features::{frf_features, FrfFeatures};
 pub use fit::{fit_two_mass, FitConfig, FitModel, ModelUnits, ParamUncertainty, TwoMassFit};
 pub use friction::{
@@ -42,4 +46,5 @@ pub use friction::{
 };
 pub use nonlinear::{fit_nonlinear, NonlinearConfig, NonlinearFit};
 pub use recorded::{detect_period, identify_recorded, RecordedExcitation, RecordedIdentification};
+pub use residual::{fit_residual, FitResidual, SecondResonance};
 pub use strategy::{direct_closed_loop, indirect_closed_loop, open_loop};

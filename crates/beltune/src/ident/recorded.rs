@@ -47,18 +47,79 @@ pub struct RecordedIdentification {
     pub ts_s: f64,
     /// Samples per period.
     pub period_samples: usize,
+    /// Whether the period was detected from the input ([`detect_period`])
+    /// rather than given.
+    pub period_detected: bool,
     /// Rows in the file.
     pub rows: usize,
 }
 
-/// The smallest `P` (at least 8) with `|x[k + P] - x[k]|` below 1 % of the
-/// signal's range for `k < P` (the first two periods): the period of a
-/// generated periodic excitation.
+/// Shortest period [`detect_period`] reports, samples (a shorter true period
+/// is reported as its smallest multiple of at least this many samples).
+pub const MIN_DETECTED_PERIOD: usize = 8;
+
+/// Fraction of the compared sample pairs that may break the periodicity in
+/// [`detect_period`] (0.1 %).
+pub const PERIOD_GLITCH_FRACTION: f64 = 1e-3;
+
+/// The period of a generated periodic excitation, in samples: the smallest
+/// `P >= MIN_DETECTED_PERIOD`, at most half the record, such that
+/// - `|x[k + P] - x[k]|` stays within 1 % of the signal's range over the
+///   whole record (every overlapping pair of periods, not only the first
+///   two: a PRBS starts with runs of up to `n_PRBS P_PRBS` equal samples,
+///   which any shorter shift reproduces over its first run), except for at
+///   most [`PERIOD_GLITCH_FRACTION`] of the pairs (a logger's glitch: the
+///   bench recording's last reference sample is one), and
+/// - the first `P` samples already span the signal's range (within twice that
+///   tolerance; the range between the 0.1 % and 99.9 % quantiles, so that a
+///   glitch does not count), which a true period does and a shift along a slow drift or
+///   inside a constant run does not.
+///
+/// `None` when no such `P` exists (not exactly periodic, fewer than two
+/// periods, or a constant signal). Cost: one pass per candidate that
+/// survives the range test, each ending once its mismatches exceed the
+/// glitch allowance.
 pub fn detect_period(x: &[f64]) -> Option<usize> {
-    let lo = x.iter().cloned().fold(f64::INFINITY, f64::min);
-    let hi = x.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-    let tol = 0.01 * (hi - lo);
-    (8..=x.len() / 2).find(|&p| (0..p).all(|k| (x[k + p] - x[k]).abs() <= tol))
+    let periodic_at = |p: usize, tol: f64| {
+        let pairs = x.len() - p;
+        let allowed = (pairs as f64 * PERIOD_GLITCH_FRACTION) as usize;
+        let mut bad = 0usize;
+        for (a, b) in x[p..].iter().zip(x) {
+            if (a - b).abs() > tol {
+                bad += 1;
+                if bad > allowed {
+                    return false;
+                }
+            }
+        }
+        true
+    };
+    // the range without the glitches: 0.1 % and 99.9 % quantiles
+    if x.len() < 2 * MIN_DETECTED_PERIOD || x.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let mut sorted = x.to_vec();
+    let q = |s: &mut Vec<f64>, f: f64| {
+        let k = ((s.len() - 1) as f64 * f).round() as usize;
+        *s.select_nth_unstable_by(k, f64::total_cmp).1
+    };
+    let lo = q(&mut sorted, PERIOD_GLITCH_FRACTION);
+    let hi = q(&mut sorted, 1.0 - PERIOD_GLITCH_FRACTION);
+    let range = hi - lo;
+    if !(range.is_finite() && range > 0.0) {
+        return None;
+    }
+    let tol = 0.01 * range;
+    let (mut pmin, mut pmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (p, &v) in x.iter().enumerate().take(x.len() / 2 + 1) {
+        // after this, pmin/pmax span x[..p]
+        if p >= MIN_DETECTED_PERIOD && pmax - pmin >= range - 2.0 * tol && periodic_at(p, tol) {
+            return Some(p);
+        }
+        pmin = pmin.min(v);
+        pmax = pmax.max(v);
+    }
+    None
 }
 
 /// Read, validate and identify. Errors name the file, the column and the row.
@@ -126,6 +187,7 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
         dead_time,
         ts_s: sampling.ts_s,
         period_samples: period,
+        period_detected: r.period_samples.is_none(),
         rows: cols.rows(),
     })
 }
@@ -142,5 +204,37 @@ mod tests {
         assert_eq!(detect_period(&x), Some(37));
         let ramp: Vec<f64> = (0..100).map(|k| k as f64).collect();
         assert_eq!(detect_period(&ramp), None);
+        assert_eq!(detect_period(&[1.0; 64]), None);
+        assert_eq!(detect_period(&x[..60]), None, "fewer than two periods");
+    }
+
+    /// Regression: an input that starts with a long run of equal samples
+    /// (beltune's own PRBS starts with `n_PRBS` equal values of `P_PRBS`
+    /// samples each) used to be taken as period 8, because only the first two
+    /// candidate periods were compared.
+    #[test]
+    fn a_long_constant_run_at_the_start_is_not_a_period() {
+        let mut one = vec![1.0; 80];
+        one.extend((0..50).map(|k| if (k * 7) % 11 < 5 { 1.0 } else { -1.0 }));
+        let x: Vec<f64> = one.iter().cycle().take(one.len() * 3).copied().collect();
+        assert_eq!(detect_period(&x), Some(130));
+    }
+
+    /// A recorded reference with a logger glitch (the bench recording's last
+    /// sample breaks the pattern) still has its period.
+    #[test]
+    fn a_single_glitch_keeps_the_period() {
+        let base: Vec<f64> = (0..37).map(|k| ((k * k) % 37) as f64).collect();
+        let mut x: Vec<f64> = base.iter().cycle().take(37 * 40).copied().collect();
+        let last = x.len() - 1;
+        x[last] += 20.0;
+        assert_eq!(detect_period(&x), Some(37));
+    }
+
+    /// A slow drift is not periodic, however small its per-sample step.
+    #[test]
+    fn a_slow_drift_is_not_a_period() {
+        let drift: Vec<f64> = (0..100_000).map(|k| k as f64 * 1e-6).collect();
+        assert_eq!(detect_period(&drift), None);
     }
 }

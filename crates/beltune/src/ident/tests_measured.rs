@@ -102,3 +102,90 @@ fn measured_fit_matches_peak_dip_and_asymptote() {
     assert!((fit_meas.f_r_hz / fit.f_r_hz - 1.0).abs() < INPUT_AGREEMENT);
     assert!((fit_meas.f_z_hz / fit.f_z_hz - 1.0).abs() < INPUT_AGREEMENT);
 }
+
+/// RMS of the unweighted dB residuals of `fit`'s model over `lines` of `frf`.
+fn rms_db_on(frf: &Frf, fit: &TwoMassFit, lines: &[usize]) -> f64 {
+    let ss: f64 = lines
+        .iter()
+        .map(|&i| {
+            let m = fit::model_magnitude_db(&fit.params, fit.model, frf.omega_rad_s(i));
+            (frf.magnitude_db(i) - m).powi(2)
+        })
+        .sum();
+    (ss / lines.len() as f64).sqrt()
+}
+
+/// The fit reaches the best the two-mass class allows on the bench recording.
+///
+/// Reference (independent of beltune's code): `tools/twomass_optimum.py`, a
+/// numpy/scipy script that computes the FRF from the raw columns itself
+/// (Clary's method II over periods 2-20), takes the lines within 40 dB of the
+/// strongest, and minimizes the unweighted squared dB residuals of (2.39)
+/// (free Theta_e, i_t = 1, d = 0) by differential evolution over +-3 decades
+/// of every parameter (scipy 1.17.1, seed 1; seed 7 gives the same optimum)
+/// polished by trust-region least squares. Output recorded on 2026-12-03:
+/// - `python3 tools/twomass_optimum.py` (the nearly log-spaced subset F_o of
+///   n_o = 150 targets, Figure 3.9: 117 lines, the lines beltune fits):
+///   rms 0.6757 dB, f_r 76.1899 Hz, f_z 54.0303 Hz;
+/// - `python3 tools/twomass_optimum.py --all-lines` (all 240 lines 11-250 Hz):
+///   rms 0.5194 dB, f_r 76.1571 Hz, f_z 54.0399 Hz.
+///
+/// Tolerances (issue: "within 0.05 dB rms and 0.5 % in f_r and f_z"): the
+/// beltune fit weights lines by coherence (near-uniform here: every line's
+/// noise is far below the model error) and runs its own FRF, so it may sit a
+/// little off the unweighted optimum, by no more than these.
+#[test]
+fn fit_reaches_the_independent_optimum() {
+    const SUBSET_RMS_DB: f64 = 0.6757;
+    const SUBSET_F_R_HZ: f64 = 76.1899;
+    const SUBSET_F_Z_HZ: f64 = 54.0303;
+    const ALL_RMS_DB: f64 = 0.5194;
+    const RMS_TOL_DB: f64 = 0.05;
+    const FREQ_TOL: f64 = 0.005;
+    let frf = measured_frf("iq_ref_A", None);
+    let fit = rotary_current_fit(&frf);
+    let subset = frf.log_spaced_subset(FitConfig::default().n_log_lines);
+    assert_eq!(subset.len(), 117, "the reference's line subset");
+    let rms_subset = rms_db_on(&frf, &fit, &subset);
+    let rms_all = rms_db_on(&frf, &fit, &frf.usable_indices());
+    println!(
+        "f_r {} f_z {} rms subset {rms_subset} all {rms_all} (reported {})",
+        fit.f_r_hz, fit.f_z_hz, fit.fit_rms_db
+    );
+    assert!((fit.fit_rms_db - rms_subset).abs() < 1e-9);
+    assert!(rms_subset < SUBSET_RMS_DB + RMS_TOL_DB, "{rms_subset}");
+    assert!(rms_all < ALL_RMS_DB + RMS_TOL_DB, "{rms_all}");
+    assert!(
+        (fit.f_r_hz / SUBSET_F_R_HZ - 1.0).abs() < FREQ_TOL,
+        "{}",
+        fit.f_r_hz
+    );
+    assert!(
+        (fit.f_z_hz / SUBSET_F_Z_HZ - 1.0).abs() < FREQ_TOL,
+        "{}",
+        fit.f_z_hz
+    );
+}
+
+/// Regression: no change may make a recording's fit worse. Every input
+/// column of the bench recording, fitted as `identify` does, stays at or
+/// below the rms `beltune identify` printed before the global stage and the
+/// line selection landed (main 9607596: `--input iq_ref_A` 0.676 dB,
+/// `--input iq_meas_A --min-freq-hz 11 --max-freq-hz 250` 0.660 dB, both
+/// `--current-units --period-samples 2500`), plus 0.001 dB for the printed
+/// rounding. (With them: 0.6757 and 0.6599 dB.)
+#[test]
+fn recorded_fits_do_not_get_worse() {
+    for (input, band, max_rms_db) in [
+        ("iq_ref_A", None, 0.676 + 0.001),
+        ("iq_meas_A", Some((11.0, 250.0)), 0.660 + 0.001),
+    ] {
+        let frf = measured_frf(input, band);
+        let fit = rotary_current_fit(&frf);
+        println!(
+            "{input}: rms {} dB, f_r {}, f_z {}",
+            fit.fit_rms_db, fit.f_r_hz, fit.f_z_hz
+        );
+        assert!(fit.fit_rms_db <= max_rms_db, "{input}: {}", fit.fit_rms_db);
+    }
+}

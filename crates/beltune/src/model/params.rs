@@ -119,6 +119,13 @@ pub struct PhysicalParams {
     /// new axis and is left out of a written plant.
     #[serde(default, skip_serializing_if = "super::wear::Wear::is_new")]
     pub wear: super::wear::Wear,
+
+    // ---- unmodeled dynamics ----
+    /// The dynamics real axes have beyond (2.30) (`[unmodeled]` table,
+    /// optional; [`super::unmodeled`]): all off by default and left out of a
+    /// written plant.
+    #[serde(default, skip_serializing_if = "super::unmodeled::Unmodeled::is_off")]
+    pub unmodeled: super::unmodeled::Unmodeled,
 }
 
 /// Measurement noise of a simulated drive, part of the plant (the `[noise]`
@@ -403,6 +410,7 @@ impl PhysicalParams {
         use bounds::*;
         self.noise.validate()?;
         self.wear.validate(self.stroke_m)?;
+        self.unmodeled.validate(self.ts_s)?;
         // Positivity first (the messages say "must be > 0"), then the
         // plausibility bounds: every quantity has an upper bound, so that no
         // derived frequency overflows and the simulator's sub-steps stay few.

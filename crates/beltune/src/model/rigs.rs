@@ -29,6 +29,9 @@ const BELT_TRAVEL_PER_COUNT_M: f64 = 2.5e-6;
 const FEED_CONSTANT_M_PER_REV: f64 = 0.078;
 
 /// A plant the simulator can run and the CLI can show.
+// A plant is built once per run and never held in bulk: the size of the
+// physical variant (with its `[unmodeled]` table) costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Plant {
@@ -438,6 +441,7 @@ pub fn egc70_params(payload_kg: f64) -> PhysicalParams {
         ts_s: SAMPLE_TIME_S,
         noise: super::params::MeasurementNoise::default(),
         wear: super::wear::Wear::default(),
+        unmodeled: super::unmodeled::Unmodeled::default(),
     }
 }
 

@@ -4,7 +4,11 @@
 //! Per sample of `T_s` (10 kHz for the built-ins):
 //! 1. the torque command is saturated at the torque limit and enters the
 //!    current loop, modelled as a dead time of `n = round(T_d / T_s)` samples
-//!    (a delay line; the thesis identifies the current loop as a dead time, 3.4);
+//!    (a delay line; the thesis identifies the current loop as a dead time, 3.4)
+//!    followed, when the plant's `[unmodeled]` table asks for them
+//!    (`unmodeled.rs`), by a second-order current loop, torque ripple,
+//!    cogging and tooth mesh on the rotor, a frame mode and encoder line
+//!    errors in the measured angle;
 //! 2. the delayed torque is held constant over the sample (zero-order hold) and
 //!    drives the plant: a physical plant with the nonlinear three-mass model
 //!    (2.20) (or, by [`SimConfig::model`], the nonlinear two-mass model (2.30)),
@@ -25,6 +29,7 @@
 mod linear;
 mod mech;
 pub mod truth;
+mod unmodeled;
 
 pub(crate) use mech::coulomb_step;
 pub use truth::Truth;
@@ -40,6 +45,7 @@ use nalgebra::{SMatrix, SVector};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use unmodeled::UnmodeledSim;
 
 /// Which model simulates a physical plant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -130,6 +136,8 @@ pub struct SimAxis {
     steps: u64,
     phi_m_zero_rad: f64,
     rejected_commands: u64,
+    /// The plant's `[unmodeled]` dynamics (`None`: all off, or a linear set).
+    unmodeled: Option<Box<UnmodeledSim>>,
 }
 
 impl SimAxis {
@@ -183,6 +191,15 @@ impl SimAxis {
             (_, Some(x)) => x,
         };
         let n_delay = (plant.dead_time_s() / info.ts_s).round() as usize;
+        let unmodeled = match &aged {
+            Some(p) if !p.unmodeled.is_off() => Some(Box::new(UnmodeledSim::new(
+                &p.unmodeled,
+                p.theta_e(),
+                p.i_t(),
+                info.ts_s,
+            ))),
+            _ => None,
+        };
         let mut axis = SimAxis {
             dynamics: Dynamics::Linear {
                 phi: SMatrix::zeros(),
@@ -203,6 +220,7 @@ impl SimAxis {
             steps: 0,
             phi_m_zero_rad: 0.0,
             rejected_commands: 0,
+            unmodeled,
         };
         axis.set_cart_position(xi0)?;
         axis.phi_m_zero_rad = axis.motor_angle_rad();
@@ -445,9 +463,22 @@ impl SimAxis {
             }
             out
         };
+        let phi_start = self.motor_angle_rad();
+        let (tau, rotor) = match self.unmodeled.as_deref_mut() {
+            Some(u) => {
+                let loop_out = u.current_loop(tau);
+                (loop_out, u.rotor_torque(loop_out, phi_start))
+            }
+            None => (tau, tau),
+        };
         self.applied_torque_nm = tau;
-        self.advance(tau);
+        self.advance(rotor);
         self.steps += 1;
+        let phi_end = self.motor_angle_rad();
+        let angle = match self.unmodeled.as_deref_mut() {
+            Some(u) => u.measured_angle(rotor, phi_end),
+            None => phi_end,
+        };
         let noise = if self.noise.torque_nm > 0.0 {
             let z: f64 = StandardNormal.sample(&mut self.rng);
             self.noise.torque_nm * z
@@ -460,9 +491,8 @@ impl SimAxis {
         } else {
             0.0
         };
-        let counts = floor_i64(
-            (self.motor_angle_rad() - self.phi_m_zero_rad) / self.info.motor_rad_per_count + jitter,
-        );
+        let counts =
+            floor_i64((angle - self.phi_m_zero_rad) / self.info.motor_rad_per_count + jitter);
         let cart = floor_i64(self.cart_position_m() / self.config.cart_encoder_resolution_m) as f64
             * self.config.cart_encoder_resolution_m;
         Measurement {
@@ -486,6 +516,9 @@ impl Axis for SimAxis {
     /// torque that is still on its way through the current-loop dead time.
     fn quick_stop(&mut self) -> Result<(), AxisError> {
         self.delay.iter_mut().for_each(|t| *t = 0.0);
+        if let Some(u) = self.unmodeled.as_deref_mut() {
+            u.stop();
+        }
         Ok(())
     }
 }

@@ -468,6 +468,11 @@ pub fn identification(
         frf_fit.fit_rms_db,
         identified.mean_coherence
     );
+    // what the two-mass model does not explain (ident::residual)
+    let line = match crate::ident::fit_residual(&frf, &frf_fit) {
+        Ok(r) => format!("{line}; {}", r.short()),
+        Err(_) => line,
+    };
     st.finish("identification", line);
     let n = e.cmd.len();
     Ok(Identification {
