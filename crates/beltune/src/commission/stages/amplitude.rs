@@ -63,10 +63,9 @@ fn find_amplitude(
             runner.step(holding_nm + prbs.step(), None)?;
             counts.push(runner.last().motor_counts);
         }
-        let windows = counts.len() / window;
-        let moving = (0..windows)
-            .filter(|w| counts[w * window] != counts[(w + 1) * window - 1])
-            .count();
+        let moving_windows = moving_windows(&counts, window);
+        let windows = moving_windows.1;
+        let moving = moving_windows.0;
         let fraction = moving as f64 / windows.max(1) as f64;
         if fraction >= ex.moving_fraction {
             return Ok((a * ex.amplitude_margin).min(a_max));
@@ -81,5 +80,41 @@ fn find_amplitude(
             });
         }
         a = (a * ex.amplitude_growth).min(a_max);
+    }
+}
+
+/// Windows of `window` samples in which the encoder `counts` moved, and
+/// the windows: each compares the count at its start with the count at the
+/// next window's start, so that a window spans `window` sample intervals
+/// at every sampling rate (the last sample of the window instead spanned
+/// one interval less: 19 of 20 at 10 kHz but 1 of 2 at 1 kHz, and a 1 kHz
+/// drive needed a 1.5 times larger amplitude for the same motion).
+pub(crate) fn moving_windows(counts: &[i64], window: usize) -> (usize, usize) {
+    let window = window.max(1);
+    let windows = counts.len().saturating_sub(1) / window;
+    let moving = (0..windows)
+        .filter(|w| counts[w * window] != counts[(w + 1) * window])
+        .count();
+    (moving, windows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::moving_windows;
+
+    /// The same motion (one count every 1.5 ms) reads the same at 10 kHz
+    /// (20-sample windows) and 1 kHz (2-sample windows): 2 ms windows.
+    #[test]
+    fn the_movement_test_does_not_depend_on_the_sampling_rate() {
+        let counts = |ts: f64, n: usize| -> Vec<i64> {
+            (0..n)
+                .map(|k| (k as f64 * ts / 1.5e-3).floor() as i64)
+                .collect()
+        };
+        let fast = moving_windows(&counts(1e-4, 3001), 20);
+        let slow = moving_windows(&counts(1e-3, 301), 2);
+        assert_eq!(fast.1, slow.1);
+        assert_eq!(fast.0, slow.0, "{fast:?} {slow:?}");
+        assert_eq!(fast.0, fast.1);
     }
 }

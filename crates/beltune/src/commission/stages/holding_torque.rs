@@ -128,8 +128,8 @@ pub fn holding_torque_stage(
 }
 
 /// The bootstrap controller fitted to the friction stage 3 measured
-/// ([`crate::commission::bootstrap::bootstrap_with_friction`] on the
-/// data-sheet inertia), holding the measured holding torque as its offset:
+/// ([`crate::commission::bootstrap_margin::bootstrap_for_data_sheet`]: the
+/// data-sheet inertia, the margin over the resonances it allows), holding the measured holding torque as its offset:
 /// the controller of the positioning moves and the stops from here on.
 pub fn fitted_bootstrap(
     held: &Holding,
@@ -137,9 +137,8 @@ pub fn fitted_bootstrap(
     ts_s: f64,
     torque_max_nm: f64,
 ) -> Result<CascadeConfig<f64>> {
-    let mut c = crate::commission::bootstrap::bootstrap_with_friction(
-        ds.rigid_inertia(),
-        ds.i_t_m,
+    let (mut c, _) = crate::commission::bootstrap_margin::bootstrap_for_data_sheet(
+        ds,
         ts_s,
         torque_max_nm,
         held.viscous_nm_s_per_rad,
@@ -181,13 +180,13 @@ fn holding_runs(
             let w = 0.5 * (slow.up_rad_s - slow.down_rad_s);
             if w > 0.0 {
                 let offset = ctrl.torque_offset_nm;
-                ctrl = crate::commission::bootstrap::bootstrap_with_friction(
-                    ds.rigid_inertia(),
-                    ds.i_t_m,
+                ctrl = crate::commission::bootstrap_margin::bootstrap_for_data_sheet(
+                    ds,
                     ts,
                     torque_max_nm,
                     bound.friction_nm / w,
-                )?;
+                )?
+                .0;
                 ctrl.torque_offset_nm = offset;
             }
         }
