@@ -5,11 +5,12 @@
 //!
 //! An attempt that ran a fraction `done / n` of its samples and moved the
 //! axis by `moved` extrapolates (linear in time) to a drift of
-//! `moved n / done` over the whole excitation. Below
-//! [`DRIFT_MEASURED_FRACTION`] of the record that extrapolation says nothing
-//! (1.1 mm in the first sample once read "extrapolated to 3495 mm"): such an
-//! attempt ended because it started too close to the edge, and the drift
-//! measured by an earlier attempt, if any, stays the estimate.
+//! `moved n / done` over the whole excitation. An attempt that ended within
+//! [`DRIFT_MEASURED_FRACTION`] of the record having moved less than the
+//! guard says nothing about the drift (1.1 mm in the first sample once read
+//! "extrapolated to 3495 mm"): it ended because it started too close to the
+//! edge, and the drift measured by an earlier attempt, if any, stays the
+//! estimate.
 
 /// Shortest fraction of an excitation whose drift is extrapolated to the
 /// whole record.
@@ -47,7 +48,7 @@ impl EndedAttempt {
         let moved = self.ended_m - self.center_m;
         let ran_s = self.done as f64 * self.ts_s;
         let total_s = self.n as f64 * self.ts_s;
-        if (self.done as f64) < DRIFT_MEASURED_FRACTION * self.n as f64 {
+        if (self.done as f64) < DRIFT_MEASURED_FRACTION * self.n as f64 && moved.abs() < guard_m {
             return DriftReading {
                 drift_m: None,
                 why: format!(
@@ -162,7 +163,8 @@ mod tests {
     }
 
     /// A measured attempt extrapolates linearly: 10 mm in a quarter of the
-    /// record is 40 mm over the whole of it.
+    /// record is 40 mm over the whole of it; a short attempt that moved
+    /// more than the guard measured its drift too.
     #[test]
     fn a_measured_attempt_extrapolates_linearly() {
         let a = EndedAttempt {

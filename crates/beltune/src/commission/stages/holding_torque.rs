@@ -147,6 +147,16 @@ pub fn fitted_bootstrap(
     Ok(c)
 }
 
+/// Fraction of the torque limit at which a run counts as saturated.
+const SATURATED_FRACTION: f64 = 0.95;
+
+/// Why an axis whose slow run saturated the torque is refused, one line.
+fn saturated_reason(v_m_s: f64, peak_nm: f64, torque_max_nm: f64) -> String {
+    format!(
+        "the axis cannot move at {v_m_s:.2} m/s within the torque limit {torque_max_nm:.3} N m (the slow run needed {peak_nm:.3} N m): gravity and friction take the torque"
+    )
+}
+
 /// The runs: the slow pair with `ctrl`, the fast pair with the bootstrap
 /// fitted to the viscous friction the slow pair bounds (all its friction
 /// taken as viscous: `d <= tau_f / w`), so that a heavily damped axis tracks
@@ -217,6 +227,18 @@ fn holding_runs(
             let rec = track(runner, &ctrl, &traj, 0.0, TrackOptions::default())?;
             let Some(run) = constant_velocity_point(&rec, v, None) else {
                 if i == 0 {
+                    // a loop at the torque limit: the axis cannot follow
+                    // the slow run (gravity and friction take the torque)
+                    let peak = rec
+                        .samples
+                        .iter()
+                        .map(|s| s.torque_command_nm.abs())
+                        .fold(0.0, f64::max);
+                    if peak >= SATURATED_FRACTION * torque_max_nm {
+                        return Err(Error::Infeasible {
+                            reason: saturated_reason(v, peak, torque_max_nm),
+                        });
+                    }
                     return Err(Error::TooShort {
                         what: "holding-torque run (constant-velocity part)".into(),
                         needed: 40,
@@ -242,6 +264,15 @@ fn holding_runs(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An underpowered gantry was refused with "record too short for
+    /// holding-torque run": the refusal names the physical reason.
+    #[test]
+    fn a_saturated_run_is_refused_for_its_torque() {
+        let r = saturated_reason(0.15, 0.4, 0.4);
+        assert!(r.contains("torque limit 0.400 N m") && r.contains("friction"));
+        assert!(!r.contains('\n'));
+    }
 
     /// The separation is exact on the friction model it assumes, also with
     /// runs slower one way than the other (a lagging loop).
