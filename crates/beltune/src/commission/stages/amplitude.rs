@@ -63,7 +63,8 @@ fn find_amplitude(
             runner.step(holding_nm + prbs.step(), None)?;
             counts.push(runner.last().motor_counts);
         }
-        let moving_windows = moving_windows(&counts, window);
+        let span = ((MOVING_SPAN_S / ts).round() as usize).clamp(1, window);
+        let moving_windows = moving_windows(&counts, window, span);
         let windows = moving_windows.1;
         let moving = moving_windows.0;
         let fraction = moving as f64 / windows.max(1) as f64;
@@ -83,38 +84,53 @@ fn find_amplitude(
     }
 }
 
-/// Windows of `window` samples in which the encoder `counts` moved, and
-/// the windows: each compares the count at its start with the count at the
-/// next window's start, so that a window spans `window` sample intervals
-/// at every sampling rate (the last sample of the window instead spanned
-/// one interval less: 19 of 20 at 10 kHz but 1 of 2 at 1 kHz, and a 1 kHz
-/// drive needed a 1.5 times larger amplitude for the same motion).
-pub(crate) fn moving_windows(counts: &[i64], window: usize) -> (usize, usize) {
+/// Time over which a movement window compares the encoder counts, s: the
+/// 2 ms window at 10 kHz compared its first and last sample, 19 intervals
+/// apart; at 1 kHz its two samples were one interval (1 ms) apart and a
+/// 1 kHz drive needed a 1.5 times larger amplitude for the same motion.
+pub const MOVING_SPAN_S: f64 = 1.9e-3;
+
+/// Windows of `window` samples in which the encoder `counts` moved over
+/// `span` samples from the window's start (at most `window`: the next
+/// window's start), and the windows.
+pub(crate) fn moving_windows(counts: &[i64], window: usize, span: usize) -> (usize, usize) {
     let window = window.max(1);
-    let windows = counts.len().saturating_sub(1) / window;
+    let span = span.clamp(1, window);
+    // the windows whose span ends inside the record (at 10 kHz with
+    // `span = window - 1` exactly `len / window`, as before)
+    let windows = if counts.len() > span {
+        (counts.len() - span - 1) / window + 1
+    } else {
+        0
+    };
     let moving = (0..windows)
-        .filter(|w| counts[w * window] != counts[(w + 1) * window])
+        .filter(|w| counts[w * window] != counts[w * window + span])
         .count();
     (moving, windows)
 }
 
 #[cfg(test)]
 mod tests {
-    use super::moving_windows;
+    use super::{moving_windows, MOVING_SPAN_S};
 
-    /// The same motion (one count every 1.5 ms) reads the same at 10 kHz
-    /// (20-sample windows) and 1 kHz (2-sample windows): 2 ms windows.
+    /// The same motion (one count every 1.85 ms) reads the same at 10 kHz
+    /// (20-sample windows over 19 intervals, as the search always counted)
+    /// and 1 kHz (2-sample windows over 2 intervals, where one interval
+    /// missed it): every window sees a count change.
     #[test]
     fn the_movement_test_does_not_depend_on_the_sampling_rate() {
         let counts = |ts: f64, n: usize| -> Vec<i64> {
             (0..n)
-                .map(|k| (k as f64 * ts / 1.5e-3).floor() as i64)
+                .map(|k| (k as f64 * ts / 1.85e-3).floor() as i64)
                 .collect()
         };
-        let fast = moving_windows(&counts(1e-4, 3001), 20);
-        let slow = moving_windows(&counts(1e-3, 301), 2);
-        assert_eq!(fast.1, slow.1);
-        assert_eq!(fast.0, slow.0, "{fast:?} {slow:?}");
-        assert_eq!(fast.0, fast.1);
+        let span = |ts: f64| (MOVING_SPAN_S / ts).round() as usize;
+        let fast = moving_windows(&counts(1e-4, 3000), 20, span(1e-4));
+        let slow = moving_windows(&counts(1e-3, 300), 2, span(1e-3));
+        assert_eq!(fast.0, fast.1, "{fast:?}");
+        assert_eq!(slow.0, slow.1, "{slow:?}");
+        // one interval at 1 kHz (the former test) misses some of them
+        let one = moving_windows(&counts(1e-3, 300), 2, 1);
+        assert!(one.0 < one.1, "{one:?}");
     }
 }
