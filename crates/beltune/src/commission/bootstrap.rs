@@ -76,9 +76,33 @@ pub fn bootstrap_with_friction(
     let j = require_positive("rigid inertia [kg m^2]", j_kg_m2)?;
     require_positive("i_t [m/rad]", i_t_m)?;
     require_positive("torque limit [N m]", torque_max_nm)?;
+    bootstrap_at_crossover(
+        j,
+        i_t_m,
+        ts_s,
+        torque_max_nm,
+        viscous_nm_s_per_rad,
+        bootstrap_crossover_rad_s(j, i_t_m, torque_max_nm),
+    )
+}
+
+/// [`bootstrap_with_friction`] with the velocity-loop crossover `w_c_rad_s`
+/// given (rad/s; [`super::bootstrap_margin::bootstrap_for_data_sheet`]
+/// lowers it for the resonances the data sheet allows).
+pub fn bootstrap_at_crossover(
+    j_kg_m2: f64,
+    i_t_m: f64,
+    ts_s: f64,
+    torque_max_nm: f64,
+    viscous_nm_s_per_rad: f64,
+    w_c_rad_s: f64,
+) -> Result<CascadeConfig<f64>> {
+    let j = require_positive("rigid inertia [kg m^2]", j_kg_m2)?;
+    require_positive("i_t [m/rad]", i_t_m)?;
+    require_positive("torque limit [N m]", torque_max_nm)?;
+    let w_c = require_positive("bootstrap crossover [rad/s]", w_c_rad_s)?;
     let d =
         crate::error::require_non_negative("viscous friction [N m s/rad]", viscous_nm_s_per_rad)?;
-    let w_c = bootstrap_crossover_rad_s(j, i_t_m, torque_max_nm);
     let k_p = j * w_c;
     // The PI zero follows the plant's pole at most up to BOOTSTRAP_ZERO_MAX
     // times the crossover: an overestimated damping (Coulomb friction taken

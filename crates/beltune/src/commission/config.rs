@@ -30,6 +30,11 @@ pub struct DataSheet {
     pub torque_max_nm: f64,
     /// Speed limit for the commissioning, m/s.
     pub velocity_max_m_s: f64,
+    /// The antiresonance range `[lowest, highest]` the data sheet allows over
+    /// the stroke, Hz ([`super::band::antiresonance_band_hz`]); `None`:
+    /// unknown (the PRBS and the bootstrap stay as configured).
+    #[serde(default)]
+    pub antiresonance_band_hz: Option<[f64; 2]>,
 }
 
 impl DataSheet {
@@ -90,6 +95,7 @@ impl DataSheet {
             travel_max_m: hi,
             torque_max_nm: plant.info().torque_max_nm,
             velocity_max_m_s: 2.5,
+            antiresonance_band_hz: super::band::antiresonance_band_hz(plant),
         }
     }
 
@@ -131,10 +137,13 @@ pub fn check_travel_window(
 /// Excitation settings (thesis 3.1, 3.4).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ExcitationConfig {
-    /// PRBS order `n_PRBS`.
+    /// PRBS order `n_PRBS` (the lowest; higher where a shorter clock needs
+    /// it for the same period, [`Self::for_band`]).
     pub prbs_order: u32,
     /// PRBS clock period `P_PRBS`, s (rounded to whole samples of the axis'
-    /// cycle time, at least one; 1.6 ms = 16 samples at 10 kHz).
+    /// cycle time, at least one; 1.6 ms = 16 samples at 10 kHz): the
+    /// longest clock; shorter where the data sheet allows higher resonances
+    /// ([`Self::for_band`]).
     pub clock_period_s: f64,
     /// Periods averaged (`n_m`).
     pub periods: usize,
@@ -164,6 +173,15 @@ pub struct ExcitationConfig {
     pub burst_s: f64,
     /// Log-spaced lines used by the fit.
     pub n_log_lines: usize,
+    /// Whether the clock and order follow the resonance range of the data
+    /// sheet and the sampling rate ([`Self::for_band`]; off where the user
+    /// set them).
+    #[serde(default = "default_true")]
+    pub band_from_data_sheet: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 impl Default for ExcitationConfig {
@@ -183,6 +201,7 @@ impl Default for ExcitationConfig {
             moving_window_s: 2e-3,
             burst_s: 0.15,
             n_log_lines: 60,
+            band_from_data_sheet: true,
         }
     }
 }

@@ -22,8 +22,9 @@
 //! | file | what |
 //! | --- | --- |
 //! | [`config`] | data sheet, excitation settings, limits of the moves |
+//! | [`band`] | the resonance range the data sheet allows; the PRBS for it |
 //! | [`runner`], [`safety`], [`motion`] | driving the axis sample by sample under the supervisor |
-//! | [`bootstrap`] | the controller before the axis is identified |
+//! | [`bootstrap`], [`bootstrap_margin`] | the controller before the axis is identified, its margin over the resonances the data sheet allows |
 //! | [`stages`] | one file per stage |
 //! | [`validation`] | the validation move (also simulated, for the tuning page) |
 //! | [`stiffness`] | the belt stiffness along the stroke |
@@ -32,7 +33,9 @@
 //!
 //! This file holds only the order of the stages.
 
+pub mod band;
 pub mod bootstrap;
+pub mod bootstrap_margin;
 pub mod config;
 pub mod motion;
 pub mod progress;
@@ -109,7 +112,18 @@ pub fn commission(
     stages::take_axis::move_to_worst_case(&mut st, &boot_hold, id_pos, datasheet)?;
 
     // ---- 4. excitation amplitude ----
-    let ex = &cfg.excitation;
+    let band = band::ResonanceBand::of(datasheet);
+    let excitation = cfg.excitation.for_band(ts, band.as_ref());
+    if excitation != cfg.excitation {
+        st.log.push(format!(
+            "excitation: PRBS clock {:.2} ms, order {} for resonances up to {:.0} Hz at {:.0} Hz sampling",
+            excitation.clock_period_s * 1e3,
+            excitation.prbs_order,
+            band.map_or(f64::NAN, |b| b.f_r_max_hz()),
+            1.0 / ts
+        ));
+    }
+    let ex = &excitation;
     let amplitude = stages::amplitude::amplitude_stage(
         &mut st,
         &boot_hold,

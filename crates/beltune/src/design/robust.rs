@@ -411,7 +411,7 @@ fn open_loops_on(
 /// crossover `w_c` of the sampled response `l` (deg; NaN without a crossover
 /// or with a non-finite point). A crossover between two grid points is placed
 /// by linear interpolation of `ln |L|`, its phase interpolated alike.
-fn nyquist_phase_margin_deg(l: &[C64]) -> f64 {
+pub(crate) fn nyquist_phase_margin_deg(l: &[C64]) -> f64 {
     let mut pm = f64::NAN;
     for pair in l.windows(2) {
         let (a, b) = (pair[0], pair[1]);
@@ -431,7 +431,7 @@ fn nyquist_phase_margin_deg(l: &[C64]) -> f64 {
 
 /// Smallest gain margin of the sampled response `l`, dB: `-20 log10 |L|`
 /// where `L` crosses the negative real axis (`+inf` where it never does).
-fn gain_margin_db(l: &[C64]) -> f64 {
+pub(crate) fn gain_margin_db(l: &[C64]) -> f64 {
     let mut gm = f64::INFINITY;
     for pair in l.windows(2) {
         let (a, b) = (pair[0], pair[1]);

@@ -106,6 +106,18 @@ impl Plant {
         }
     }
 
+    /// The two-mass parameters of the simulator's own physics at cart
+    /// position `xi_m`: for a physical plant the equivalent of the
+    /// three-mass model with its end pulley
+    /// ([`super::equivalent::equivalent_two_mass`]), which [`Self::linearize`]
+    /// (thesis 2.1.4) neglects; a linear set as it is.
+    pub fn true_two_mass(&self, xi_m: f64) -> Result<TwoMassParams> {
+        match self {
+            Plant::Physical(p) => super::equivalent::equivalent_two_mass(p, xi_m),
+            Plant::Linear(_) => self.linearize(xi_m),
+        }
+    }
+
     /// The worst-case (lowest-resonance) cart position, m (0 for a linear set).
     pub fn worst_case_position_m(&self) -> f64 {
         match self {

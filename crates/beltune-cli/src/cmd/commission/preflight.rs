@@ -371,9 +371,11 @@ fn check_excitation(
     ex.fixed_amplitude_nm = args.excitation_amplitude;
     if let Some(n) = args.prbs_order {
         ex.prbs_order = n;
+        ex.band_from_data_sheet = false;
     }
     if let Some(ms) = args.prbs_clock_ms {
         ex.clock_period_s = ms * 1e-3;
+        ex.band_from_data_sheet = false;
     }
     let order = ex.prbs_order;
     let clock = ex.clock_samples(ts_s);

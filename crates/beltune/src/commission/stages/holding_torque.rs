@@ -128,8 +128,8 @@ pub fn holding_torque_stage(
 }
 
 /// The bootstrap controller fitted to the friction stage 3 measured
-/// ([`crate::commission::bootstrap::bootstrap_with_friction`] on the
-/// data-sheet inertia), holding the measured holding torque as its offset:
+/// ([`crate::commission::bootstrap_margin::bootstrap_for_data_sheet`]: the
+/// data-sheet inertia, the margin over the resonances it allows), holding the measured holding torque as its offset:
 /// the controller of the positioning moves and the stops from here on.
 pub fn fitted_bootstrap(
     held: &Holding,
@@ -137,15 +137,24 @@ pub fn fitted_bootstrap(
     ts_s: f64,
     torque_max_nm: f64,
 ) -> Result<CascadeConfig<f64>> {
-    let mut c = crate::commission::bootstrap::bootstrap_with_friction(
-        ds.rigid_inertia(),
-        ds.i_t_m,
+    let (mut c, _) = crate::commission::bootstrap_margin::bootstrap_for_data_sheet(
+        ds,
         ts_s,
         torque_max_nm,
         held.viscous_nm_s_per_rad,
     )?;
     c.torque_offset_nm = held.holding_nm;
     Ok(c)
+}
+
+/// Fraction of the torque limit at which a run counts as saturated.
+const SATURATED_FRACTION: f64 = 0.95;
+
+/// Why an axis whose slow run saturated the torque is refused, one line.
+fn saturated_reason(v_m_s: f64, peak_nm: f64, torque_max_nm: f64) -> String {
+    format!(
+        "the axis cannot move at {v_m_s:.2} m/s within the torque limit {torque_max_nm:.3} N m (the slow run needed {peak_nm:.3} N m): gravity and friction take the torque"
+    )
 }
 
 /// The runs: the slow pair with `ctrl`, the fast pair with the bootstrap
@@ -181,13 +190,13 @@ fn holding_runs(
             let w = 0.5 * (slow.up_rad_s - slow.down_rad_s);
             if w > 0.0 {
                 let offset = ctrl.torque_offset_nm;
-                ctrl = crate::commission::bootstrap::bootstrap_with_friction(
-                    ds.rigid_inertia(),
-                    ds.i_t_m,
+                ctrl = crate::commission::bootstrap_margin::bootstrap_for_data_sheet(
+                    ds,
                     ts,
                     torque_max_nm,
                     bound.friction_nm / w,
-                )?;
+                )?
+                .0;
                 ctrl.torque_offset_nm = offset;
             }
         }
@@ -218,6 +227,18 @@ fn holding_runs(
             let rec = track(runner, &ctrl, &traj, 0.0, TrackOptions::default())?;
             let Some(run) = constant_velocity_point(&rec, v, None) else {
                 if i == 0 {
+                    // a loop at the torque limit: the axis cannot follow
+                    // the slow run (gravity and friction take the torque)
+                    let peak = rec
+                        .samples
+                        .iter()
+                        .map(|s| s.torque_command_nm.abs())
+                        .fold(0.0, f64::max);
+                    if peak >= SATURATED_FRACTION * torque_max_nm {
+                        return Err(Error::Infeasible {
+                            reason: saturated_reason(v, peak, torque_max_nm),
+                        });
+                    }
                     return Err(Error::TooShort {
                         what: "holding-torque run (constant-velocity part)".into(),
                         needed: 40,
@@ -243,6 +264,15 @@ fn holding_runs(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An underpowered gantry was refused with "record too short for
+    /// holding-torque run": the refusal names the physical reason.
+    #[test]
+    fn a_saturated_run_is_refused_for_its_torque() {
+        let r = saturated_reason(0.15, 0.4, 0.4);
+        assert!(r.contains("torque limit 0.400 N m") && r.contains("friction"));
+        assert!(!r.contains('\n'));
+    }
 
     /// The separation is exact on the friction model it assumes, also with
     /// runs slower one way than the other (a lagging loop).

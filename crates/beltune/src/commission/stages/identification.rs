@@ -158,6 +158,7 @@ pub(crate) fn excite(
     st.start(stage, n as u64);
     let mut center = center_m;
     let mut attempt = 1;
+    let mut measured_drift = None;
     loop {
         let mut prbs = sequence;
         move_to(st.runner, hold, center, limits, 0.05)?;
@@ -184,35 +185,38 @@ pub(crate) fn excite(
         if e.cmd.len() == n {
             return Ok(e);
         }
-        let done = e.cmd.len();
-        let moved = st.runner.position_m() - center;
-        let drift = moved * n as f64 / done as f64;
+        let ended = super::drift::EndedAttempt {
+            attempt,
+            center_m: center,
+            ended_m: st.runner.position_m(),
+            done: e.cmd.len(),
+            n,
+            ts_s: ts,
+        };
+        let reading = ended.reading(EXCITATION_GUARD_M);
+        let drift = reading.drift_m.or(measured_drift);
         let window = st.runner.supervisor().limits();
-        let (lo, hi) = (
-            window.travel_min_m + EXCITATION_GUARD_M - drift.min(0.0),
-            window.travel_max_m - EXCITATION_GUARD_M - drift.max(0.0),
+        // against a drift this attempt measured; where it began otherwise
+        let preferred = center - reading.drift_m.unwrap_or(0.0);
+        let next = super::drift::restart_center_m(
+            preferred,
+            drift.unwrap_or(0.0),
+            window.travel_min_m,
+            window.travel_max_m,
+            EXCITATION_GUARD_M,
         );
-        let why = format!(
-            "the open-loop excitation drifted {:.1} mm in {:.2} of {:.2} s (attempt {attempt} from {:.1} mm)",
-            moved * 1e3,
-            done as f64 * ts,
-            n as f64 * ts,
-            center * 1e3
-        );
-        if lo > hi || attempt == EXCITATION_ATTEMPTS {
+        let Some(next) = next.filter(|_| attempt < EXCITATION_ATTEMPTS) else {
             // the axis still moves open loop: bring it to rest first
             let rest = st.runner.stop()?;
             return Err(Error::Infeasible {
-                reason: format!(
-                    "{stage}: {why}; the travel window does not fit its drift, extrapolated to {:.0} mm over the whole excitation (check the holding torque, or lower the PRBS amplitude); axis stopped at {:.1} mm",
-                    drift.abs() * 1e3,
-                    rest * 1e3
-                ),
+                reason: super::drift::give_up_reason(stage, &reading, measured_drift, rest),
             });
-        }
-        center = (center - drift).clamp(lo, hi);
+        };
+        measured_drift = drift;
+        center = next;
         st.log.push(format!(
-            "{stage}: {why}; started again at {:.1} mm",
+            "{stage}: {}; started again at {:.1} mm",
+            reading.why,
             center * 1e3
         ));
         attempt += 1;
@@ -264,8 +268,8 @@ pub(crate) fn fit_frf(
     {
         return Err(Error::FitFailed {
             reason: format!(
-                "the fitted model (f_r {:.3e} Hz, f_z {:.3e} Hz) has no resonance inside the measured band up to {:.0} Hz; check the excitation and the data sheet",
-                fit.f_r_hz, fit.f_z_hz, f_band
+                "the fitted model (f_r {:.3e} Hz, f_z {:.3e} Hz) has no resonance inside the measured band up to {:.0} Hz (PRBS clock {:.2} ms); check the data sheet, or excite a wider band with a shorter clock (--prbs-clock-ms, at least one sample of {:.2} ms)",
+                fit.f_r_hz, fit.f_z_hz, f_band, ex.clock_samples(ecfg.ts_s) as f64 * ecfg.ts_s * 1e3, ecfg.ts_s * 1e3
             ),
         });
     }

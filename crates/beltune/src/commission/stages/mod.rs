@@ -10,13 +10,14 @@
 //! | 2. take the axis (first hold) | [`take_axis`] |
 //! | 3. holding torque and friction where the axis was taken, the bootstrap fitted to the friction, the move to the worst-case position | [`holding_torque`], [`take_axis::move_to_worst_case`] |
 //! | 4. excitation amplitude | [`amplitude`] |
-//! | 5. open-loop identification; 5b, 5c: the belt stiffness at the validation target and near the start | [`identification`] |
+//! | 5. open-loop identification (restarts against its drift: [`drift`]); 5b, 5c: the belt stiffness at the validation target and near the start | [`identification`] |
 //! | 6. controller design | [`design`] |
 //! | 7. friction runs, the rigid inertia from their momentum balance; 7b: the delivered design on the measured friction | [`friction`], [`momentum`], [`design::delivered_design`] |
 //! | 8. validation moves | [`validation_moves`] |
 
 pub mod amplitude;
 pub mod design;
+pub mod drift;
 pub mod friction;
 pub mod holding_torque;
 pub mod identification;

@@ -2,7 +2,7 @@
 //! need from them before the axis moves: the safety supervisor, the stop
 //! limits and the bootstrap controller (designed from the data sheet alone).
 
-use super::super::bootstrap::bootstrap_controller;
+use super::super::bootstrap_margin::bootstrap_for_data_sheet;
 use super::super::safety::{
     SafetyLimits, SafetySupervisor, StopCapability, STOP_JERK_PER_DECELERATION,
 };
@@ -53,7 +53,7 @@ pub fn plausibility(
     let capability = StopCapability::from_axis(torque_max, j_ds, datasheet.i_t_m, 0.0, 0.0)?;
     let a_stop = capability.worst_deceleration_m_s2();
     let supervisor = SafetySupervisor::with_capability(limits, capability)?;
-    let bootstrap = bootstrap_controller(j_ds, datasheet.i_t_m, ts, torque_max)?;
+    let (bootstrap, band_margins) = bootstrap_for_data_sheet(datasheet, ts, torque_max, 0.0)?;
     let stop_limits = Limits {
         a_max: a_stop,
         a_min: -a_stop,
@@ -61,7 +61,7 @@ pub fn plausibility(
         j_min: -STOP_JERK_PER_DECELERATION * a_stop,
         ..positioning_limits(datasheet)
     };
-    let line = format!(
+    let mut line = format!(
         "data sheet ok: Theta_e {:.2} kg mm^2, i_t {:.3} mm/rad, rigid inertia {:.3e} kg m^2, torque limit {:.2} N m, travel [{:.0}, {:.0}] mm",
         datasheet.theta_e_kg_m2 * 1e6,
         datasheet.i_t_m * 1e3,
@@ -70,6 +70,17 @@ pub fn plausibility(
         datasheet.travel_min_m * 1e3,
         datasheet.travel_max_m * 1e3
     );
+    let rule_hz =
+        super::super::bootstrap::bootstrap_crossover_rad_s(j_ds, datasheet.i_t_m, torque_max)
+            / (2.0 * std::f64::consts::PI);
+    // said where the band changed the loop or the loop cannot keep its margins
+    let band = band_margins.filter(|m| !m.kept() || m.crossover_hz < rule_hz * (1.0 - 1e-9));
+    if let (Some(m), Some([lo, hi])) = (band, datasheet.antiresonance_band_hz) {
+        line.push_str(&format!(
+            "; bootstrap loop lowered to {:.2} Hz: gain margin {:.1} dB, phase margin {:.0} deg over f_z {:.1}-{:.0} Hz",
+            m.crossover_hz, m.gain_margin_db, m.phase_margin_deg, lo, hi
+        ));
+    }
     Ok(Plausibility {
         torque_max_nm: torque_max,
         rigid_inertia_kg_m2: j_ds,
