@@ -83,19 +83,26 @@ impl Reference {
 }
 
 fn bench_vs_ruckig(c: &mut Criterion) {
-    let cases = cases();
     let mut ours = Planner::default();
     let mut reference = Reference::new();
+    // Only what the reference can plan (it refuses some moving targets whose
+    // velocity cannot be reached within the limits).
+    let mut cases = cases();
+    cases.retain(|(s, t, l)| reference.plan(s, t, l).is_some());
+    println!(
+        "{} of {CASES} seeded cases planned by rsruckig",
+        cases.len()
+    );
     // Same answers first (the unit test checks 12,000 cases).
     for (s, t, l) in &cases {
-        let d_ref = reference.plan(s, t, l).expect("rsruckig plans the case");
+        let d_ref = reference.plan(s, t, l).expect("kept above");
         let d = ours
             .plan(s, t, l)
             .expect("beltune-rt plans the case")
             .duration_s();
         assert!((d - d_ref).abs() <= 1e-9 * d_ref + 1e-12, "{d} vs {d_ref}");
     }
-    let mut group = c.benchmark_group("plan 2000 seeded cases");
+    let mut group = c.benchmark_group("plan the seeded cases");
     group.bench_function("beltune-rt Planner::plan", |b| {
         b.iter(|| {
             for (s, t, l) in &cases {
