@@ -126,6 +126,41 @@ fn commission_then_design_from_commissioning_json_and_export() {
         beltune::record::export::parse_values(&c),
     );
     assert!(r.len() > 30 && r == c, "{r:?}\n{c:?}");
+    // single precision: the f32 nearest each value; C has no f32 ABI (bad input, 2)
+    let rust32 = ok(&beltune()
+        .args([
+            "export",
+            "--lang",
+            "rust",
+            "--precision",
+            "f32",
+            "--controller",
+        ])
+        .arg(&toml_path)
+        .output()
+        .unwrap());
+    assert!(rust32.contains("CascadeConfig<f32>"));
+    let r32 = beltune::record::export::parse_values(&rust32);
+    assert_eq!(r32.len(), r.len());
+    for ((n32, l32), (n, l)) in r32.iter().zip(&r) {
+        assert_eq!(n32, n);
+        if let (Ok(x32), Ok(x)) = (l32.parse::<f32>(), l.parse::<f64>()) {
+            assert_eq!(x32.to_bits(), (x as f32).to_bits(), "{n}");
+        }
+    }
+    let c32 = beltune()
+        .args([
+            "export",
+            "--lang",
+            "c",
+            "--precision",
+            "f32",
+            "--controller",
+        ])
+        .arg(&toml_path)
+        .output()
+        .unwrap();
+    assert_eq!(c32.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -6,7 +6,7 @@
 
 mod support;
 
-use beltune_rt::trajectory::{Limits, State, Trajectory};
+use beltune_rt::trajectory::{Limits, Planner, State, Trajectory};
 use beltune_rt::Error;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -21,11 +21,11 @@ const DURATION_ABS_FLOOR: f64 = 1e-12;
 /// Cases per family; 6 families -> 12,000 cases.
 const CASES_PER_FAMILY: usize = 2_000;
 
-/// A planner under test: [`Trajectory::plan`] or the general solver.
-type Planner = fn(&State, &State, &Limits) -> Result<Trajectory, Error>;
-
-/// Plan the 12,000 seeded cases with `plan` and compare with rsruckig.
-fn compare_with_reference(plan: Planner) {
+/// Plan the 12,000 seeded cases with `plan` ([`Trajectory::plan`], a reused
+/// [`Planner`] or the general solver) and compare with rsruckig.
+fn compare_with_reference(
+    mut plan: impl FnMut(&State, &State, &Limits) -> Result<Trajectory, Error>,
+) {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(0xBE17_70E5);
     let mut compared = 0;
     let mut reference_failed = 0;
@@ -92,6 +92,28 @@ fn compare_with_reference(plan: Planner) {
 #[test]
 fn durations_equal_rsruckig_on_12000_random_cases() {
     compare_with_reference(Trajectory::plan);
+}
+
+/// One [`Planner`] reused for all 12,000 cases: its scratch profiles are not
+/// re-initialized between plans, so a stale value read anywhere would show as
+/// a duration differing from rsruckig's or a phase differing from a fresh
+/// planner's.
+#[test]
+fn reused_planner_equals_rsruckig_and_fresh_plans() {
+    let mut planner = Planner::default();
+    compare_with_reference(|start, target, limits| {
+        let reused = planner.plan(start, target, limits);
+        let fresh = Trajectory::plan(start, target, limits);
+        match (&reused, &fresh) {
+            (Ok(r), Ok(f)) => {
+                assert_eq!(r.duration_s().to_bits(), f.duration_s().to_bits());
+                assert_eq!(r.phases(), f.phases());
+            }
+            (Err(r), Err(f)) => assert_eq!(r, f),
+            _ => panic!("reused {reused:?} vs fresh {fresh:?}"),
+        }
+        reused
+    });
 }
 
 /// The general solver for asymmetric jerk (`asymmetric.rs`), run on the same

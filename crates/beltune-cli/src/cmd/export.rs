@@ -3,7 +3,7 @@
 //! (crate beltune-rt-ffi), with the same values to the last digit.
 
 use beltune::record::controller::ControllerFile;
-use beltune::record::export::{export, Lang};
+use beltune::record::export::{export_as, Lang, Precision};
 use std::path::PathBuf;
 
 /// Target language.
@@ -15,6 +15,16 @@ pub enum LangArg {
     C,
 }
 
+/// Float type of the export.
+#[derive(Clone, Copy, Debug, Default, clap::ValueEnum)]
+pub enum PrecisionArg {
+    /// Double precision (`f64`), the values exactly as in the file.
+    #[default]
+    F64,
+    /// Single precision (`f32`, Rust only): for MCUs with a single-precision FPU.
+    F32,
+}
+
 /// Arguments of `beltune export`.
 #[derive(clap::Args)]
 pub struct Args {
@@ -24,6 +34,9 @@ pub struct Args {
     /// Target language.
     #[arg(long, value_enum)]
     pub lang: LangArg,
+    /// Float type of the constants and structs (f32: Rust only).
+    #[arg(long, value_enum, default_value = "f64")]
+    pub precision: PrecisionArg,
     /// Write here instead of stdout.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -39,7 +52,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         LangArg::Rust => Lang::Rust,
         LangArg::C => Lang::C,
     };
-    let text = export(&file, lang);
+    let precision = match args.precision {
+        PrecisionArg::F64 => Precision::F64,
+        PrecisionArg::F32 => Precision::F32,
+    };
+    let text = export_as(&file, lang, precision)?;
     match &args.out {
         Some(path) => {
             super::util::write_atomic(path, text.as_bytes())?;

@@ -253,46 +253,48 @@ pub struct PositionRange {
     pub highest: f64,
 }
 
-/// A planned time-optimal move; sample it with [`Trajectory::sample`].
-#[derive(Clone, Copy, Debug)]
-pub struct Trajectory {
-    profile: Profile,
-    start: State,
-    duration_s: f64,
+/// Reusable scratch space of the planner: the candidate profiles of step 1,
+/// the selected one and the boundary (about 4 kB). [`Trajectory::plan`]
+/// builds a fresh one per call; keeping one and calling [`Planner::plan`]
+/// avoids initializing it on every plan (the plans are the same either way,
+/// checked against rsruckig in `tests/trajectory_vs_ruckig.rs`).
+///
+/// ```
+/// use beltune_rt::trajectory::{Limits, Planner, State};
+///
+/// let mut planner = Planner::default();
+/// let limits = Limits::default();
+/// let a = planner.plan(&State::at_rest(0.0), &State::at_rest(0.5), &limits)?;
+/// let b = planner.plan(&State::at_rest(0.5), &State::at_rest(0.0), &limits)?;
+/// assert_eq!(a.duration_s(), b.duration_s());
+/// # Ok::<(), beltune_rt::Error>(())
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct Planner {
+    step1: ExtremalProfiles,
+    block: Block,
+    input: Profile,
 }
 
-impl Trajectory {
-    /// Plan the time-optimal jerk-limited move from `start` to `target`.
-    ///
-    /// Errors: non-finite states or invalid limits ([`Error::InvalidParameter`]),
-    /// a target whose acceleration or velocity is outside the limits, or from
-    /// which the velocity limits would inevitably be exceeded
-    /// ([`Error::Infeasible`]), a target position outside the position limits
-    /// ([`Error::TargetOutsideLimits`]), a planned move that leaves them
-    /// ([`Error::PositionLimitsViolated`]), and a numerical failure of the
-    /// profile search ([`Error::Infeasible`]).
-    pub fn plan(start: &State, target: &State, limits: &Limits) -> Result<Self, Error> {
-        Self::plan_with(start, target, limits, Solver::Auto)
-    }
-
-    /// [`Self::plan`] with the general solver of `asymmetric.rs` even for
-    /// symmetric jerk limits, where [`Self::plan`] uses Ruckig's closed forms.
-    /// For cross-checking the two (tests, benchmarks); not a stable API.
-    #[doc(hidden)]
-    pub fn plan_with_general_solver(
+impl Planner {
+    /// Plan the time-optimal jerk-limited move from `start` to `target`,
+    /// reusing this planner's scratch space; errors as [`Trajectory::plan`].
+    pub fn plan(
+        &mut self,
         start: &State,
         target: &State,
         limits: &Limits,
-    ) -> Result<Self, Error> {
-        Self::plan_with(start, target, limits, Solver::General)
+    ) -> Result<Trajectory, Error> {
+        self.plan_with(start, target, limits, Solver::Auto)
     }
 
     fn plan_with(
+        &mut self,
         start: &State,
         target: &State,
         limits: &Limits,
         solver: Solver,
-    ) -> Result<Self, Error> {
+    ) -> Result<Trajectory, Error> {
         finite("start.position", start.position)?;
         finite("start.velocity", start.velocity)?;
         finite("start.acceleration", start.acceleration)?;
@@ -339,7 +341,7 @@ impl Trajectory {
             // Already at the target (to the precision every profile ends
             // with): no move. Ruckig plans a loop back to a moving start
             // state instead (0.64 s for (0.1, 0.5, 1) with Table A.8's limits).
-            return Ok(Self::stationary(start, target));
+            return Ok(Trajectory::stationary(start, target));
         }
 
         // Brake pre-phase, then the seven phases from the braked state.
@@ -356,20 +358,21 @@ impl Trajectory {
         let (mut p0, mut v0, mut a0) = (start.position, start.velocity, start.acceleration);
         brake.finalize(&mut p0, &mut v0, &mut a0);
         let (profile, duration_s) = if j_min == -j_max && solver == Solver::Auto {
-            let input = Profile {
-                p: [p0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                v: [v0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                a: [a0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                brake,
-                pf,
-                vf,
-                af,
-                ..Profile::default()
-            };
-            let mut step1 = ExtremalProfiles::default();
+            // Only the boundary (p/v/a[0], pf/vf/af, brake) of `input` is read;
+            // the scratch profiles are overwritten before they are read (see
+            // `ExtremalProfiles::reset`), so nothing is zero-filled here.
+            let input = &mut self.input;
+            input.p[0] = p0;
+            input.v[0] = v0;
+            input.a[0] = a0;
+            input.brake = brake;
+            input.pf = pf;
+            input.vf = vf;
+            input.af = af;
+            let step1 = &mut self.step1;
             step1.reset(p0, v0, a0, pf, vf, af, v_max, v_min, a_max, a_min, j_max);
-            let mut block = Block::default();
-            if !step1.get_profile(&input, &mut block) || !block.t_min.is_finite() {
+            let block = &mut self.block;
+            if !step1.get_profile(input, block) || !block.t_min.is_finite() {
                 return Err(NO_PROFILE);
             }
             (block.p_min, block.t_min)
@@ -399,21 +402,65 @@ impl Trajectory {
             (profile, profile.total_duration())
         };
 
-        let trajectory = Self {
+        let trajectory = Trajectory {
             profile,
             start: *start,
             duration_s,
         };
-        let range = trajectory.position_range();
-        if range.lowest < position_min - POSITION_LIMIT_TOL
-            || range.highest > position_max + POSITION_LIMIT_TOL
-        {
-            return Err(Error::PositionLimitsViolated {
-                lowest: range.lowest,
-                highest: range.highest,
-            });
+        // Without position limits there is nothing to check (and the
+        // extrema of the seven phases are not computed).
+        if position_min > f64::NEG_INFINITY || position_max < f64::INFINITY {
+            let range = trajectory.position_range();
+            if range.lowest < position_min - POSITION_LIMIT_TOL
+                || range.highest > position_max + POSITION_LIMIT_TOL
+            {
+                return Err(Error::PositionLimitsViolated {
+                    lowest: range.lowest,
+                    highest: range.highest,
+                });
+            }
         }
         Ok(trajectory)
+    }
+}
+
+/// A planned time-optimal move; sample it with [`Trajectory::sample`].
+#[derive(Clone, Copy, Debug)]
+pub struct Trajectory {
+    profile: Profile,
+    start: State,
+    duration_s: f64,
+}
+
+impl Trajectory {
+    /// Plan the time-optimal jerk-limited move from `start` to `target`.
+    ///
+    /// A convenience for [`Planner::plan`] with a fresh [`Planner`]: it
+    /// initializes the planner's scratch space (eight profiles, about 4 kB)
+    /// on every call. Code that plans repeatedly (a firmware's retargeting, a
+    /// benchmark) keeps one [`Planner`] instead.
+    ///
+    /// Errors: non-finite states or invalid limits ([`Error::InvalidParameter`]),
+    /// a target whose acceleration or velocity is outside the limits, or from
+    /// which the velocity limits would inevitably be exceeded
+    /// ([`Error::Infeasible`]), a target position outside the position limits
+    /// ([`Error::TargetOutsideLimits`]), a planned move that leaves them
+    /// ([`Error::PositionLimitsViolated`]), and a numerical failure of the
+    /// profile search ([`Error::Infeasible`]).
+    pub fn plan(start: &State, target: &State, limits: &Limits) -> Result<Self, Error> {
+        Planner::default().plan(start, target, limits)
+    }
+
+    /// [`Self::plan`] with the general solver of `asymmetric.rs` even for
+    /// symmetric jerk limits, where [`Self::plan`] uses Ruckig's closed forms.
+    /// For cross-checking the two (tests, benchmarks); not a stable API.
+    #[doc(hidden)]
+    pub fn plan_with_general_solver(
+        start: &State,
+        target: &State,
+        limits: &Limits,
+    ) -> Result<Self, Error> {
+        Planner::default().plan_with(start, target, limits, Solver::General)
     }
 
     /// The zero-duration move of a start that is already at `target`.

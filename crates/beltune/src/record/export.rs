@@ -22,6 +22,28 @@ pub enum Lang {
     C,
 }
 
+/// Float type of the exported constants and structs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Precision {
+    /// `f64` / `double` (the default): the values exactly as in the file.
+    #[default]
+    F64,
+    /// `f32`, for MCUs with a single-precision FPU (Cortex-M4F): each value
+    /// rounded to the nearest `f32`, printed as the shortest text that reads
+    /// back to that `f32`. Rust only so far (the C ABI of beltune-rt-ffi is
+    /// `double`).
+    F32,
+}
+
+impl Precision {
+    fn rust_type(self) -> &'static str {
+        match self {
+            Precision::F64 => "f64",
+            Precision::F32 => "f32",
+        }
+    }
+}
+
 /// One named value of the export.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Value {
@@ -155,9 +177,13 @@ pub fn values(file: &ControllerFile) -> Vec<(String, Value)> {
     out
 }
 
-/// `x` as the shortest literal that reads back to the same `f64` in Rust and C.
-fn real(x: f64) -> String {
-    format!("{x:?}")
+/// `x` as the shortest literal that reads back to the same `f64` in Rust and
+/// C, or (`F32`) to the `f32` nearest to `x`.
+fn real(x: f64, precision: Precision) -> String {
+    match precision {
+        Precision::F64 => format!("{x:?}"),
+        Precision::F32 => format!("{:?}", x as f32),
+    }
 }
 
 /// How one language spells the values of the table ([`values`]): the two
@@ -166,14 +192,14 @@ struct Syntax {
     /// Prefix of every constant's name (`BELTUNE_` in C).
     prefix: &'static str,
     /// The declaration of one named value (the name already upper case).
-    declare: fn(&str, &Value) -> String,
+    declare: fn(&str, &Value, Precision) -> String,
 }
 
 const RUST: Syntax = Syntax {
     prefix: "",
-    declare: |name, v| {
+    declare: |name, v, precision| {
         let (ty, lit) = match v {
-            Value::Real(x) => ("f64", real(*x)),
+            Value::Real(x) => (precision.rust_type(), real(*x, precision)),
             Value::Count(c) => ("usize", c.to_string()),
             Value::Flag(b) => ("bool", b.to_string()),
         };
@@ -183,9 +209,9 @@ const RUST: Syntax = Syntax {
 
 const C: Syntax = Syntax {
     prefix: "BELTUNE_",
-    declare: |name, v| {
+    declare: |name, v, precision| {
         let lit = match v {
-            Value::Real(x) => real(*x),
+            Value::Real(x) => real(*x, precision),
             Value::Count(c) => format!("{c}u"),
             Value::Flag(b) => b.to_string(),
         };
@@ -205,10 +231,10 @@ impl Syntax {
     }
 
     /// One declaration per value of the table, one line each.
-    fn declarations(&self, file: &ControllerFile) -> String {
+    fn declarations(&self, file: &ControllerFile, precision: Precision) -> String {
         values(file)
             .iter()
-            .map(|(n, v)| (self.declare)(&n.to_ascii_uppercase(), v) + "\n")
+            .map(|(n, v)| (self.declare)(&n.to_ascii_uppercase(), v, precision) + "\n")
             .collect()
     }
 
@@ -256,7 +282,7 @@ fn header_lines(file: &ControllerFile, comment: &str) -> String {
     )
 }
 
-/// The export of `file` in `lang`.
+/// The export of `file` in `lang` (double precision).
 pub fn export(file: &ControllerFile, lang: Lang) -> String {
     match lang {
         Lang::Rust => rust_module(file),
@@ -264,17 +290,59 @@ pub fn export(file: &ControllerFile, lang: Lang) -> String {
     }
 }
 
+/// The export of `file` in `lang` and `precision`. Errors for `F32` in C (the
+/// C ABI is `double` only) and for a value whose magnitude an `f32` cannot
+/// hold (it would round to infinity).
+pub fn export_as(
+    file: &ControllerFile,
+    lang: Lang,
+    precision: Precision,
+) -> crate::error::Result<String> {
+    if precision == Precision::F32 {
+        if lang == Lang::C {
+            return Err(crate::Error::invalid(
+                "precision",
+                32.0,
+                "f32 is exported for Rust only (the C ABI of beltune_rt.h is double)",
+            ));
+        }
+        for (name, v) in values(file) {
+            if let Value::Real(x) = v {
+                if !(x as f32).is_finite() {
+                    return Err(crate::Error::invalid(
+                        name,
+                        x,
+                        "does not fit an f32 (export with --precision f64)",
+                    ));
+                }
+            }
+        }
+    }
+    Ok(match lang {
+        Lang::Rust => rust_module_as(file, precision),
+        Lang::C => c_header(file),
+    })
+}
+
 /// The Rust module: named `const`s, `CASCADE` (`CascadeConfig<f64>`) and
 /// `BELT_STRETCH` (`BeltStretch<f64>`: the belt's compliance along the
 /// stroke and the static force, [`beltune_rt::control::BeltProfile`]) for
 /// `SetpointConversion::new(I_T_M_PER_RAD, BELT_STRETCH)`.
 pub fn rust_module(file: &ControllerFile) -> String {
+    rust_module_as(file, Precision::F64)
+}
+
+/// [`rust_module`] in `precision`: `CascadeConfig<f32>` and
+/// `BeltStretch<f32>` with `f32` constants for [`Precision::F32`] (no check
+/// that the values fit an `f32`: [`export_as`] does that).
+pub fn rust_module_as(file: &ControllerFile, precision: Precision) -> String {
+    let ty = precision.rust_type();
     let name = |n: &str| RUST.name(file, n);
     let mut s = header_lines(file, "//");
     s.push_str(
         "\nuse beltune_rt::control::{\n    AntiWindup, BeltProfile, BeltStretch, CascadeConfig, CascadeGains, Feedforward,\n    FeedforwardParams, FeedforwardTerms,\n};\nuse beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};\n\n",
     );
-    s.push_str(&RUST.declarations(file));
+    s.push_str(&RUST.declarations(file, precision));
     let sos = |i: usize| {
         let [b0, b1, b2, a1, a2] = RUST.section(file, i);
         format!(
@@ -287,7 +355,7 @@ pub fn rust_module(file: &ControllerFile) -> String {
     };
     let _ = write!(
         s,
-        "\n/// The commissioned controller.\npub const CASCADE: CascadeConfig<f64> = CascadeConfig {{\n    ts_s: TS_S,\n    gains: CascadeGains {{\n        k_pp_per_s: K_PP_PER_S,\n        k_p_nm_s_per_rad: {kp},\n        k_i_nm_per_rad: {ki},\n        k_v: K_V,\n    }},\n    velocity_filter: FirstOrderCoeffs {{\n        b0: VELOCITY_FILTER_B0,\n        b1: VELOCITY_FILTER_B1,\n        a1: VELOCITY_FILTER_A1,\n    }},\n    prefilter: [\n        {s1},\n        {s2},\n    ],\n    torque_max_nm: {tmax},\n    anti_windup: {aw},\n    feedforward: Feedforward {{\n        params: FeedforwardParams {{\n            inertia_kg_m2: {ffi},\n            viscous_nm_s_per_rad: {ffv},\n            coulomb_nm: {ffc},\n            coulomb_deadband_rad_s: FF_COULOMB_DEADBAND_RAD_S,\n            coulomb_breakaway_rad: FF_COULOMB_BREAKAWAY_RAD,\n        }},\n        terms: FeedforwardTerms {{\n            inertia: FF_INERTIA,\n            viscous: FF_VISCOUS,\n            coulomb: FF_COULOMB,\n        }},\n    }},\n    torque_offset_nm: {toff},\n    filter_desired_velocity: FILTER_DESIRED_VELOCITY,\n    feedforward_preview: FEEDFORWARD_PREVIEW,\n}};\n",
+        "\n/// The commissioned controller.\npub const CASCADE: CascadeConfig<{ty}> = CascadeConfig {{\n    ts_s: TS_S,\n    gains: CascadeGains {{\n        k_pp_per_s: K_PP_PER_S,\n        k_p_nm_s_per_rad: {kp},\n        k_i_nm_per_rad: {ki},\n        k_v: K_V,\n    }},\n    velocity_filter: FirstOrderCoeffs {{\n        b0: VELOCITY_FILTER_B0,\n        b1: VELOCITY_FILTER_B1,\n        a1: VELOCITY_FILTER_A1,\n    }},\n    prefilter: [\n        {s1},\n        {s2},\n    ],\n    torque_max_nm: {tmax},\n    anti_windup: {aw},\n    feedforward: Feedforward {{\n        params: FeedforwardParams {{\n            inertia_kg_m2: {ffi},\n            viscous_nm_s_per_rad: {ffv},\n            coulomb_nm: {ffc},\n            coulomb_deadband_rad_s: FF_COULOMB_DEADBAND_RAD_S,\n            coulomb_breakaway_rad: FF_COULOMB_BREAKAWAY_RAD,\n        }},\n        terms: FeedforwardTerms {{\n            inertia: FF_INERTIA,\n            viscous: FF_VISCOUS,\n            coulomb: FF_COULOMB,\n        }},\n    }},\n    torque_offset_nm: {toff},\n    filter_desired_velocity: FILTER_DESIRED_VELOCITY,\n    feedforward_preview: FEEDFORWARD_PREVIEW,\n}};\n",
         kp = name("k_p_nm_s_per_rad"),
         ki = name("k_i_nm_per_rad"),
         s1 = sos(1),
@@ -316,7 +384,7 @@ pub fn rust_module(file: &ControllerFile) -> String {
     };
     let _ = write!(
         s,
-        "\n/// Belt-stretch compensation of the setpoint conversion.\npub const BELT_STRETCH: BeltStretch<f64> = {belt};\n"
+        "\n/// Belt-stretch compensation of the setpoint conversion.\npub const BELT_STRETCH: BeltStretch<{ty}> = {belt};\n"
     );
     s
 }
@@ -327,7 +395,7 @@ pub fn c_header(file: &ControllerFile) -> String {
     let name = |n: &str| C.name(file, n);
     let mut s = header_lines(file, "//");
     s.push_str("#ifndef BELTUNE_CONTROLLER_H\n#define BELTUNE_CONTROLLER_H\n\n#include \"beltune_rt.h\"\n\n");
-    s.push_str(&C.declarations(file));
+    s.push_str(&C.declarations(file, Precision::F64));
     let sec = |i: usize| format!("{{{}}}", C.section(file, i).join(", "));
     let aw = match file.anti_windup {
         AntiWindupKind::ConditionalIntegration => "BT_ANTI_WINDUP_CONDITIONAL",
