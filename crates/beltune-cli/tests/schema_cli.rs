@@ -319,6 +319,26 @@ fn commission_csv_in_current_units_labels_every_unit_as_current() {
     assert_eq!(file.cascade_config().unwrap().torque_max_nm, 20.0);
     // report: every unit of the parameter table is a current unit or carries no torque
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    // the drive-family table (family, parameter, unit, value) after the others
+    let (html, vendor) = html
+        .split_once("Drive parameters per drive family")
+        .expect("the report has the drive-family table");
+    let vendor_units: Vec<String> = vendor
+        .split("<tr><td>")
+        .skip(1)
+        .filter_map(|row| {
+            let cell = row.split("</td><td>").nth(2)?;
+            Some(cell.replace("&#x2f;", "/").replace("&#x5e;", "^"))
+        })
+        .collect();
+    assert!(vendor_units.len() >= 9, "{vendor_units:?}");
+    for u in &vendor_units {
+        assert!(
+            ["Hz", "ms", "1/s", "1000/min", ""].contains(&u.as_str())
+                || (u.starts_with('A') && !u.contains('N') && !u.contains("kg")),
+            "unit `{u}` in the drive-family table"
+        );
+    }
     let units: Vec<String> = html
         .split("<tr><td>")
         .skip(1)

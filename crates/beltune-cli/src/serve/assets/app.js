@@ -142,6 +142,8 @@
     for (const v of xt) {
       const X = px(v).toFixed(1);
       svg.appendChild(el('line', { x1: X, x2: X, y1: T, y2: H - B, class: 'grid' }));
+      // the axis' unit sits at the right end: a tick label there would cover it
+      if (opts.xlabel && W - R - px(v) < 30) continue;
       svg.appendChild(el('text', { x: X, y: H - B + 12, 'text-anchor': 'middle', class: 'tick x-tick' }, tickLabel(v)));
     }
     for (const v of niceTicks(y0, y1, 5)) {
