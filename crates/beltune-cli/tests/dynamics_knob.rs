@@ -9,6 +9,7 @@
 
 use beltune::design::robust::{design_identified, DesignRule, RobustDesign};
 use beltune::design::{DesignInput, DesignKnobs, Dynamics};
+use beltune::model::stroke::StrokeVariation;
 use beltune::model::{builtin, Plant, BUILTIN_NAMES};
 use beltune::study::{generate, Ranges};
 use rayon::prelude::*;
@@ -42,16 +43,18 @@ fn axes() -> Vec<(String, Plant)> {
 
 /// The commissioning's design rule for `plant` (its two-mass linearization at
 /// the worst-case position, its true viscous friction, 5 % uncertainties) at
-/// `dynamics`.
+/// `dynamics`, checked along its stroke.
 fn design_at(plant: &Plant, dynamics: Dynamics) -> beltune::Result<RobustDesign> {
     let model = plant.worst_case_two_mass()?;
     let input = DesignInput::new(model, plant.dead_time_s());
     let knobs = dynamics.knobs(&DesignKnobs::default());
+    let stroke = StrokeVariation::of(plant, plant.worst_case_position_m());
     design_identified(
         &input,
         Some(plant.friction_totals().viscous_nm_s_per_rad),
         f64::NAN,
         f64::NAN,
+        stroke.as_ref(),
         &knobs,
         DesignRule::Robust,
     )
@@ -130,6 +133,7 @@ fn the_default_dynamics_is_standard() {
         Some(plant.friction_totals().viscous_nm_s_per_rad),
         f64::NAN,
         f64::NAN,
+        StrokeVariation::of(&plant, plant.worst_case_position_m()).as_ref(),
         &DesignKnobs::default(),
         DesignRule::default(),
     )

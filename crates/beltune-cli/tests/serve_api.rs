@@ -466,6 +466,7 @@ fn empty_request_gives_the_design_defaults_and_dynamics_maps_to_the_documented_m
         input.friction.map(|f| f.viscous_nm_s_per_rad),
         run.identified.m_c_sigma,
         run.identified.c_sigma,
+        run.identified.stroke_variation.as_ref(),
         &DesignKnobs::default(),
         DesignRule::Robust,
     )
@@ -494,6 +495,7 @@ fn empty_request_gives_the_design_defaults_and_dynamics_maps_to_the_documented_m
             input.friction.map(|f| f.viscous_nm_s_per_rad),
             run.identified.m_c_sigma,
             run.identified.c_sigma,
+            run.identified.stroke_variation.as_ref(),
             &beltune::design::Dynamics::new(x)
                 .unwrap()
                 .knobs(&DesignKnobs::default()),
@@ -695,6 +697,7 @@ fn commissioning_folder_model_is_designed_and_simulated() {
         Some(0.00253),
         f64::NAN,
         f64::NAN,
+        None,
         &DesignKnobs::default(),
         DesignRule::Robust,
     )

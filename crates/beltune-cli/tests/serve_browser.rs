@@ -335,6 +335,7 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
                 run.design.input.friction.map(|f| f.viscous_nm_s_per_rad),
                 run.identified.m_c_sigma,
                 run.identified.c_sigma,
+                run.identified.stroke_variation.as_ref(),
                 &DesignKnobs::default(),
                 DesignRule::Robust,
             )

@@ -94,6 +94,7 @@ fn data_sheets() -> Vec<(&'static str, DataSheet, f64)> {
         torque_max_nm: 12.0,
         travel_max_m: 3.47,
         antiresonance_band_hz: Some([6.0 * 0.65, 10.0 * 1.1]),
+        stroke_variation: None,
         ..egc70
     };
     let gt2 = DataSheet {
@@ -103,6 +104,7 @@ fn data_sheets() -> Vec<(&'static str, DataSheet, f64)> {
         torque_max_nm: 0.5,
         travel_max_m: 0.5,
         antiresonance_band_hz: Some([40.0 * 0.65, 90.0 * 1.1]),
+        stroke_variation: None,
         ..egc70
     };
     vec![

@@ -149,6 +149,8 @@ pub struct LibraryTuner {
     friction: FrictionResult,
     /// `m_c` and `c` one-sigma uncertainties of the identification.
     sigmas: (f64, f64),
+    /// The model along the stroke (the commissioning's data sheet), if known.
+    stroke: Option<beltune::model::stroke::StrokeVariation>,
     nominal_payload_kg: f64,
     move_plant: MovePlant,
     /// Torque limit written to controller.toml and used in the move: the
@@ -188,6 +190,7 @@ impl LibraryTuner {
         let friction = model.friction().cloned().unwrap_or_default();
         Ok(LibraryTuner {
             sigmas: (record.identified.m_c_sigma, record.identified.c_sigma),
+            stroke: record.identified.stroke_variation,
             model,
             input,
             friction,
@@ -297,6 +300,7 @@ impl LibraryTuner {
             self.input.friction.map(|f| f.viscous_nm_s_per_rad),
             self.sigmas.0,
             self.sigmas.1,
+            self.stroke.as_ref(),
             &k,
             rule,
         )

@@ -143,6 +143,7 @@ mod tests {
     fn ds_with(band: [f64; 2]) -> DataSheet {
         DataSheet {
             antiresonance_band_hz: Some(band),
+            stroke_variation: None,
             ..DataSheet::for_plant(&rigs::builtin("egc70", None).unwrap(), 0.05, None)
         }
     }

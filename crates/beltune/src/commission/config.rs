@@ -35,6 +35,12 @@ pub struct DataSheet {
     /// unknown (the PRBS and the bootstrap stay as configured).
     #[serde(default)]
     pub antiresonance_band_hz: Option<[f64; 2]>,
+    /// How the two-mass model changes from the identification position to
+    /// the ends of the stroke, from the data sheet's physics
+    /// ([`crate::model::stroke`]); `None`: unknown (a linear set, a
+    /// recording), the design is checked at the identification position only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stroke_variation: Option<crate::model::stroke::StrokeVariation>,
 }
 
 impl DataSheet {
@@ -67,6 +73,9 @@ impl DataSheet {
                 ),
             ));
         }
+        if let Some(v) = &self.stroke_variation {
+            v.validate()?;
+        }
         Ok(())
     }
 
@@ -86,7 +95,7 @@ impl DataSheet {
             Plant::Linear(l) => (l.two_mass.theta_e, l.two_mass.i_t, l.two_mass.m_c, 0.6),
         };
         let (lo, hi) = travel_window_m.unwrap_or((-0.01, stroke - 0.03));
-        DataSheet {
+        let mut ds = DataSheet {
             theta_e_kg_m2: theta_e,
             i_t_m: i_t,
             moving_mass_kg: mass,
@@ -96,7 +105,13 @@ impl DataSheet {
             torque_max_nm: plant.info().torque_max_nm,
             velocity_max_m_s: 2.5,
             antiresonance_band_hz: super::band::antiresonance_band_hz(plant),
-        }
+            stroke_variation: None,
+        };
+        ds.stroke_variation = crate::model::stroke::StrokeVariation::of(
+            plant,
+            super::stages::take_axis::identification_position_m(&ds),
+        );
+        ds
     }
 
     /// Rigid-body inertia from the data sheet, `Theta_e + i_t^2 m`, kg m^2.

@@ -181,6 +181,7 @@ pub fn commission(
     let designed = stages::design::design_stage(
         &mut st,
         &ident.fit,
+        datasheet.stroke_variation.as_ref(),
         ident.dead_time.seconds,
         torque_max,
         holding,
@@ -221,6 +222,7 @@ pub fn commission(
         &mut st,
         &designed.design,
         &ident.fit,
+        datasheet.stroke_variation.as_ref(),
         &fr,
         torque_max,
         holding,

@@ -102,6 +102,7 @@ pub fn commission_recorded(
         friction.as_ref().map(|f| f.viscous_nm_s_per_rad),
         fit.m_c_sigma(),
         fit.c_sigma(),
+        None,
         &cfg.knobs,
         cfg.design_rule,
     )?;

@@ -86,6 +86,14 @@ impl Dynamics {
     pub fn guaranteed_position_phase_margin_deg(self) -> f64 {
         70.0 - 20.0 * self.0
     }
+
+    /// Velocity-loop gain margin the robust rule guarantees over the box,
+    /// dB: `8 - 4 x` (6 dB standard, the margin a lightly damped resonance
+    /// needs against a resonance damping the friction made look larger
+    /// than it is).
+    pub fn guaranteed_velocity_gain_margin_db(self) -> f64 {
+        8.0 - 4.0 * self.0
+    }
 }
 
 impl std::str::FromStr for Dynamics {

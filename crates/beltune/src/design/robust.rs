@@ -33,6 +33,7 @@
 use super::VelocityPlant;
 use super::{design, ControllerDesign, DesignInput, DesignKnobs, Dynamics, PrefilterKind};
 use crate::lti::C64;
+use crate::model::stroke::StrokeVariation;
 use crate::model::TwoMassParams;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -44,6 +45,11 @@ pub const GUARANTEED_PHASE_MARGIN_DEG: f64 = 45.0;
 /// (a position loop below 60 deg overshoots its target: the thesis asks 80
 /// nominally).
 pub const GUARANTEED_POSITION_PHASE_MARGIN_DEG: f64 = 60.0;
+
+/// How many degrees of phase margin a dB of gain margin weighs when no
+/// candidate meets the guarantee and the most robust one is kept (6 dB of
+/// gain margin against 45 deg of phase margin: about 7.5 deg per dB).
+const DEG_PER_DB: f64 = 7.5;
 
 /// Prefilter candidates besides the configured one: (kind, attenuation at the
 /// antiresonance in dB). The Butterworth cut-off of (4.4) runs from 3.8 `w_z`
@@ -180,6 +186,7 @@ pub fn robust_design(
     knobs: &DesignKnobs,
     m_c_sigma_kg: f64,
     c_sigma_n_per_m: f64,
+    stroke: Option<&StrokeVariation>,
 ) -> Result<RobustDesign> {
     let steps = (knobs.dynamics.value() / DYNAMICS_STEP).round() as usize;
     let setting = |k: usize| Dynamics::new((k as f64 * DYNAMICS_STEP).min(1.0));
@@ -226,12 +233,17 @@ pub fn robust_design(
     let mut chosen: Option<(usize, bool)> = None;
     for k in 0..=steps {
         let level = setting(k)?;
-        let (g_v, g_p) = (
+        let (g_v, g_p, g_gm) = (
             level.guaranteed_velocity_phase_margin_deg(),
             level.guaranteed_position_phase_margin_deg(),
+            level.guaranteed_velocity_gain_margin_db(),
         );
+        // how far the worst margin is from its guarantee (a dB of gain
+        // margin weighs as DEG_PER_DB degrees of phase margin)
         let worst = |g: &GuaranteedMargins| {
-            (g.velocity_phase_margin_deg - g_v).min(g.position_phase_margin_deg - g_p)
+            (g.velocity_phase_margin_deg - g_v)
+                .min(g.position_phase_margin_deg - g_p)
+                .min((g.velocity_gain_margin_db - g_gm) * DEG_PER_DB)
         };
         let mut pick: Option<(usize, bool)> = None;
         let mut fallback: Option<(usize, f64)> = None;
@@ -249,8 +261,13 @@ pub fn robust_design(
                 Some(g) => *g,
                 None => {
                     checked += 1;
-                    let g = match guaranteed_margins(d, &input.model, m_c_sigma_kg, c_sigma_n_per_m)
-                    {
+                    let g = match guaranteed_margins(
+                        d,
+                        &input.model,
+                        m_c_sigma_kg,
+                        c_sigma_n_per_m,
+                        stroke,
+                    ) {
                         Ok(g) if !g.velocity_phase_margin_deg.is_nan() => Some(g),
                         Ok(_) => None,
                         Err(e) => {
@@ -327,6 +344,7 @@ pub fn design_identified(
     viscous_nm_s_per_rad: Option<f64>,
     m_c_sigma_kg: f64,
     c_sigma_n_per_m: f64,
+    stroke: Option<&StrokeVariation>,
     knobs: &DesignKnobs,
     rule: DesignRule,
 ) -> Result<RobustDesign> {
@@ -334,12 +352,12 @@ pub fn design_identified(
     let on_model = DesignInput { model, ..*input };
     let d = match rule {
         DesignRule::Robust => {
-            return robust_design(&on_model, knobs, m_c_sigma_kg, c_sigma_n_per_m)
+            return robust_design(&on_model, knobs, m_c_sigma_kg, c_sigma_n_per_m, stroke)
         }
         DesignRule::Knobs => design(&on_model, knobs)?,
         DesignRule::Thesis => design(input, knobs)?,
     };
-    let guaranteed = guaranteed_margins(&d, &model, m_c_sigma_kg, c_sigma_n_per_m)?;
+    let guaranteed = guaranteed_margins(&d, &model, m_c_sigma_kg, c_sigma_n_per_m, stroke)?;
     Ok(RobustDesign {
         meets_guarantee: guaranteed.meets(knobs.dynamics),
         design: d,
@@ -481,16 +499,21 @@ impl GuaranteedMargins {
     pub fn meets(&self, dynamics: Dynamics) -> bool {
         self.velocity_phase_margin_deg >= dynamics.guaranteed_velocity_phase_margin_deg()
             && self.position_phase_margin_deg >= dynamics.guaranteed_position_phase_margin_deg()
+            && self.velocity_gain_margin_db >= dynamics.guaranteed_velocity_gain_margin_db()
     }
 }
 
 /// The guaranteed margins of `design` over the box around `model` with
-/// one-sigma uncertainties `m_c_sigma_kg`, `c_sigma_n_per_m` (NaN: 5 %).
+/// one-sigma uncertainties `m_c_sigma_kg`, `c_sigma_n_per_m` (NaN: 5 %),
+/// and, where `stroke` is known, on `model` carried to either end of the
+/// stroke ([`StrokeVariation::at_ends`]), with its damping as given and
+/// halved: the controller identified at one position runs at all of them.
 pub fn guaranteed_margins(
     design: &ControllerDesign,
     model: &TwoMassParams,
     m_c_sigma_kg: f64,
     c_sigma_n_per_m: f64,
+    stroke: Option<&StrokeVariation>,
 ) -> Result<GuaranteedMargins> {
     let sm = if m_c_sigma_kg.is_finite() {
         m_c_sigma_kg
@@ -503,42 +526,50 @@ pub fn guaranteed_margins(
         0.05 * model.c
     };
     let k = UNCERTAINTY_SIGMAS;
+    let halved = |m: TwoMassParams| TwoMassParams {
+        d_m: 0.5 * m.d_m,
+        d_c: 0.5 * m.d_c,
+        d: 0.5 * m.d,
+        ..m
+    };
+    let mut models = Vec::with_capacity(22);
+    for dm in [-1.0, 0.0, 1.0] {
+        for dc in [-1.0, 0.0, 1.0] {
+            let m = TwoMassParams {
+                m_c: (model.m_c + dm * k * sm).max(0.2 * model.m_c),
+                c: (model.c + dc * k * sc).max(0.2 * model.c),
+                ..*model
+            };
+            models.extend([m, halved(m)]);
+        }
+    }
+    if let Some(v) = stroke {
+        for m in v.at_ends(model) {
+            models.extend([m, halved(m)]);
+        }
+    }
     let mut out = GuaranteedMargins {
         velocity_phase_margin_deg: f64::INFINITY,
         velocity_gain_margin_db: f64::INFINITY,
         position_phase_margin_deg: f64::INFINITY,
         models: 0,
     };
-    for dm in [-1.0, 0.0, 1.0] {
-        for dc in [-1.0, 0.0, 1.0] {
-            for damped in [true, false] {
-                let mut m = *model;
-                m.m_c = (model.m_c + dm * k * sm).max(0.2 * model.m_c);
-                m.c = (model.c + dc * k * sc).max(0.2 * model.c);
-                if !damped {
-                    m.d_m *= 0.5;
-                    m.d_c *= 0.5;
-                    m.d *= 0.5;
-                }
-                let on = margins_on(design, &m)?;
-                let (pm_v, gm_v, pm_p) = (
-                    on.velocity_phase_margin_deg,
-                    on.velocity_gain_margin_db,
-                    on.position_phase_margin_deg,
-                );
-                let worse = |a: f64, b: f64| {
-                    if a.is_nan() || b.is_nan() {
-                        f64::NAN
-                    } else {
-                        a.min(b)
-                    }
-                };
-                out.velocity_phase_margin_deg = worse(out.velocity_phase_margin_deg, pm_v);
-                out.velocity_gain_margin_db = worse(out.velocity_gain_margin_db, gm_v);
-                out.position_phase_margin_deg = worse(out.position_phase_margin_deg, pm_p);
-                out.models += 1;
-            }
+    let worse = |a: f64, b: f64| {
+        if a.is_nan() || b.is_nan() {
+            f64::NAN
+        } else {
+            a.min(b)
         }
+    };
+    for m in &models {
+        let on = margins_on(design, m)?;
+        out.velocity_phase_margin_deg =
+            worse(out.velocity_phase_margin_deg, on.velocity_phase_margin_deg);
+        out.velocity_gain_margin_db =
+            worse(out.velocity_gain_margin_db, on.velocity_gain_margin_db);
+        out.position_phase_margin_deg =
+            worse(out.position_phase_margin_deg, on.position_phase_margin_deg);
+        out.models += 1;
     }
     Ok(out)
 }
@@ -591,7 +622,7 @@ mod tests {
         let thesis = design(&DesignInput::new(fit, 1e-3), &DesignKnobs::default()).unwrap();
         assert!(on_truth(&thesis) < 45.0, "{}", on_truth(&thesis));
         let input = DesignInput::new(design_model(&fit, 4.06e-3), 1e-3);
-        let r = robust_design(&input, &DesignKnobs::default(), 0.31, 3.8e3).unwrap();
+        let r = robust_design(&input, &DesignKnobs::default(), 0.31, 3.8e3, None).unwrap();
         assert!(r.meets_guarantee, "{r:?}");
         let pm = on_truth(&r.design);
         assert!(pm >= GUARANTEED_PHASE_MARGIN_DEG, "{pm} {r:?}");

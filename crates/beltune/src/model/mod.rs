@@ -15,6 +15,7 @@ pub mod equivalent;
 pub mod nonlinear_two_mass;
 pub mod params;
 pub mod rigs;
+pub mod stroke;
 pub mod three_mass;
 pub mod two_mass;
 pub mod unmodeled;

@@ -95,6 +95,12 @@ pub struct IdentifiedModel {
     /// Coulomb friction of the cart the friction-aware fit found, N
     /// (`null`: not identified).
     pub cart_coulomb_n: Option<f64>,
+    /// How the model changes from [`Self::position_m`] to the ends of the
+    /// stroke, from the data sheet's physics ([`crate::model::stroke`]);
+    /// absent: unknown (recorded data, a linear set), the design is checked
+    /// at the identification position only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stroke_variation: Option<crate::model::stroke::StrokeVariation>,
 }
 
 /// Which identification gave the parameters of an [`IdentifiedModel`].
@@ -150,6 +156,8 @@ struct RawModel {
     motor_coulomb_nm: Option<f64>,
     #[serde(default)]
     cart_coulomb_n: Option<f64>,
+    #[serde(default)]
+    stroke_variation: Option<crate::model::stroke::StrokeVariation>,
 }
 
 impl TryFrom<RawModel> for IdentifiedModel {
@@ -165,6 +173,9 @@ impl TryFrom<RawModel> for IdentifiedModel {
             i_t: r.i_t,
         };
         params.validate().map_err(|e| e.to_string())?;
+        if let Some(v) = &r.stroke_variation {
+            v.validate().map_err(|e| e.to_string())?;
+        }
         let measured = r.dead_time_measured.unwrap_or(r.dead_time_s.is_some());
         let nan = f64::NAN;
         Ok(IdentifiedModel {
@@ -192,6 +203,7 @@ impl TryFrom<RawModel> for IdentifiedModel {
             method: r.method,
             motor_coulomb_nm: r.motor_coulomb_nm.filter(|x| x.is_finite()),
             cart_coulomb_n: r.cart_coulomb_n.filter(|x| x.is_finite()),
+            stroke_variation: r.stroke_variation,
         })
     }
 }
@@ -233,6 +245,7 @@ impl IdentifiedModel {
             method: IdentificationMethod::FrfFit,
             motor_coulomb_nm: None,
             cart_coulomb_n: None,
+            stroke_variation: None,
         }
     }
 
@@ -398,6 +411,7 @@ const FRICTION_KEYS: &[&str] = &[
     "relative_residual",
     "holding_torque_nm",
     "cart_coulomb_n",
+    "stroke_variation",
     "cart_viscous_n_s_per_m",
 ];
 /// Top-level keys of the document form.
@@ -604,6 +618,7 @@ impl ModelFile {
             input.friction.map(|f| f.viscous_nm_s_per_rad),
             self.identified.m_c_sigma,
             self.identified.c_sigma,
+            self.identified.stroke_variation.as_ref(),
             knobs,
             rule,
         )
@@ -615,6 +630,35 @@ mod tests {
     use super::*;
 
     const TOML: &str = "theta_e = 71.73e-6\nm_c = 13.44\nc = 203.74e3\nd_m = 33.17\nd_c = 226.42\ni_t = 0.0124141\ndead_time_s = 1e-3\nviscous = 2.53e-3\ncoulomb = 0.125\n";
+
+    /// A model file's stroke variation is read back and used by the design;
+    /// an absurd ratio is refused naming its key (never a 1e308 model).
+    #[test]
+    fn a_stroke_variation_is_read_checked_and_designed_with() {
+        let ends = |c: &str| {
+            format!(
+                "[stroke_variation]\nreference_position_m = 0.5\n\
+                 [[stroke_variation.ends]]\nposition_m = 0.0\nm_c_ratio = 0.9\nc_ratio = {c}\nd_ratio = 1.0\n\
+                 [[stroke_variation.ends]]\nposition_m = 0.6\nm_c_ratio = 1.0\nc_ratio = 0.95\nd_ratio = 1.0\n"
+            )
+        };
+        let m = ModelFile::parse(&format!("{TOML}{}", ends("2.0")), "a.toml").unwrap();
+        let v = m.identified.stroke_variation.unwrap();
+        assert_eq!(v.ends[0].c_ratio, 2.0);
+        let with = m
+            .design(Some(1e-4), &Default::default(), Default::default())
+            .unwrap();
+        let without = ModelFile::parse(TOML, "a.toml")
+            .unwrap()
+            .design(Some(1e-4), &Default::default(), Default::default())
+            .unwrap();
+        // four more models checked: each end, as identified and halved
+        assert_eq!(with.guaranteed.models, without.guaranteed.models + 4);
+        let err = ModelFile::parse(&format!("{TOML}{}", ends("1e308")), "a.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("c_ratio"), "{err}");
+    }
 
     #[test]
     fn toml_and_old_identify_json_with_extras() {

@@ -9,6 +9,7 @@ use super::Stages;
 use crate::design::robust::{design_identified, DesignRule, GuaranteedMargins, RobustDesign};
 use crate::design::{ControllerDesign, DesignInput, Feedforward, PrefilterKind};
 use crate::ident::fit::{FitModel, TwoMassFit};
+use crate::model::stroke::StrokeVariation;
 use crate::Result;
 use beltune_rt::control::CascadeConfig;
 
@@ -24,10 +25,13 @@ pub struct DesignStage {
 /// cascade becomes the runner's stop controller. Before the friction runs the
 /// viscous friction is unknown; the design model then has none (a pure
 /// integrator at low frequency, the conservative phase) and the resonance
-/// damping of the fit ([`crate::design::robust::design_model`]).
+/// damping of the fit ([`crate::design::robust::design_model`]). `stroke`:
+/// the model along the stroke (the data sheet's), checked by the robust rule.
+#[allow(clippy::too_many_arguments)]
 pub fn design_stage(
     st: &mut Stages,
     fit: &TwoMassFit,
+    stroke: Option<&StrokeVariation>,
     dead_time_s: f64,
     torque_max_nm: f64,
     holding_nm: f64,
@@ -42,7 +46,9 @@ pub fn design_stage(
         ts_s: ts,
         friction: None,
     };
-    let des = st.compute(|| design_rule(&input, cfg, fit, None))?.design;
+    let des = st
+        .compute(|| design_rule(&input, cfg, fit, None, stroke))?
+        .design;
     let feedback = cascade_from_design(&des, torque_max_nm, holding_nm)?;
     st.runner.set_stop_controller(feedback);
     let line = format!(
@@ -66,12 +72,13 @@ pub fn design_stage(
 /// The configured design rule on `fit` with the measured viscous friction
 /// `viscous_nm_s_per_rad` (N m s/rad at the motor; `None` before the friction
 /// runs): [`crate::design::robust::design_identified`] with
-/// [`CommissioningConfig::design_rule`].
+/// [`CommissioningConfig::design_rule`], checked along the `stroke`.
 pub fn design_rule(
     input: &DesignInput,
     cfg: &CommissioningConfig,
     fit: &TwoMassFit,
     viscous_nm_s_per_rad: Option<f64>,
+    stroke: Option<&StrokeVariation>,
 ) -> Result<RobustDesign> {
     let rule = cfg.design_rule;
     let input = DesignInput {
@@ -83,6 +90,7 @@ pub fn design_rule(
         viscous_nm_s_per_rad,
         fit.m_c_sigma(),
         fit.c_sigma(),
+        stroke,
         &cfg.knobs,
         rule,
     )
@@ -109,18 +117,27 @@ pub struct DeliveredDesign {
 /// accelerated (the FRF fit's `m_c` came out up to 38 % heavy on heavy
 /// payloads on soft belts; the momentum balance is within 5 % there but up
 /// to 16 % light on light carts with high friction), else the FRF fit's.
+#[allow(clippy::too_many_arguments)]
 pub fn delivered_design(
     st: &mut Stages,
     designed: &ControllerDesign,
     fit: &TwoMassFit,
+    stroke: Option<&StrokeVariation>,
     friction: &FrictionStage,
     torque_max_nm: f64,
     holding_nm: f64,
     cfg: &CommissioningConfig,
 ) -> Result<DeliveredDesign> {
     let fr = &friction.result;
-    let robust =
-        st.compute(|| design_rule(&designed.input, cfg, fit, Some(fr.viscous_nm_s_per_rad)))?;
+    let robust = st.compute(|| {
+        design_rule(
+            &designed.input,
+            cfg,
+            fit,
+            Some(fr.viscous_nm_s_per_rad),
+            stroke,
+        )
+    })?;
     let guaranteed = robust.guaranteed;
     let tried = match cfg.design_rule {
         DesignRule::Robust => format!(

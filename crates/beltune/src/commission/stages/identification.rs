@@ -440,6 +440,7 @@ pub fn identification(
         IdentifiedModel::from_fit(&fit, &frf, dead_time.seconds, measured_position_m);
     // the quality of the FRF measurement and of its fit, whichever model is used
     identified.fit_rms_db = frf_fit.fit_rms_db;
+    identified.stroke_variation = datasheet.stroke_variation;
     if let Some(nl) = nonlinear.as_ref().filter(|_| nonlinear_note.is_none()) {
         identified.method = crate::record::model::IdentificationMethod::FrictionAware;
         identified.motor_coulomb_nm = Some(nl.tau_c_motor_nm);
