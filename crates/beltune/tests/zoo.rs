@@ -41,10 +41,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "verdict FAIL: max cart error 1.27 mm, static error 144 um (inertia ratio 42, 3 m stroke; identification and margins fine)",
     ),
     (
-        "heavy-motor-light-cart",
-        "fit failed: m_c ran a factor 10 away (inertia ratio 0.23)",
-    ),
-    (
         "preloaded-rail-1.5kg-45N",
         "identified f_z 3.7 % off (Coulomb 45 N on 1.5 kg), static error 210 um",
     ),

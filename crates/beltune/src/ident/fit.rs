@@ -24,7 +24,7 @@
 //! N m becomes A: inertias in A s^2/rad, and so on.
 
 use super::etfe::Frf;
-use super::features::{frf_features, FrfFeatures};
+use super::features::FrfFeatures;
 use crate::error::require_positive;
 use crate::lti::C64;
 use crate::model::TwoMassParams;
@@ -62,6 +62,12 @@ pub struct FitConfig {
     /// Points of the global stage before Levenberg-Marquardt (see
     /// [`multi_start`]); 0: one local run from the FRF's start values.
     pub global_samples: usize,
+    /// The antiresonance range the data sheet allows, Hz
+    /// ([`crate::commission::config::DataSheet::antiresonance_band_hz`]):
+    /// the start values take the FRF's dip inside it
+    /// ([`super::features::frf_features_in`]). `None`: anywhere below the
+    /// resonance.
+    pub antiresonance_band_hz: Option<[f64; 2]>,
 }
 
 /// The model structure whose magnitude is fitted.
@@ -107,6 +113,7 @@ impl Default for FitConfig {
             units: ModelUnits::Torque,
             model: FitModel::Exact,
             global_samples: GLOBAL_SAMPLES,
+            antiresonance_band_hz: None,
         }
     }
 }
@@ -202,7 +209,7 @@ pub fn fit_two_mass(frf: &Frf, cfg: &FitConfig) -> Result<TwoMassFit> {
             ),
         });
     }
-    let features = frf_features(frf)?;
+    let features = super::features::frf_features_in(frf, cfg.antiresonance_band_hz)?;
     let start = start_values(&features, cfg.theta_e, cfg.i_t)?;
 
     let omega: Vec<f64> = lines.iter().map(|&i| frf.omega_rad_s(i)).collect();

@@ -257,6 +257,7 @@ pub(crate) fn fit_frf(
         theta_e: Some(datasheet.theta_e_kg_m2),
         i_t: datasheet.i_t_m,
         n_log_lines: ex.n_log_lines,
+        antiresonance_band_hz: datasheet.antiresonance_band_hz,
         ..FitConfig::default()
     };
     let fit = fit_two_mass(frf, &fcfg)?;
