@@ -271,7 +271,30 @@ impl Conn {
     }
 }
 
+/// Open an SQLite file, trying again for up to [`BUSY_TIMEOUT`] while it
+/// is busy: switching a new file to WAL and the first open of its log take
+/// locks that SQLite's busy handler does not wait for, so writer processes
+/// racing to open a new database got "database is locked" at once.
 fn open_sqlite(path: &Path) -> rusqlite::Result<Conn> {
+    let started = std::time::Instant::now();
+    let mut pause = Duration::from_millis(5);
+    loop {
+        match open_sqlite_once(path) {
+            Err(rusqlite::Error::SqliteFailure(e, _))
+                if matches!(
+                    e.code,
+                    rusqlite::ErrorCode::DatabaseBusy | rusqlite::ErrorCode::DatabaseLocked
+                ) && started.elapsed() < BUSY_TIMEOUT =>
+            {
+                std::thread::sleep(pause);
+                pause = (pause * 2).min(Duration::from_millis(200));
+            }
+            other => return other,
+        }
+    }
+}
+
+fn open_sqlite_once(path: &Path) -> rusqlite::Result<Conn> {
     let c = rusqlite::Connection::open(path)?;
     c.busy_timeout(BUSY_TIMEOUT)?;
     // WAL: readers do not block the writer, and a killed writer's
