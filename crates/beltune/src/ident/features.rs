@@ -49,8 +49,10 @@ pub fn frf_features(frf: &Frf) -> Result<FrfFeatures> {
 /// antiresonance at 133-203 Hz) showed no dip deep enough near its
 /// resonance, and a dip the friction shaped near 8 Hz was taken instead
 /// (start `m_c` 1.3 kg, `c` 3.7 kN/m; the fit ran to its edge). Inside the
-/// band the shallowest dip still counts: with `f_r / f_z` near 1 (2.47) the
-/// peak over the dip, `kappa^2 / (4 zeta_z zeta_r (1 + kappa))`, is about 1.
+/// band a shallow dip counts when it is the one next to the resonance: with
+/// `f_r / f_z` near 1 (2.47) the peak over the dip,
+/// `kappa^2 / (4 zeta_z zeta_r (1 + kappa))`, is about 1. Where the band
+/// holds no dip, the search falls back to the whole band below the resonance.
 pub fn frf_features_in(frf: &Frf, band_hz: Option<[f64; 2]>) -> Result<FrfFeatures> {
     let idx = feature_lines(frf);
     if idx.len() < 5 {

@@ -61,10 +61,7 @@ impl StrokeVariation {
     /// linear set (one model for every position) or where the physics
     /// cannot be evaluated.
     pub fn of(plant: &Plant, reference_position_m: f64) -> Option<StrokeVariation> {
-        let stroke = match plant {
-            Plant::Physical(p) => p.stroke_m,
-            Plant::Linear(_) => return None,
-        };
+        let stroke = plant.stroke_m()?;
         let reference = plant.true_two_mass(reference_position_m).ok()?;
         let end = |xi: f64| -> Option<StrokeEnd> {
             let m = plant.true_two_mass(xi).ok()?;
