@@ -108,6 +108,16 @@ pub fn commission(
     )?;
     let holding = held.holding_nm;
     let boot_hold = stages::holding_torque::fitted_bootstrap(&held, datasheet, ts, torque_max)?;
+    let crossover_hz = |c: &CascadeConfig<f64>| {
+        c.gains.k_p_nm_s_per_rad / datasheet.rigid_inertia() / (2.0 * std::f64::consts::PI)
+    };
+    if crossover_hz(&boot_hold) < 0.99 * crossover_hz(&taken.bootstrap) {
+        st.log.push(format!(
+            "bootstrap loop for the whole stroke: {:.2} Hz (near the start {:.2} Hz), the measured Coulomb friction fed forward",
+            crossover_hz(&boot_hold),
+            crossover_hz(&taken.bootstrap)
+        ));
+    }
     st.runner.set_stop_controller(boot_hold);
     stages::take_axis::move_to_worst_case(&mut st, &boot_hold, id_pos, datasheet)?;
 

@@ -128,22 +128,37 @@ pub fn holding_torque_stage(
 }
 
 /// The bootstrap controller fitted to the friction stage 3 measured
-/// ([`crate::commission::bootstrap_margin::bootstrap_for_data_sheet`]: the
-/// data-sheet inertia, the margin over the resonances it allows), holding the measured holding torque as its offset:
-/// the controller of the positioning moves and the stops from here on.
+/// ([`crate::commission::bootstrap_margin::bootstrap_for_whole_stroke`]: the
+/// data-sheet inertia, the margin over the resonances it allows along the
+/// whole stroke), holding the measured holding torque as its offset: the
+/// controller of the positioning moves and the stops from here on.
 pub fn fitted_bootstrap(
     held: &Holding,
     ds: &DataSheet,
     ts_s: f64,
     torque_max_nm: f64,
 ) -> Result<CascadeConfig<f64>> {
-    let (mut c, _) = crate::commission::bootstrap_margin::bootstrap_for_data_sheet(
+    let (mut c, _) = crate::commission::bootstrap_margin::bootstrap_for_whole_stroke(
         ds,
         ts_s,
         torque_max_nm,
         held.viscous_nm_s_per_rad,
     )?;
     c.torque_offset_nm = held.holding_nm;
+    // A loop lowered below the crossover rule's floor for a low
+    // antiresonance (a long gantry) builds the friction torque too slowly
+    // from its error (`e ~ tau_f i_t / (K_P K_I / J ...)`, 70 mm for 0.035
+    // N m at 1.4 Hz on a 2.9 m GT2 gantry, a following-error stop at the
+    // first reversal): the Coulomb friction the runs measured is fed
+    // forward with the inertia.
+    let crossover_hz = c.gains.k_p_nm_s_per_rad / ds.rigid_inertia() / (2.0 * std::f64::consts::PI);
+    if crossover_hz < crate::commission::bootstrap::BOOTSTRAP_CROSSOVER_MIN_HZ * (1.0 - 1e-9) {
+        c.feedforward = beltune_rt::control::Feedforward::nonlinear(
+            c.feedforward.params.inertia_kg_m2,
+            c.feedforward.params.viscous_nm_s_per_rad,
+            held.friction_nm,
+        );
+    }
     Ok(c)
 }
 
