@@ -149,7 +149,8 @@ fn commission_sim_c(seed: u64, noise: MeasurementNoise) -> (Vec<f64>, Vec<f64>, 
     .unwrap_or_else(|e| panic!("sim-c: {e}"));
     (
         run.excitation.position_m,
-        run.moves[2]
+        run.delivered_move()
+            .expect("the delivered move ran")
             .record
             .samples
             .iter()

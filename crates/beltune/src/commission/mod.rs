@@ -85,11 +85,7 @@ pub fn commission(
         plaus.bootstrap,
         plaus.stop_limits,
     )?;
-    let mut st = Stages {
-        runner: &mut runner,
-        log: vec![format!("plausibility: {}", plaus.line)],
-        compute_s: 0.0,
-    };
+    let mut st = Stages::new(&mut runner, vec![format!("plausibility: {}", plaus.line)]);
     let pos_limits = positioning_limits(datasheet);
 
     // ---- 2. take the axis, identification position ----
@@ -267,6 +263,7 @@ pub fn commission(
         verdict: crate::verdict::Verdict::default(),
         excitation,
         experiment_time_s: 0.0,
+        stage_axis_times: Vec::new(),
         computation_time_s: 0.0,
         log: Vec::new(),
     };
@@ -282,6 +279,7 @@ pub fn commission(
             .collect::<String>(),
     ));
     run.experiment_time_s = st.runner.busy_time_s();
+    run.stage_axis_times = std::mem::take(&mut st.axis_times);
     run.computation_time_s = st.compute_s;
     run.log = std::mem::take(&mut st.log);
     Ok(run)

@@ -27,14 +27,20 @@ pub struct MoveSummary {
     pub max_torque_nm: f64,
 }
 
-/// The validation with the three feedforward variants of chapter 5.
+/// The validation with the three feedforward variants of chapter 5: the
+/// delivered controller's move (nonlinear feedforward) always, the two
+/// comparison moves only where they were asked for
+/// ([`super::CommissioningConfig::compare_feedforward`]; neither is judged
+/// nor delivered, and together they kept the axis busy 7-8 s).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Validation {
-    /// Without feedforward.
-    pub none: MoveSummary,
-    /// Linear feedforward (inertia and a viscous-only friction fit).
-    pub linear: MoveSummary,
-    /// Nonlinear feedforward (inertia, viscous and Coulomb).
+    /// Without feedforward (`null`: not run).
+    #[serde(default)]
+    pub none: Option<MoveSummary>,
+    /// Linear feedforward (inertia and a viscous-only friction fit; `null`: not run).
+    #[serde(default)]
+    pub linear: Option<MoveSummary>,
+    /// Nonlinear feedforward (inertia, viscous and Coulomb): the delivered controller's move.
     pub nonlinear: MoveSummary,
 }
 
@@ -153,6 +159,16 @@ pub fn table_a8_limits() -> Limits {
         position_min: -0.01,
         position_max: 0.57,
     }
+}
+
+/// One validation move that ran on the axis: its feedforward variant and
+/// what it recorded.
+#[derive(Clone, Debug)]
+pub struct VariantMove {
+    /// The feedforward variant.
+    pub variant: FeedforwardVariant,
+    /// The record and its summary.
+    pub result: MoveResult,
 }
 
 /// A recorded validation move and its summary.
