@@ -46,5 +46,10 @@ fn print_all() {
     ] {
         let run = commission(name, payload);
         print(&format!("{name} {payload:?}"), &run);
+        if name == "sim-c" {
+            for l in &run.log {
+                eprintln!("  {l}");
+            }
+        }
     }
 }

@@ -46,14 +46,8 @@ fn run_with(
     if let (Some(t), Plant::Physical(p)) = (tilt_deg, &mut plant) {
         p.tilt_rad = t.to_radians();
     }
-    let run = commission_simulated(
-        &plant,
-        SimConfig::default(),
-        None,
-        cfg,
-        &mut NoProgress,
-    )
-    .unwrap_or_else(|e| panic!("commissioning failed: {e}"));
+    let run = commission_simulated(&plant, SimConfig::default(), None, cfg, &mut NoProgress)
+        .unwrap_or_else(|e| panic!("commissioning failed: {e}"));
     (plant, run)
 }
 
@@ -146,7 +140,8 @@ fn comparison_moves_on_request_order_as_the_thesis() {
         .unwrap()
         .axis_time_s;
     // three moves of at least their trajectory and the recorded second each
-    let one_move_s = run.validation.nonlinear.settling_time_s.unwrap_or(0.0) + cfg.validation.settle_s;
+    let one_move_s =
+        run.validation.nonlinear.settling_time_s.unwrap_or(0.0) + cfg.validation.settle_s;
     assert!(validation_s > 3.0 * one_move_s, "{validation_s} s");
 }
 

@@ -297,7 +297,7 @@ impl Default for CommissioningConfig {
             excitation: ExcitationConfig::default(),
             t_r_s: crate::design::DEFAULT_T_R_S,
             friction_speeds_m_s: vec![0.1, 0.4],
-            friction_plateau_s: 0.45,
+            friction_plateau_s: 0.3,
             validation: MoveSpec::default(),
             compare_feedforward: false,
             following_error_max_m: 0.05,
