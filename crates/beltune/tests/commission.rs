@@ -19,19 +19,11 @@ const FREQUENCY_TOLERANCE: f64 = 0.02;
 const MAX_TRACKING_ERROR_M: f64 = 1e-3;
 /// Thesis chapter 5: static positioning error.
 const STATIC_ERROR_M: f64 = 100e-6;
-/// The axis busy for about 20 s (the thesis' FRF measurement alone
-/// takes about 16 s). Issue 12 added 0.2 s: the holding-torque stage runs up
-/// and down at two speeds to separate gravity, Coulomb and viscous friction
-/// before the long move (measured 20.1 s); the three unmeasured returns to
-/// the validation start run within the positioning limits (0.5 m/s instead
-/// of the move's 1.1 m/s: a light cart with high friction overshot into a
-/// travel stop) and add 1.0 s (measured 21.1 s). The belt stiffness near
-/// the validation start (stage 5c: one more PRBS of three periods, for the
-/// compliance along the stroke the setpoint conversion uses) adds 3.2 s
-/// (measured 24.3 s). The final approach of the three validation moves
-/// (about 1 mm crept at 2 mm/s each) adds 1.7 s (measured 26.0 s), hence
-/// 27 s.
-const EXPERIMENT_TIME_GUARD_S: f64 = 27.0;
+/// The axis busy at most 15 s (issue 31; measured 13.5 s). It was 26.0 s:
+/// the thesis' FRF alone takes about 16 s, and the two comparison moves
+/// (no and linear feedforward), neither judged nor delivered, took 7-8 s;
+/// they now run only on request. `tests/axis_time.rs` budgets each stage.
+const EXPERIMENT_TIME_GUARD_S: f64 = 15.0;
 
 fn run(payload_kg: Option<f64>, tilt_deg: Option<f64>) -> (Plant, Commissioning) {
     run_with(payload_kg, tilt_deg, &CommissioningConfig::default())
@@ -139,10 +131,16 @@ fn comparison_moves_on_request_order_as_the_thesis() {
         .find(|t| t.stage == "validation")
         .unwrap()
         .axis_time_s;
-    // three moves of at least their trajectory and the recorded second each
-    let one_move_s =
-        run.validation.nonlinear.settling_time_s.unwrap_or(0.0) + cfg.validation.settle_s;
-    assert!(validation_s > 3.0 * one_move_s, "{validation_s} s");
+    // the stage's axis time holds the three recorded moves (and their returns)
+    let recorded_s: f64 = run
+        .moves
+        .iter()
+        .map(|m| m.result.record.time_s.last().copied().unwrap_or(0.0))
+        .sum();
+    assert!(
+        validation_s > recorded_s,
+        "{validation_s} s, moves {recorded_s} s"
+    );
 }
 
 #[test]

@@ -16,8 +16,12 @@
 //! 6. controller design (chapter 4);
 //! 7. friction runs at constant velocity with the designed controller (3.6),
 //!    then the delivered design on the friction they measured;
-//! 8. validation move with no, linear and nonlinear feedforward (chapter 5);
-//!    the delivered controller's move is judged by [`crate::verdict`].
+//! 8. validation move with nonlinear feedforward (chapter 5), judged by
+//!    [`crate::verdict`]; with no and linear feedforward first only on
+//!    request ([`CommissioningConfig::compare_feedforward`]).
+//!
+//! Each stage's axis time goes to [`Commissioning::stage_axis_times`]
+//! (issue 31: at most 15 s in all by default; `tests/axis_time.rs`).
 //!
 //! | file | what |
 //! | --- | --- |

@@ -40,14 +40,6 @@ pub fn amplitude_stage(
     Ok(amplitude)
 }
 
-/// Distance from the centre beyond which the amplitude search moves the
-/// axis back before its next burst, m (a small fraction of the tens of mm
-/// the identification's excitation moves it).
-const RECENTER_M: f64 = 1e-4;
-/// Rigid-body speed below which the axis counts as at rest between bursts,
-/// m/s.
-const REST_SPEED_M_S: f64 = 1e-3;
-
 fn find_amplitude(
     runner: &mut Runner,
     hold: &CascadeConfig<f64>,
@@ -65,14 +57,7 @@ fn find_amplitude(
     let a_max = ex.amplitude_max_fraction * torque_max;
     loop {
         let mut prbs = Prbs::new(ex.prbs_order, clock, a)?;
-        // Back to the centre where a burst moved the axis; a burst that
-        // friction held (the axis within [`RECENTER_M`] of the centre and
-        // at rest) leaves nothing to settle, and the next one follows at
-        // once (0.05 s of axis time per burst that did not move).
-        let off = (runner.position_m() - center_m).abs();
-        if !(off < RECENTER_M && runner.rigid_velocity_m_s().abs() < REST_SPEED_M_S) {
-            move_to(runner, hold, center_m, limits, 0.05)?;
-        }
+        move_to(runner, hold, center_m, limits, 0.05)?;
         let mut counts = Vec::with_capacity(burst);
         for _ in 0..burst {
             runner.step(holding_nm + prbs.step(), None)?;
