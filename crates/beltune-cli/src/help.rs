@@ -175,7 +175,11 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
     ),
     (
         "Validation limits",
-        &["max_tracking_error", "max_static_error"],
+        &[
+            "max_tracking_error",
+            "max_static_error",
+            "compare_feedforward",
+        ],
     ),
     (
         "Recorded data (--csv)",

@@ -165,12 +165,27 @@ fn json_summary_has_the_documented_keys_and_the_run_s_numbers() {
             "validation",
             "verdict",
             "axis_busy_s",
+            "stage_axis_times",
             "computation_s",
             "wall_time_s",
             "files",
         ])
     );
     assert_eq!(s["schema"], "beltune-commission-summary/2");
+    // the axis time per stage adds up to the axis' busy time (issue 31)
+    let stages = s["stage_axis_times"].as_array().unwrap();
+    assert!(stages.len() >= 8, "{stages:?}");
+    let sum: f64 = stages
+        .iter()
+        .map(|t| {
+            assert_eq!(keys(t), set(&["stage", "axis_time_s"]));
+            t["axis_time_s"].as_f64().unwrap()
+        })
+        .sum();
+    assert!((sum - s["axis_busy_s"].as_f64().unwrap()).abs() < 1e-6);
+    // the comparison moves run only with --compare-feedforward
+    assert!(s["validation"]["max_tracking_error_none_m"].is_null());
+    assert!(s["validation"]["max_tracking_error_linear_m"].is_null());
     assert_eq!(s["status"], "ok");
     assert_eq!(s["exit_code"], 0);
     assert_eq!(

@@ -14,9 +14,10 @@
 //! | `identified` | `f_r_hz`, `f_z_hz`, `theta_e_kg_m2`, `m_c_kg`, `c_n_per_m`, `d_m_n_s_per_m`, `d_c_n_s_per_m`, `dead_time_s`, `fit_rms_db`, `mean_coherence` |
 //! | `truth` | simulated plants: `f_r_hz`, `f_z_hz`, `m_c_kg`, `c_n_per_m`; `null` for recorded data |
 //! | `controller` | `k_p_nm_s_per_rad`, `k_i_nm_per_rad`, `k_pp_per_s`, `velocity_crossover_hz`, `velocity_phase_margin_deg`, `position_crossover_hz`, `position_phase_margin_deg`, `gain_at_resonance_db` |
-//! | `validation` | `start_m`, `target_m` (the move that ran), `max_tracking_error_none_m`, `max_tracking_error_linear_m`, `max_tracking_error_nonlinear_m`, `static_error_nonlinear_m`, `settling_time_nonlinear_s` (or `null`); `null` for recorded data |
+//! | `validation` | `start_m`, `target_m` (the move that ran), `max_tracking_error_none_m`, `max_tracking_error_linear_m` (`null` unless run with `--compare-feedforward`), `max_tracking_error_nonlinear_m`, `static_error_nonlinear_m`, `settling_time_nonlinear_s` (or `null`); `null` for recorded data |
 //! | `verdict` | the library's verdict, as in `commissioning.json`: `passed`, `validated_on`, `checks` (each `name`, `value`, `limit`, `unit`, `below`, `passed`), `warnings`, `next_step` |
 //! | `axis_busy_s` | time the axis was busy (`null` for recorded data) |
+//! | `stage_axis_times` | the axis time of each stage in the order they ran, each `stage`, `axis_time_s` (they add up to `axis_busy_s`; empty for recorded data) |
 //! | `computation_s`, `wall_time_s` | computing time, elapsed time of the command |
 //! | `files` | the files written |
 //!
@@ -112,10 +113,10 @@ pub struct ValidationSummary {
     pub start_m: f64,
     /// Target of the move, m.
     pub target_m: f64,
-    /// Largest cart error without feedforward, m.
-    pub max_tracking_error_none_m: f64,
-    /// Largest cart error with linear feedforward, m.
-    pub max_tracking_error_linear_m: f64,
+    /// Largest cart error without feedforward, m (`None`: not run).
+    pub max_tracking_error_none_m: Option<f64>,
+    /// Largest cart error with linear feedforward, m (`None`: not run).
+    pub max_tracking_error_linear_m: Option<f64>,
     /// Largest cart error with nonlinear feedforward (the delivered controller), m.
     pub max_tracking_error_nonlinear_m: f64,
     /// Static cart error with nonlinear feedforward, m.
@@ -147,6 +148,8 @@ pub struct Summary {
     pub verdict: Option<Verdict>,
     /// Time the axis was busy, s.
     pub axis_busy_s: Option<f64>,
+    /// The axis time of each stage, in the order they ran.
+    pub stage_axis_times: Vec<beltune::commission::stages::StageAxisTime>,
     /// Computing time, s.
     pub computation_s: f64,
     /// Elapsed time of the command, s.
@@ -211,8 +214,8 @@ impl ValidationSummary {
         ValidationSummary {
             start_m: m.start_m,
             target_m: m.target_m,
-            max_tracking_error_none_m: v.none.max_tracking_error_m,
-            max_tracking_error_linear_m: v.linear.max_tracking_error_m,
+            max_tracking_error_none_m: v.none.as_ref().map(|s| s.max_tracking_error_m),
+            max_tracking_error_linear_m: v.linear.as_ref().map(|s| s.max_tracking_error_m),
             max_tracking_error_nonlinear_m: v.nonlinear.max_tracking_error_m,
             static_error_nonlinear_m: v.nonlinear.static_error_m,
             settling_time_nonlinear_s: v.nonlinear.settling_time_s,
@@ -250,6 +253,7 @@ impl Summary {
             } else {
                 record.experiment_time_s
             },
+            stage_axis_times: record.stage_axis_times.clone(),
             computation_s: record.computation_time_s.unwrap_or(nan),
             wall_time_s,
             files,
@@ -369,12 +373,14 @@ impl Summary {
             add(
                 "validation",
                 format!(
-                    "{:.0} -> {:.0} mm, max cart error: none {:.3} mm, linear {:.3} mm, \
-                     nonlinear {:.3} mm; static {:.1} um",
+                    "{:.0} -> {:.0} mm, max cart error: {}nonlinear {:.3} mm; static {:.1} um",
                     v.start_m * 1e3,
                     v.target_m * 1e3,
-                    v.max_tracking_error_none_m * 1e3,
-                    v.max_tracking_error_linear_m * 1e3,
+                    match (v.max_tracking_error_none_m, v.max_tracking_error_linear_m) {
+                        (Some(n), Some(l)) =>
+                            format!("none {:.3} mm, linear {:.3} mm, ", n * 1e3, l * 1e3),
+                        _ => String::new(),
+                    },
                     v.max_tracking_error_nonlinear_m * 1e3,
                     v.static_error_nonlinear_m * 1e6
                 ),
@@ -394,6 +400,16 @@ impl Summary {
         time.push(format!("computation {:.2} s", self.computation_s));
         time.push(format!("wall time {:.1} s", self.wall_time_s));
         add("time", time.join(", "));
+        // the stages that moved the axis (design and fits take no axis time)
+        let stages: Vec<String> = self
+            .stage_axis_times
+            .iter()
+            .filter(|t| t.axis_time_s >= 0.05)
+            .map(|t| format!("{} {:.1}", t.stage, t.axis_time_s))
+            .collect();
+        if !stages.is_empty() {
+            add("axis time", format!("{} s", stages.join(", ")));
+        }
         for f in &self.files {
             add("wrote", f.display().to_string());
         }
@@ -446,6 +462,7 @@ mod tests {
                 next_step: "No validation move was run: run a test move.".into(),
             }),
             axis_busy_s: None,
+            stage_axis_times: Vec::new(),
             computation_s: 0.5,
             wall_time_s: 0.6,
             files: vec![PathBuf::from("out/commissioning.json")],

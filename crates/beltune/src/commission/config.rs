@@ -271,6 +271,11 @@ pub struct CommissioningConfig {
     pub friction_plateau_s: f64,
     /// The validation move.
     pub validation: MoveSpec,
+    /// Also run the validation move with no and with linear feedforward
+    /// before the delivered controller's (thesis chapter 5's comparison).
+    /// Neither is judged nor delivered; they keep the axis busy about 3.5 s
+    /// each, so they run only on request (`--compare-feedforward`).
+    pub compare_feedforward: bool,
     /// Largest following error allowed in closed-loop stages, m.
     pub following_error_max_m: f64,
     /// How the controller is designed from the identified model
@@ -291,9 +296,10 @@ impl Default for CommissioningConfig {
             knobs: DesignKnobs::default(),
             excitation: ExcitationConfig::default(),
             t_r_s: crate::design::DEFAULT_T_R_S,
-            friction_speeds_m_s: vec![0.1, 0.25, 0.4],
-            friction_plateau_s: 0.45,
+            friction_speeds_m_s: vec![0.1, 0.4],
+            friction_plateau_s: 0.3,
             validation: MoveSpec::default(),
+            compare_feedforward: false,
             following_error_max_m: 0.05,
             design_rule: DesignRule::Robust,
             limits: crate::verdict::Limits::default(),

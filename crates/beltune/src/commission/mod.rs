@@ -16,8 +16,12 @@
 //! 6. controller design (chapter 4);
 //! 7. friction runs at constant velocity with the designed controller (3.6),
 //!    then the delivered design on the friction they measured;
-//! 8. validation move with no, linear and nonlinear feedforward (chapter 5);
-//!    the delivered controller's move is judged by [`crate::verdict`].
+//! 8. validation move with nonlinear feedforward (chapter 5), judged by
+//!    [`crate::verdict`]; with no and linear feedforward first only on
+//!    request ([`CommissioningConfig::compare_feedforward`]).
+//!
+//! Each stage's axis time goes to [`Commissioning::stage_axis_times`]
+//! (issue 31: at most 15 s in all by default; `tests/axis_time.rs`).
 //!
 //! | file | what |
 //! | --- | --- |
@@ -85,11 +89,7 @@ pub fn commission(
         plaus.bootstrap,
         plaus.stop_limits,
     )?;
-    let mut st = Stages {
-        runner: &mut runner,
-        log: vec![format!("plausibility: {}", plaus.line)],
-        compute_s: 0.0,
-    };
+    let mut st = Stages::new(&mut runner, vec![format!("plausibility: {}", plaus.line)]);
     let pos_limits = positioning_limits(datasheet);
 
     // ---- 2. take the axis, identification position ----
@@ -277,6 +277,7 @@ pub fn commission(
         verdict: crate::verdict::Verdict::default(),
         excitation,
         experiment_time_s: 0.0,
+        stage_axis_times: Vec::new(),
         computation_time_s: 0.0,
         log: Vec::new(),
     };
@@ -292,6 +293,7 @@ pub fn commission(
             .collect::<String>(),
     ));
     run.experiment_time_s = st.runner.busy_time_s();
+    run.stage_axis_times = std::mem::take(&mut st.axis_times);
     run.computation_time_s = st.compute_s;
     run.log = std::mem::take(&mut st.log);
     Ok(run)

@@ -22,6 +22,20 @@ pub struct TrackOptions {
     pub belt_stretch: BeltStretch<f64>,
     /// How the supervisor treats the following error.
     pub following_error: FollowingError,
+    /// End the hold after the path early once the error has settled
+    /// (`None`: hold the whole settling time).
+    pub end_when_settled: Option<SettledEnd>,
+}
+
+/// When a hold after a path may end before its settling time is over: once
+/// the error (at the cart where it is measured, else at the motor) has
+/// stayed within `band_m` for `hold_s` after the path ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SettledEnd {
+    /// Band around the desired position, m.
+    pub band_m: f64,
+    /// How long the error must stay within the band, s.
+    pub hold_s: f64,
 }
 
 /// How the supervisor treats the following error of a tracked motion.
@@ -108,8 +122,9 @@ fn motor_sample(
 }
 
 /// Follow `traj` (cart coordinates) with a controller built from `config`, then
-/// hold its end for `settle_s`. The controller starts bumplessly at the
-/// current position.
+/// hold its end for `settle_s` (less where `opts.end_when_settled` says the
+/// error has settled). The controller starts bumplessly at the current
+/// position.
 pub fn track(
     runner: &mut Runner,
     config: &CascadeConfig<f64>,
@@ -130,6 +145,11 @@ pub fn track(
     };
     rec.time_s.reserve(n);
     let mut desired = traj.sample(0.0);
+    // samples in a row within the settled band after the path's end
+    let mut settled = 0usize;
+    let settled_needed = opts
+        .end_when_settled
+        .map(|e| (e.hold_s.max(0.0) / ts).ceil() as usize);
     for k in 0..n {
         let t = k as f64 * ts;
         let now = motor_sample(&conv, origin, traj, t);
@@ -153,6 +173,19 @@ pub fn track(
         rec.desired_m.push(desired.position);
         rec.desired_velocity_m_s.push(desired.velocity);
         rec.samples.push(sample);
+        if let (Some(end), Some(needed)) = (opts.end_when_settled, settled_needed) {
+            if t_end > duration {
+                let at = sample.cart_position_m.unwrap_or(sample.position_m);
+                settled = if (desired.position - at).abs() <= end.band_m {
+                    settled + 1
+                } else {
+                    0
+                };
+                if needed > 0 && settled >= needed {
+                    break;
+                }
+            }
+        }
     }
     Ok(rec)
 }

@@ -3,7 +3,7 @@
 
 use super::stages::validation_moves::PlannedMove;
 use super::stiffness::TargetStiffness;
-use super::validation::{MoveResult, Validation};
+use super::validation::{MoveResult, Validation, VariantMove};
 use super::DataSheet;
 use crate::design::robust::GuaranteedMargins;
 use crate::design::ControllerDesign;
@@ -72,8 +72,10 @@ pub struct Commissioning {
     pub friction_fit: FrictionFit,
     /// Friction summary.
     pub friction: FrictionResult,
-    /// The three validation moves: none, linear, nonlinear.
-    pub moves: [MoveResult; 3],
+    /// The validation moves that ran: none and linear feedforward where
+    /// asked for ([`super::CommissioningConfig::compare_feedforward`]),
+    /// then nonlinear, the delivered controller's (always last).
+    pub moves: Vec<VariantMove>,
     /// Summaries of the moves.
     pub validation: Validation,
     /// The validation move run (Table A.8's or the fastest the axis can do).
@@ -87,8 +89,22 @@ pub struct Commissioning {
     pub excitation: ExcitationTrace,
     /// Time the axis was busy, s.
     pub experiment_time_s: f64,
+    /// The axis time of each stage, in the order they ran (they add up to
+    /// [`Self::experiment_time_s`]).
+    pub stage_axis_times: Vec<super::stages::StageAxisTime>,
     /// Wall-clock time spent computing (FFT, fit, design), s.
     pub computation_time_s: f64,
     /// One log line per stage.
     pub log: Vec<String>,
+}
+
+impl Commissioning {
+    /// The delivered controller's validation move (nonlinear feedforward).
+    pub fn delivered_move(&self) -> Option<&MoveResult> {
+        self.moves
+            .iter()
+            .rev()
+            .find(|m| m.variant == super::validation::FeedforwardVariant::Nonlinear)
+            .map(|m| &m.result)
+    }
 }

@@ -162,11 +162,7 @@ pub fn health_check(
         plaus.bootstrap,
         plaus.stop_limits,
     )?;
-    let mut st = Stages {
-        runner: &mut runner,
-        log: vec![format!("plausibility: {}", plaus.line)],
-        compute_s: 0.0,
-    };
+    let mut st = Stages::new(&mut runner, vec![format!("plausibility: {}", plaus.line)]);
     let measured = experiment::run(
         &mut st,
         plaus.bootstrap,

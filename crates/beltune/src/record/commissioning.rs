@@ -63,6 +63,10 @@ pub struct CommissioningRecord {
     /// How long the axis was busy, s (recorded data: the record's duration).
     #[serde(default)]
     pub experiment_time_s: Option<f64>,
+    /// How long each stage kept the axis busy, in the order they ran, s
+    /// (empty for recorded data and in older files).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stage_axis_times: Vec<crate::commission::stages::StageAxisTime>,
     /// Computation time (FFT, fit, design), s.
     #[serde(default)]
     pub computation_time_s: Option<f64>,
@@ -264,6 +268,7 @@ impl CommissioningRecord {
             }),
             verdict: Some(run.verdict.clone()),
             experiment_time_s: Some(run.experiment_time_s),
+            stage_axis_times: run.stage_axis_times.clone(),
             computation_time_s: Some(run.computation_time_s),
             excitation_amplitude_nm: Some(run.excitation_amplitude_nm),
             identification_position_m: Some(run.identification_position_m),
@@ -293,6 +298,7 @@ impl CommissioningRecord {
             validation_move: None,
             verdict: Some(run.verdict.clone()),
             experiment_time_s: Some(run.record_time_s),
+            stage_axis_times: Vec::new(),
             computation_time_s: Some(run.computation_time_s),
             excitation_amplitude_nm: None,
             identification_position_m: None,

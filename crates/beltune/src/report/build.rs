@@ -108,6 +108,12 @@ pub fn build_report(inp: &ReportInputs) -> Result<Report> {
         drive_form_table(des, id.units),
         super::vendor::vendor_table(des, id.units),
     ];
+    if !rec.stage_axis_times.is_empty() {
+        tables.push(axis_time_table(
+            &rec.stage_axis_times,
+            rec.experiment_time_s.unwrap_or(f64::NAN),
+        ));
+    }
     if !inp.absent.is_empty() {
         tables.push(Table {
             title: "Sections not in this report".into(),
@@ -546,6 +552,22 @@ pub fn move_plot(m: &MoveResult, label: &str) -> MovePlot {
                 .collect::<Vec<_>>(),
             TRACE_POINTS,
         ),
+    }
+}
+
+/// The table of the axis time per stage (the stages that took none, the
+/// computations, left out) and the total `total_s`, s.
+pub fn axis_time_table(times: &[crate::commission::stages::StageAxisTime], total_s: f64) -> Table {
+    let mut rows: Vec<Vec<String>> = times
+        .iter()
+        .filter(|t| t.axis_time_s > 0.0)
+        .map(|t| vec![t.stage.clone(), format!("{:.2} s", t.axis_time_s)])
+        .collect();
+    rows.push(vec!["total".into(), format!("{total_s:.2} s")]);
+    Table {
+        title: "Axis time per stage".into(),
+        header: vec!["stage".into(), "axis time".into()],
+        rows,
     }
 }
 

@@ -13,7 +13,7 @@ use super::plot_data::{frf_lines, loop_data};
 use super::Report;
 use crate::commission::recorded::RecordedCommissioning;
 use crate::commission::stiffness::TargetStiffness;
-use crate::commission::validation::{FeedforwardVariant, MoveResult};
+use crate::commission::validation::MoveResult;
 use crate::commission::Commissioning;
 use crate::design::ControllerDesign;
 use crate::ident::FitModel;
@@ -133,8 +133,7 @@ impl ResultSet {
         let labelled: Vec<(String, &MoveResult)> = run
             .moves
             .iter()
-            .zip(FeedforwardVariant::ALL)
-            .map(|(m, v)| (v.label().to_string(), m))
+            .map(|m| (m.variant.label().to_string(), &m.result))
             .collect();
         let data = DataFiles {
             frf: Some(frf_lines(&run.frf, &tf, run.dead_time.seconds)?),

@@ -188,6 +188,11 @@ pub struct Args {
     /// Print the summary as JSON on stdout (keys: see the README).
     #[arg(long)]
     pub json: bool,
+    /// Also run the validation move with no and with linear feedforward
+    /// before the delivered controller's, for thesis chapter 5's comparison
+    /// (about 7 s more of axis time; neither move is judged or delivered).
+    #[arg(long)]
+    pub compare_feedforward: bool,
     /// Largest following error allowed in the closed-loop stages before the
     /// supervisor stops the axis, m (default 0.05).
     #[arg(long, value_name = "M")]

@@ -108,6 +108,7 @@ pub fn plan(args: &Args) -> anyhow::Result<Plan> {
         knobs: args.knobs.knobs()?,
         design_rule: args.knobs.rule(),
         limits,
+        compare_feedforward: args.compare_feedforward,
         ..CommissioningConfig::default()
     };
     if let Some(csv) = &args.csv {

@@ -262,7 +262,6 @@ fn friction_runs(
     f_ring_hz: f64,
     a_run: f64,
 ) -> Result<Vec<FrictionRun>> {
-    let center = 0.5 * (ds.travel_min_m + ds.travel_max_m);
     let pos_limits = positioning_limits(ds);
     let mut points = Vec::new();
     let opts = TrackOptions {
@@ -270,21 +269,36 @@ fn friction_runs(
         following_error: FollowingError::Limited,
         ..Default::default()
     };
-    // Back to back (the momentum balance between consecutive runs needs no
-    // gap): each speed runs forward over its own length from where the
-    // previous run ended, and back to where the next speed starts.
     let speeds = &cfg.friction_speeds_m_s;
-    let half = |i: usize| 0.5 * run_length_m(speeds[i], cfg.friction_plateau_s, a_run, ds);
-    if !speeds.is_empty() {
-        move_to(runner, ctrl, center - half(0), &pos_limits, 0.05)?;
+    if speeds.is_empty() {
+        return Ok(points);
     }
-    for (i, &v) in speeds.iter().enumerate() {
-        let next = if i + 1 < speeds.len() {
-            half(i + 1)
-        } else {
-            half(i)
-        };
-        for target in [center + half(i), center - half(i).max(next)] {
+    let lengths: Vec<f64> = speeds
+        .iter()
+        .map(|&v| run_length_m(v, cfg.friction_plateau_s, a_run, ds))
+        .collect();
+    let v_top = speeds.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let stop_room = {
+        let sup = runner.supervisor();
+        2.0 * sup
+            .stopping_distance_m(v_top)
+            .max(sup.stopping_distance_m(-v_top))
+    };
+    let base = runs_base_m(
+        ds,
+        &lengths,
+        stop_room,
+        cfg.validation.start_m,
+        runner.position_m(),
+    );
+    // Back to back (the momentum balance between consecutive runs needs no
+    // gap): every speed runs forward over its own length from `base` and
+    // back to it, so that no run crosses more than its own length at its
+    // speed (with a common centre the slow run's way back to where the
+    // fast one started took 0.75 s of axis time on egc70).
+    move_to(runner, ctrl, base, &pos_limits, 0.05)?;
+    for (&v, &length) in speeds.iter().zip(&lengths) {
+        for target in [base + length, base] {
             let limits = Limits {
                 v_max: v,
                 v_min: -v,
@@ -320,6 +334,41 @@ fn friction_runs(
         }
     }
     Ok(points)
+}
+
+/// Where the friction runs of lengths `lengths_m` (m) start and end, m:
+/// as near the validation start `validation_start_m` as the window of `ds`
+/// allows with [`RUN_MARGIN_M`] and `stop_room_m` (twice the supervisor's
+/// stopping distance from the fastest run) at the lower end and the
+/// margin beyond the longest run at the upper end, so that the return to
+/// the validation start afterwards is short; where the window is too short
+/// for that room, the runs are centred in it. Where the axis is
+/// (`position_m`) only breaks a tie.
+pub fn runs_base_m(
+    ds: &DataSheet,
+    lengths_m: &[f64],
+    stop_room_m: f64,
+    validation_start_m: f64,
+    position_m: f64,
+) -> f64 {
+    let longest = lengths_m.iter().fold(0.0_f64, |m, l| m.max(*l));
+    let stop_room = if stop_room_m.is_finite() {
+        stop_room_m.max(0.0)
+    } else {
+        0.0
+    };
+    let lo = ds.travel_min_m + RUN_MARGIN_M + stop_room;
+    let hi = ds.travel_max_m - RUN_MARGIN_M - longest;
+    let center = 0.5 * (ds.travel_min_m + ds.travel_max_m) - 0.5 * longest;
+    if lo > hi {
+        return center;
+    }
+    let wanted = if validation_start_m.is_finite() {
+        validation_start_m
+    } else {
+        position_m
+    };
+    wanted.clamp(lo, hi)
 }
 
 /// Distance kept from either end of the travel window by the friction runs, m.

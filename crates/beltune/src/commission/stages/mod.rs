@@ -28,6 +28,16 @@ pub mod validation_moves;
 
 use super::runner::Runner;
 
+/// How long one stage kept the axis busy (simulated time on a simulated
+/// axis, so the same on every run), in the order the stages ran.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StageAxisTime {
+    /// The stage, as its log line names it (`holding torque`, `friction`, ...).
+    pub stage: String,
+    /// Axis time from the end of the previous stage to the end of this one, s.
+    pub axis_time_s: f64,
+}
+
 /// The context every stage works in: the runner that drives the axis, one log
 /// line per finished stage, and the wall-clock time spent computing.
 pub struct Stages<'r, 'a> {
@@ -37,17 +47,43 @@ pub struct Stages<'r, 'a> {
     pub log: Vec<String>,
     /// Wall-clock time spent computing (FFT, fit, design), s.
     pub compute_s: f64,
+    /// The axis time of each finished stage; they add up to the runner's
+    /// busy time at the last one.
+    pub axis_times: Vec<StageAxisTime>,
 }
 
 impl<'r, 'a> Stages<'r, 'a> {
+    /// The context for `runner`, the log starting with `log`.
+    pub fn new(runner: &'r mut Runner<'a>, log: Vec<String>) -> Self {
+        Stages {
+            runner,
+            log,
+            compute_s: 0.0,
+            axis_times: Vec::new(),
+        }
+    }
+
+    /// Busy time of the axis at the end of the last finished stage, s.
+    fn accounted_s(&self) -> f64 {
+        self.axis_times.iter().map(|t| t.axis_time_s).sum()
+    }
+
     /// Announce a stage (progress bar with `samples` steps, 0 = unknown).
     pub fn start(&mut self, name: &str, samples: u64) {
         self.runner.progress().stage_started(name, samples);
     }
 
     /// Finish a stage with its log line (the busy time is appended).
+    /// Its axis time (since the previous stage finished) goes to
+    /// [`Stages::axis_times`].
     pub fn finish(&mut self, name: &str, line: String) {
-        let line = format!("{line} [axis busy {:.1} s]", self.runner.busy_time_s());
+        let busy = self.runner.busy_time_s();
+        let axis_time_s = (busy - self.accounted_s()).max(0.0);
+        self.axis_times.push(StageAxisTime {
+            stage: name.to_string(),
+            axis_time_s,
+        });
+        let line = format!("{line} [axis busy {busy:.1} s]");
         self.runner.progress().stage_finished(&line);
         self.log.push(format!("{name}: {line}"));
     }

@@ -1,10 +1,12 @@
-//! Stage 8: the validation move (thesis chapter 5, Table A.8) with no, linear
-//! and nonlinear feedforward, each from the same start; the unmeasured return
-//! to the start runs under the feedback cascade.
+//! Stage 8: the validation move (thesis chapter 5, Table A.8) with nonlinear
+//! feedforward (the delivered controller), and on request
+//! ([`CommissioningConfig::compare_feedforward`]) first with no and linear
+//! feedforward for the comparison, each from the same start; the unmeasured
+//! return to the start runs under the positioning controller.
 
 use super::super::motion::{FollowingError, TrackOptions};
 use super::super::validation::{
-    run_move, validation_controller, validation_track_options, FeedforwardVariant, MoveResult,
+    run_move, validation_controller, validation_track_options, FeedforwardVariant, VariantMove,
 };
 use super::super::{positioning_limits, CommissioningConfig, DataSheet};
 use super::Stages;
@@ -17,8 +19,9 @@ use beltune_rt::trajectory::{Limits, State, Trajectory};
 
 /// What stage 8 hands on.
 pub struct ValidationMoves {
-    /// The three moves: none, linear, nonlinear feedforward.
-    pub moves: [MoveResult; 3],
+    /// The moves that ran, in order: none and linear feedforward where
+    /// asked for, then nonlinear (the delivered controller's, always last).
+    pub moves: Vec<VariantMove>,
     /// Their summaries.
     pub validation: Validation,
     /// The move actually run (Table A.8's, or the fastest the axis can do).
@@ -216,10 +219,14 @@ pub fn validation_moves(
         friction,
         st.runner.origin_m(),
     );
-    let move_samples =
-        ((cfg.validation.settle_s + 1.5) / ts) as u64 * FeedforwardVariant::ALL.len() as u64;
+    let variants: &[FeedforwardVariant] = if cfg.compare_feedforward {
+        &FeedforwardVariant::ALL
+    } else {
+        &[FeedforwardVariant::Nonlinear]
+    };
+    let move_samples = ((cfg.validation.settle_s + 1.5) / ts) as u64 * variants.len() as u64;
     st.start("validation moves", move_samples);
-    let mut moves: Vec<MoveResult> = Vec::with_capacity(3);
+    let mut moves: Vec<VariantMove> = Vec::with_capacity(variants.len());
     let planned = plan_validation_move(
         &cfg.validation,
         datasheet,
@@ -255,7 +262,7 @@ pub fn validation_moves(
         .capability()
         .worst_deceleration_m_s2();
     let return_limits = return_limits(&planned.limits, datasheet, worst_stop);
-    for variant in FeedforwardVariant::ALL {
+    for &variant in variants {
         // the same controller the tuning page simulates
         let c = validation_controller(
             feedback,
@@ -281,19 +288,38 @@ pub fn validation_moves(
             ..opts
         };
         // Return to the start within the return limits (it is not measured).
-        moves.push(run_move(
+        let result = run_move(
             st.runner,
             positioning,
             &return_limits,
             &c,
             variant_opts,
             &spec,
-        )?);
+        )?;
+        moves.push(VariantMove { variant, result });
     }
+    let summary_of = |v: FeedforwardVariant| {
+        moves
+            .iter()
+            .find(|m| m.variant == v)
+            .map(|m| m.result.summary.clone())
+    };
     let validation = Validation {
-        none: moves[0].summary.clone(),
-        linear: moves[1].summary.clone(),
-        nonlinear: moves[2].summary.clone(),
+        none: summary_of(FeedforwardVariant::None),
+        linear: summary_of(FeedforwardVariant::Linear),
+        nonlinear: summary_of(FeedforwardVariant::Nonlinear).ok_or_else(|| Error::TooShort {
+            what: "validation moves".into(),
+            needed: 1,
+            got: 0,
+        })?,
+    };
+    let compared = match (&validation.none, &validation.linear) {
+        (Some(n), Some(l)) => format!(
+            "none {:.3} mm, linear {:.3} mm, ",
+            n.max_tracking_error_m * 1e3,
+            l.max_tracking_error_m * 1e3
+        ),
+        _ => String::new(),
     };
     let approach = spec
         .approach(&opts.belt_stretch, st.runner.origin_m())
@@ -305,7 +331,7 @@ pub fn validation_moves(
             )
         });
     let line = format!(
-        "{}{approach}; max cart error: none {:.3} mm, linear {:.3} mm, nonlinear {:.3} mm; static (nonlinear) {:.1} um",
+        "{}{approach}; max cart error: {compared}nonlinear {:.3} mm; static (nonlinear) {:.1} um",
         if planned.reduced {
             format!(
                 "the fastest move the axis can do {:.0} -> {:.0} mm (v <= {:.2} m/s, a <= {:.2} m/s^2; Table A.8's is beyond its torque)",
@@ -321,17 +347,10 @@ pub fn validation_moves(
                 planned.target_m * 1e3
             )
         },
-        validation.none.max_tracking_error_m * 1e3,
-        validation.linear.max_tracking_error_m * 1e3,
         validation.nonlinear.max_tracking_error_m * 1e3,
         validation.nonlinear.static_error_m * 1e6
     );
     st.finish("validation", line);
-    let moves: [MoveResult; 3] = moves.try_into().map_err(|_| Error::TooShort {
-        what: "validation moves".into(),
-        needed: 3,
-        got: 0,
-    })?;
     Ok(ValidationMoves {
         moves,
         validation,
