@@ -765,7 +765,7 @@ fn friction_is_symmetric_and_matches_the_totals_at_constant_velocity() {
 /// which keeps that code) on a seeded run: egc70's three-mass and two-mass
 /// models with stick-slip friction and gravity (30 deg tilt), 5 simulated
 /// seconds at 10 kHz of a PRBS-like torque (the cart slides throughout; the stick branch is not exercised), and
-/// slip, the belt segments updated per sub-step as `SimAxis::advance` does.
+/// the belt segments updated per sub-step as `SimAxis::advance` does.
 /// Every position and velocity is equal (`==`, which leaves only the sign of
 /// a zero free) on every sample.
 #[test]
