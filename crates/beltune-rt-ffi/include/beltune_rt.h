@@ -55,6 +55,21 @@
 #define BT_SETPOINT_WORDS 16
 
 /**
+ * 8-byte words of opaque storage in [`BtCascadeF32`].
+ */
+#define BT_CASCADE_F32_WORDS 32
+
+/**
+ * 8-byte words of opaque storage in [`BtSetpointConversionF32`].
+ */
+#define BT_SETPOINT_F32_WORDS 8
+
+/**
+ * 8-byte words of opaque storage in [`BtTrajectoryF32`].
+ */
+#define BT_TRAJECTORY_F32_WORDS 32
+
+/**
  * Opaque storage of a controller (initialize with [`bt_cascade_init`]); e.g. a
  * zero-initialized static variable.
  */
@@ -388,6 +403,286 @@ typedef struct {
   double coulomb_velocity_m_s;
 } BtSetpointConfig;
 
+/**
+ * Opaque storage of a single-precision controller (initialize with
+ * [`bt_cascade_f32_init`]).
+ */
+typedef struct {
+  /**
+   * Set by the initialization; do not touch.
+   */
+  uint64_t magic;
+  /**
+   * The Rust object; do not touch.
+   */
+  uint64_t storage[BT_CASCADE_F32_WORDS];
+} BtCascadeF32;
+
+/**
+ * Single precision (`float`): everything the cascaded controller needs (`beltune_rt::control::CascadeConfig`),
+ * in motor coordinates: angle rad, velocity rad/s, torque N m (or A for a
+ * current-unit commissioning).
+ */
+typedef struct {
+  /**
+   * Sampling time `T_s`, s.
+   */
+  float ts_s;
+  /**
+   * Position gain `K_PP`, 1/s.
+   */
+  float k_pp_per_s;
+  /**
+   * Velocity gain `K_P`, N m s/rad.
+   */
+  float k_p_nm_s_per_rad;
+  /**
+   * Integral gain `K_I`, N m/rad.
+   */
+  float k_i_nm_per_rad;
+  /**
+   * Velocity feedforward gain `K_v` (1 by (4.17)).
+   */
+  float k_v;
+  /**
+   * Velocity filter `G_R` (6.1): `[b0, b1, a1]` of `(b0 + b1 z^-1) / (1 + a1 z^-1)`.
+   */
+  float velocity_filter[3];
+  /**
+   * Prefilter sections in series: `[b0, b1, b2, a1, a2]` of
+   * `(b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2)`.
+   */
+  float prefilter[2][5];
+  /**
+   * Torque limit (symmetric), N m.
+   */
+  float torque_max_nm;
+  /**
+   * [`BT_ANTI_WINDUP_CONDITIONAL`] or [`BT_ANTI_WINDUP_OFF`].
+   */
+  uint32_t anti_windup;
+  /**
+   * Feedforward term `m_e alpha_d` on.
+   */
+  bool ff_inertia;
+  /**
+   * Feedforward term `d_v omega_d` on.
+   */
+  bool ff_viscous;
+  /**
+   * Feedforward term `tau_c sign(omega_d)` on.
+   */
+  bool ff_coulomb;
+  /**
+   * `m_e`, kg m^2.
+   */
+  float inertia_kg_m2;
+  /**
+   * `d_v`, N m s/rad.
+   */
+  float viscous_nm_s_per_rad;
+  /**
+   * `tau_c`, N m.
+   */
+  float coulomb_nm;
+  /**
+   * Dead band of `sign(omega_d)`, rad/s.
+   */
+  float coulomb_deadband_rad_s;
+  /**
+   * Breakaway threshold of the Coulomb hold, rad (0: off).
+   */
+  float coulomb_breakaway_rad;
+  /**
+   * Constant torque offset (holding torque), N m.
+   */
+  float torque_offset_nm;
+  /**
+   * Refinement (a): desired velocity through the low-pass part of `G_R`.
+   */
+  bool filter_desired_velocity;
+  /**
+   * Refinement (b): the feedforward uses [`BtSetpointF32::ahead`].
+   */
+  bool feedforward_preview;
+} BtCascadeConfigF32;
+
+/**
+ * Single precision (`float`): one desired motion sample in motor coordinates.
+ */
+typedef struct {
+  /**
+   * Desired motor angle, rad.
+   */
+  float angle_rad;
+  /**
+   * Desired motor velocity, rad/s.
+   */
+  float velocity_rad_s;
+  /**
+   * Desired motor acceleration, rad/s^2.
+   */
+  float acceleration_rad_s2;
+} BtMotionSampleF32;
+
+/**
+ * Single precision (`float`): the setpoint of one sample: now, and `n_T` samples ahead for the feedforward.
+ */
+typedef struct {
+  /**
+   * This sample.
+   */
+  BtMotionSampleF32 now;
+  /**
+   * `n_T` samples later (dead-time preview; equal to `now` without preview).
+   */
+  BtMotionSampleF32 ahead;
+} BtSetpointF32;
+
+/**
+ * Single precision (`float`): what one controller sample computed.
+ */
+typedef struct {
+  /**
+   * Torque command, N m, within the limit.
+   */
+  float torque_nm;
+  /**
+   * Torque before saturation, N m.
+   */
+  float torque_unsaturated_nm;
+  /**
+   * Position error `phi_d - phi_m`, rad.
+   */
+  float position_error_rad;
+  /**
+   * Velocity estimate, rad/s.
+   */
+  float velocity_estimate_rad_s;
+  /**
+   * Feedforward torque, N m.
+   */
+  float feedforward_nm;
+  /**
+   * Integrator state after this sample, rad.
+   */
+  float integrator_rad;
+  /**
+   * The command was limited.
+   */
+  bool saturated;
+  /**
+   * `false` if an input or intermediate value was not finite (torque 0).
+   */
+  bool finite;
+} BtControlOutputF32;
+
+/**
+ * Single precision (`float`): a cart trajectory sample (m, m/s, m/s^2, m/s^3).
+ */
+typedef struct {
+  /**
+   * Position, m.
+   */
+  float position_m;
+  /**
+   * Velocity, m/s.
+   */
+  float velocity_m_s;
+  /**
+   * Acceleration, m/s^2.
+   */
+  float acceleration_m_s2;
+  /**
+   * Jerk, m/s^3.
+   */
+  float jerk_m_s3;
+} BtCartSampleF32;
+
+/**
+ * Opaque storage of a move for sampling in single precision (initialize
+ * with [`bt_trajectory_to_f32`]).
+ */
+typedef struct {
+  /**
+   * Set by the initialization; do not touch.
+   */
+  uint64_t magic;
+  /**
+   * The Rust object; do not touch.
+   */
+  uint64_t storage[BT_TRAJECTORY_F32_WORDS];
+} BtTrajectoryF32;
+
+/**
+ * Opaque storage of a single-precision setpoint conversion (initialize with
+ * [`bt_setpoint_f32_init`]).
+ */
+typedef struct {
+  /**
+   * Set by the initialization; do not touch.
+   */
+  uint64_t magic;
+  /**
+   * The Rust object; do not touch.
+   */
+  uint64_t storage[BT_SETPOINT_F32_WORDS];
+} BtSetpointConversionF32;
+
+/**
+ * Single precision (`float`): cart -> motor setpoint conversion parameters.
+ */
+typedef struct {
+  /**
+   * Transmission `i_t`, m/rad.
+   */
+  float i_t_m_per_rad;
+  /**
+   * Belt-stretch compensation on.
+   */
+  bool belt_stretch;
+  /**
+   * Moving mass `m_c`, kg.
+   */
+  float m_c_kg;
+  /**
+   * Belt stiffness `c` at `stiffness_position_m`, N/m.
+   */
+  float c_n_per_m;
+  /**
+   * Cart position where `c_n_per_m` holds, m (the positions of the cart
+   * samples).
+   */
+  float stiffness_position_m;
+  /**
+   * Slope of the belt's compliance `1/c` along the stroke there, 1/N
+   * (0: one stiffness for the whole stroke).
+   */
+  float compliance_slope_per_n;
+  /**
+   * Half the compliance's second derivative, 1/(N m).
+   */
+  float compliance_curvature_per_n_m;
+  /**
+   * Force the belt carries at rest (holding torque over `i_t`), N: the
+   * motor leads by its stretch `F / c` where the cart is.
+   */
+  float static_force_n;
+  /**
+   * The cart's viscous friction `d_c`, N s/m (0: its stretch is not led).
+   */
+  float cart_viscous_n_s_per_m;
+  /**
+   * The cart's Coulomb friction `F_c`, N (0: its stretch is not led).
+   */
+  float cart_coulomb_n;
+  /**
+   * Cart speed over which the Coulomb lead ramps in and out, m/s (> 0
+   * where `cart_coulomb_n` is not 0).
+   */
+  float coulomb_velocity_m_s;
+} BtSetpointConfigF32;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -495,6 +790,109 @@ int32_t bt_setpoint_convert_held(const BtSetpointConversion *conv,
                                  const BtCartSample *cart,
                                  double hold,
                                  BtMotionSample *out);
+
+/**
+ * Initialize the single-precision controller `ctrl` with `config`, at rest
+ * at angle 0. Returns [`BT_OK`], [`BT_ERR_NULL`] or [`BT_ERR_INVALID`] (then
+ * `ctrl` is uninitialized).
+ *
+ * # Safety
+ * `ctrl` and `config` are null or valid pointers.
+ */
+int32_t bt_cascade_f32_init(BtCascadeF32 *ctrl, const BtCascadeConfigF32 *config);
+
+/**
+ * Bumpless start of the single-precision controller at `angle_rad`.
+ *
+ * # Safety
+ * `ctrl` is null or a valid pointer.
+ */
+int32_t bt_cascade_f32_reset_to(BtCascadeF32 *ctrl, float angle_rad);
+
+/**
+ * One sample of the single-precision controller (as [`bt_cascade_step`]):
+ * writes `out` (if not null) and returns the torque command, N m; 0 for a
+ * null or uninitialized `ctrl` or a null `setpoint`.
+ *
+ * # Safety
+ * `ctrl`, `setpoint` and `out` are null or valid pointers.
+ */
+float bt_cascade_f32_step(BtCascadeF32 *ctrl,
+                          const BtSetpointF32 *setpoint,
+                          float measured_angle_rad,
+                          BtControlOutputF32 *out);
+
+/**
+ * Integrator state of the single-precision `ctrl`, rad (NaN for a null or
+ * uninitialized `ctrl`).
+ *
+ * # Safety
+ * `ctrl` is null or a valid pointer.
+ */
+float bt_cascade_f32_integrator_rad(const BtCascadeF32 *ctrl);
+
+/**
+ * The move planned in double precision at time `t_s`, rounded to `float`
+ * (the documented single-precision path: plan once per move in double,
+ * sample every `T_s` into `float`; each value is the `float` nearest to
+ * [`bt_trajectory_sample`]'s).
+ *
+ * # Safety
+ * `traj` and `out` are null or valid pointers.
+ */
+int32_t bt_trajectory_sample_f32(const BtTrajectory *traj, double t_s, BtCartSampleF32 *out);
+
+/**
+ * The move `traj` (planned by [`bt_trajectory_plan`]) for sampling in
+ * single precision into `out` (`beltune_rt::trajectory::TrajectoryF32`:
+ * each segment's start time and state rounded to `float`), once per move.
+ * Returns [`BT_OK`], [`BT_ERR_NULL`] or [`BT_ERR_UNINITIALIZED`].
+ *
+ * # Safety
+ * `traj` and `out` are null or valid pointers.
+ */
+int32_t bt_trajectory_to_f32(const BtTrajectory *traj, BtTrajectoryF32 *out);
+
+/**
+ * The move at time `t_s` in single precision (no double arithmetic: at
+ * most 10 comparisons and about 15 `float` operations) into `out`; the
+ * error against [`bt_trajectory_sample`] is bounded in
+ * `beltune-rt/tests/trajectory_f32.rs` (position: `|v|max ulp(T) + 8
+ * ulp(|p|max)`).
+ *
+ * # Safety
+ * `traj` and `out` are null or valid pointers.
+ */
+int32_t bt_trajectory_f32_sample(const BtTrajectoryF32 *traj, float t_s, BtCartSampleF32 *out);
+
+/**
+ * Initialize a single-precision cart -> motor setpoint conversion.
+ *
+ * # Safety
+ * `conv` and `config` are null or valid pointers.
+ */
+int32_t bt_setpoint_f32_init(BtSetpointConversionF32 *conv, const BtSetpointConfigF32 *config);
+
+/**
+ * The single-precision motor setpoint of a cart sample into `out`.
+ *
+ * # Safety
+ * All pointers are null or valid.
+ */
+int32_t bt_setpoint_f32_convert(const BtSetpointConversionF32 *conv,
+                                const BtCartSampleF32 *cart,
+                                BtMotionSampleF32 *out);
+
+/**
+ * [`bt_setpoint_convert_held`] in single precision.
+ *
+ * # Safety
+ * All pointers are null or valid.
+ */
+int32_t bt_setpoint_f32_convert_held(const BtSetpointConversionF32 *conv,
+                                     const BtCartSampleF32 *cart,
+                                     float hold,
+                                     BtMotionSampleF32 *out);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -27,7 +27,8 @@ use beltune_rt::control::{
     Setpoint, SetpointConversion,
 };
 use beltune_rt::filter::{FirstOrderCoeffs, SosCoeffs};
-use beltune_rt::trajectory::{Limits, State, Trajectory};
+use beltune_rt::trajectory::{Limits, State, Trajectory, TrajectoryF32};
+use beltune_rt::Real;
 use core::mem::{align_of, size_of};
 
 /// Success.
@@ -50,9 +51,18 @@ pub const BT_CASCADE_WORDS: usize = 64;
 pub const BT_TRAJECTORY_WORDS: usize = 96;
 /// 8-byte words of opaque storage in [`BtSetpointConversion`].
 pub const BT_SETPOINT_WORDS: usize = 16;
+/// 8-byte words of opaque storage in [`BtCascadeF32`].
+pub const BT_CASCADE_F32_WORDS: usize = 32;
+/// 8-byte words of opaque storage in [`BtSetpointConversionF32`].
+pub const BT_SETPOINT_F32_WORDS: usize = 8;
+/// 8-byte words of opaque storage in [`BtTrajectoryF32`].
+pub const BT_TRAJECTORY_F32_WORDS: usize = 32;
 const BT_CASCADE_BYTES: usize = 8 * BT_CASCADE_WORDS;
 const BT_TRAJECTORY_BYTES: usize = 8 * BT_TRAJECTORY_WORDS;
 const BT_SETPOINT_BYTES: usize = 8 * BT_SETPOINT_WORDS;
+const BT_CASCADE_F32_BYTES: usize = 8 * BT_CASCADE_F32_WORDS;
+const BT_SETPOINT_F32_BYTES: usize = 8 * BT_SETPOINT_F32_WORDS;
+const BT_TRAJECTORY_F32_BYTES: usize = 8 * BT_TRAJECTORY_F32_WORDS;
 
 const MAGIC: u64 = 0x6265_6c74_756e_6531; // "beltune1"
 
@@ -63,6 +73,12 @@ const _: () = assert!(size_of::<SetpointConversion<f64>>() <= BT_SETPOINT_BYTES)
 const _: () = assert!(align_of::<CascadeController<f64>>() <= 8);
 const _: () = assert!(align_of::<Trajectory>() <= 8);
 const _: () = assert!(align_of::<SetpointConversion<f64>>() <= 8);
+const _: () = assert!(size_of::<CascadeController<f32>>() <= BT_CASCADE_F32_BYTES);
+const _: () = assert!(size_of::<SetpointConversion<f32>>() <= BT_SETPOINT_F32_BYTES);
+const _: () = assert!(align_of::<CascadeController<f32>>() <= 8);
+const _: () = assert!(align_of::<SetpointConversion<f32>>() <= 8);
+const _: () = assert!(size_of::<TrajectoryF32>() <= BT_TRAJECTORY_F32_BYTES);
+const _: () = assert!(align_of::<TrajectoryF32>() <= 8);
 
 /// Everything the cascaded controller needs (`beltune_rt::control::CascadeConfig`),
 /// in motor coordinates: angle rad, velocity rad/s, torque N m (or A for a
@@ -113,92 +129,99 @@ pub struct BtCascadeConfig {
     pub feedforward_preview: bool,
 }
 
-impl BtCascadeConfig {
-    /// The Rust configuration (not validated).
-    pub fn to_rt(&self) -> Option<CascadeConfig<f64>> {
-        let s = |c: &[f64; 5]| SosCoeffs {
-            b0: c[0],
-            b1: c[1],
-            b2: c[2],
-            a1: c[3],
-            a2: c[4],
-        };
-        Some(CascadeConfig {
-            ts_s: self.ts_s,
-            gains: CascadeGains {
-                k_pp_per_s: self.k_pp_per_s,
-                k_p_nm_s_per_rad: self.k_p_nm_s_per_rad,
-                k_i_nm_per_rad: self.k_i_nm_per_rad,
-                k_v: self.k_v,
-            },
-            velocity_filter: FirstOrderCoeffs {
-                b0: self.velocity_filter[0],
-                b1: self.velocity_filter[1],
-                a1: self.velocity_filter[2],
-            },
-            prefilter: [s(&self.prefilter[0]), s(&self.prefilter[1])],
-            torque_max_nm: self.torque_max_nm,
-            anti_windup: match self.anti_windup {
-                BT_ANTI_WINDUP_CONDITIONAL => AntiWindup::ConditionalIntegration,
-                BT_ANTI_WINDUP_OFF => AntiWindup::Off,
-                _ => return None,
-            },
-            feedforward: Feedforward {
-                params: FeedforwardParams {
-                    inertia_kg_m2: self.inertia_kg_m2,
-                    viscous_nm_s_per_rad: self.viscous_nm_s_per_rad,
-                    coulomb_nm: self.coulomb_nm,
-                    coulomb_deadband_rad_s: self.coulomb_deadband_rad_s,
-                    coulomb_breakaway_rad: self.coulomb_breakaway_rad,
-                },
-                terms: FeedforwardTerms {
-                    inertia: self.ff_inertia,
-                    viscous: self.ff_viscous,
-                    coulomb: self.ff_coulomb,
-                },
-            },
-            torque_offset_nm: self.torque_offset_nm,
-            filter_desired_velocity: self.filter_desired_velocity,
-            feedforward_preview: self.feedforward_preview,
-        })
-    }
+macro_rules! cascade_config_conversions {
+    ($c:ty, $t:ty) => {
+        impl $c {
+            /// The Rust configuration (not validated).
+            pub fn to_rt(&self) -> Option<CascadeConfig<$t>> {
+                let s = |c: &[$t; 5]| SosCoeffs {
+                    b0: c[0],
+                    b1: c[1],
+                    b2: c[2],
+                    a1: c[3],
+                    a2: c[4],
+                };
+                Some(CascadeConfig {
+                    ts_s: self.ts_s,
+                    gains: CascadeGains {
+                        k_pp_per_s: self.k_pp_per_s,
+                        k_p_nm_s_per_rad: self.k_p_nm_s_per_rad,
+                        k_i_nm_per_rad: self.k_i_nm_per_rad,
+                        k_v: self.k_v,
+                    },
+                    velocity_filter: FirstOrderCoeffs {
+                        b0: self.velocity_filter[0],
+                        b1: self.velocity_filter[1],
+                        a1: self.velocity_filter[2],
+                    },
+                    prefilter: [s(&self.prefilter[0]), s(&self.prefilter[1])],
+                    torque_max_nm: self.torque_max_nm,
+                    anti_windup: match self.anti_windup {
+                        BT_ANTI_WINDUP_CONDITIONAL => AntiWindup::ConditionalIntegration,
+                        BT_ANTI_WINDUP_OFF => AntiWindup::Off,
+                        _ => return None,
+                    },
+                    feedforward: Feedforward {
+                        params: FeedforwardParams {
+                            inertia_kg_m2: self.inertia_kg_m2,
+                            viscous_nm_s_per_rad: self.viscous_nm_s_per_rad,
+                            coulomb_nm: self.coulomb_nm,
+                            coulomb_deadband_rad_s: self.coulomb_deadband_rad_s,
+                            coulomb_breakaway_rad: self.coulomb_breakaway_rad,
+                        },
+                        terms: FeedforwardTerms {
+                            inertia: self.ff_inertia,
+                            viscous: self.ff_viscous,
+                            coulomb: self.ff_coulomb,
+                        },
+                    },
+                    torque_offset_nm: self.torque_offset_nm,
+                    filter_desired_velocity: self.filter_desired_velocity,
+                    feedforward_preview: self.feedforward_preview,
+                })
+            }
 
-    /// The C configuration of a Rust one.
-    pub fn from_rt(c: &CascadeConfig<f64>) -> Self {
-        let s = |x: &SosCoeffs<f64>| [x.b0, x.b1, x.b2, x.a1, x.a2];
-        let p = &c.feedforward.params;
-        let t = &c.feedforward.terms;
-        BtCascadeConfig {
-            ts_s: c.ts_s,
-            k_pp_per_s: c.gains.k_pp_per_s,
-            k_p_nm_s_per_rad: c.gains.k_p_nm_s_per_rad,
-            k_i_nm_per_rad: c.gains.k_i_nm_per_rad,
-            k_v: c.gains.k_v,
-            velocity_filter: [
-                c.velocity_filter.b0,
-                c.velocity_filter.b1,
-                c.velocity_filter.a1,
-            ],
-            prefilter: [s(&c.prefilter[0]), s(&c.prefilter[1])],
-            torque_max_nm: c.torque_max_nm,
-            anti_windup: match c.anti_windup {
-                AntiWindup::ConditionalIntegration => BT_ANTI_WINDUP_CONDITIONAL,
-                AntiWindup::Off => BT_ANTI_WINDUP_OFF,
-            },
-            ff_inertia: t.inertia,
-            ff_viscous: t.viscous,
-            ff_coulomb: t.coulomb,
-            inertia_kg_m2: p.inertia_kg_m2,
-            viscous_nm_s_per_rad: p.viscous_nm_s_per_rad,
-            coulomb_nm: p.coulomb_nm,
-            coulomb_deadband_rad_s: p.coulomb_deadband_rad_s,
-            coulomb_breakaway_rad: p.coulomb_breakaway_rad,
-            torque_offset_nm: c.torque_offset_nm,
-            filter_desired_velocity: c.filter_desired_velocity,
-            feedforward_preview: c.feedforward_preview,
+            /// The C configuration of a Rust one.
+            pub fn from_rt(c: &CascadeConfig<$t>) -> Self {
+                let s = |x: &SosCoeffs<$t>| [x.b0, x.b1, x.b2, x.a1, x.a2];
+                let p = &c.feedforward.params;
+                let t = &c.feedforward.terms;
+                Self {
+                    ts_s: c.ts_s,
+                    k_pp_per_s: c.gains.k_pp_per_s,
+                    k_p_nm_s_per_rad: c.gains.k_p_nm_s_per_rad,
+                    k_i_nm_per_rad: c.gains.k_i_nm_per_rad,
+                    k_v: c.gains.k_v,
+                    velocity_filter: [
+                        c.velocity_filter.b0,
+                        c.velocity_filter.b1,
+                        c.velocity_filter.a1,
+                    ],
+                    prefilter: [s(&c.prefilter[0]), s(&c.prefilter[1])],
+                    torque_max_nm: c.torque_max_nm,
+                    anti_windup: match c.anti_windup {
+                        AntiWindup::ConditionalIntegration => BT_ANTI_WINDUP_CONDITIONAL,
+                        AntiWindup::Off => BT_ANTI_WINDUP_OFF,
+                    },
+                    ff_inertia: t.inertia,
+                    ff_viscous: t.viscous,
+                    ff_coulomb: t.coulomb,
+                    inertia_kg_m2: p.inertia_kg_m2,
+                    viscous_nm_s_per_rad: p.viscous_nm_s_per_rad,
+                    coulomb_nm: p.coulomb_nm,
+                    coulomb_deadband_rad_s: p.coulomb_deadband_rad_s,
+                    coulomb_breakaway_rad: p.coulomb_breakaway_rad,
+                    torque_offset_nm: c.torque_offset_nm,
+                    filter_desired_velocity: c.filter_desired_velocity,
+                    feedforward_preview: c.feedforward_preview,
+                }
+            }
         }
-    }
+    };
 }
+
+cascade_config_conversions!(BtCascadeConfig, f64);
+cascade_config_conversions!(BtCascadeConfigF32, f32);
 
 /// One desired motion sample in motor coordinates.
 #[repr(C)]
@@ -324,6 +347,145 @@ pub struct BtSetpointConfig {
     pub coulomb_velocity_m_s: f64,
 }
 
+/// Single precision (`float`): everything the cascaded controller needs (`beltune_rt::control::CascadeConfig`),
+/// in motor coordinates: angle rad, velocity rad/s, torque N m (or A for a
+/// current-unit commissioning).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BtCascadeConfigF32 {
+    /// Sampling time `T_s`, s.
+    pub ts_s: f32,
+    /// Position gain `K_PP`, 1/s.
+    pub k_pp_per_s: f32,
+    /// Velocity gain `K_P`, N m s/rad.
+    pub k_p_nm_s_per_rad: f32,
+    /// Integral gain `K_I`, N m/rad.
+    pub k_i_nm_per_rad: f32,
+    /// Velocity feedforward gain `K_v` (1 by (4.17)).
+    pub k_v: f32,
+    /// Velocity filter `G_R` (6.1): `[b0, b1, a1]` of `(b0 + b1 z^-1) / (1 + a1 z^-1)`.
+    pub velocity_filter: [f32; 3],
+    /// Prefilter sections in series: `[b0, b1, b2, a1, a2]` of
+    /// `(b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2)`.
+    pub prefilter: [[f32; 5]; 2],
+    /// Torque limit (symmetric), N m.
+    pub torque_max_nm: f32,
+    /// [`BT_ANTI_WINDUP_CONDITIONAL`] or [`BT_ANTI_WINDUP_OFF`].
+    pub anti_windup: u32,
+    /// Feedforward term `m_e alpha_d` on.
+    pub ff_inertia: bool,
+    /// Feedforward term `d_v omega_d` on.
+    pub ff_viscous: bool,
+    /// Feedforward term `tau_c sign(omega_d)` on.
+    pub ff_coulomb: bool,
+    /// `m_e`, kg m^2.
+    pub inertia_kg_m2: f32,
+    /// `d_v`, N m s/rad.
+    pub viscous_nm_s_per_rad: f32,
+    /// `tau_c`, N m.
+    pub coulomb_nm: f32,
+    /// Dead band of `sign(omega_d)`, rad/s.
+    pub coulomb_deadband_rad_s: f32,
+    /// Breakaway threshold of the Coulomb hold, rad (0: off).
+    pub coulomb_breakaway_rad: f32,
+    /// Constant torque offset (holding torque), N m.
+    pub torque_offset_nm: f32,
+    /// Refinement (a): desired velocity through the low-pass part of `G_R`.
+    pub filter_desired_velocity: bool,
+    /// Refinement (b): the feedforward uses [`BtSetpointF32::ahead`].
+    pub feedforward_preview: bool,
+}
+
+/// Single precision (`float`): one desired motion sample in motor coordinates.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BtMotionSampleF32 {
+    /// Desired motor angle, rad.
+    pub angle_rad: f32,
+    /// Desired motor velocity, rad/s.
+    pub velocity_rad_s: f32,
+    /// Desired motor acceleration, rad/s^2.
+    pub acceleration_rad_s2: f32,
+}
+
+/// Single precision (`float`): the setpoint of one sample: now, and `n_T` samples ahead for the feedforward.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BtSetpointF32 {
+    /// This sample.
+    pub now: BtMotionSampleF32,
+    /// `n_T` samples later (dead-time preview; equal to `now` without preview).
+    pub ahead: BtMotionSampleF32,
+}
+
+/// Single precision (`float`): what one controller sample computed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BtControlOutputF32 {
+    /// Torque command, N m, within the limit.
+    pub torque_nm: f32,
+    /// Torque before saturation, N m.
+    pub torque_unsaturated_nm: f32,
+    /// Position error `phi_d - phi_m`, rad.
+    pub position_error_rad: f32,
+    /// Velocity estimate, rad/s.
+    pub velocity_estimate_rad_s: f32,
+    /// Feedforward torque, N m.
+    pub feedforward_nm: f32,
+    /// Integrator state after this sample, rad.
+    pub integrator_rad: f32,
+    /// The command was limited.
+    pub saturated: bool,
+    /// `false` if an input or intermediate value was not finite (torque 0).
+    pub finite: bool,
+}
+
+/// Single precision (`float`): a cart trajectory sample (m, m/s, m/s^2, m/s^3).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BtCartSampleF32 {
+    /// Position, m.
+    pub position_m: f32,
+    /// Velocity, m/s.
+    pub velocity_m_s: f32,
+    /// Acceleration, m/s^2.
+    pub acceleration_m_s2: f32,
+    /// Jerk, m/s^3.
+    pub jerk_m_s3: f32,
+}
+
+/// Single precision (`float`): cart -> motor setpoint conversion parameters.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BtSetpointConfigF32 {
+    /// Transmission `i_t`, m/rad.
+    pub i_t_m_per_rad: f32,
+    /// Belt-stretch compensation on.
+    pub belt_stretch: bool,
+    /// Moving mass `m_c`, kg.
+    pub m_c_kg: f32,
+    /// Belt stiffness `c` at `stiffness_position_m`, N/m.
+    pub c_n_per_m: f32,
+    /// Cart position where `c_n_per_m` holds, m (the positions of the cart
+    /// samples).
+    pub stiffness_position_m: f32,
+    /// Slope of the belt's compliance `1/c` along the stroke there, 1/N
+    /// (0: one stiffness for the whole stroke).
+    pub compliance_slope_per_n: f32,
+    /// Half the compliance's second derivative, 1/(N m).
+    pub compliance_curvature_per_n_m: f32,
+    /// Force the belt carries at rest (holding torque over `i_t`), N: the
+    /// motor leads by its stretch `F / c` where the cart is.
+    pub static_force_n: f32,
+    /// The cart's viscous friction `d_c`, N s/m (0: its stretch is not led).
+    pub cart_viscous_n_s_per_m: f32,
+    /// The cart's Coulomb friction `F_c`, N (0: its stretch is not led).
+    pub cart_coulomb_n: f32,
+    /// Cart speed over which the Coulomb lead ramps in and out, m/s (> 0
+    /// where `cart_coulomb_n` is not 0).
+    pub coulomb_velocity_m_s: f32,
+}
+
 /// Opaque storage of a controller (initialize with [`bt_cascade_init`]); e.g. a
 /// zero-initialized static variable.
 #[repr(C)]
@@ -350,6 +512,36 @@ pub struct BtSetpointConversion {
     pub magic: u64,
     /// The Rust object; do not touch.
     pub storage: [u64; BT_SETPOINT_WORDS],
+}
+
+/// Opaque storage of a single-precision controller (initialize with
+/// [`bt_cascade_f32_init`]).
+#[repr(C)]
+pub struct BtCascadeF32 {
+    /// Set by the initialization; do not touch.
+    pub magic: u64,
+    /// The Rust object; do not touch.
+    pub storage: [u64; BT_CASCADE_F32_WORDS],
+}
+
+/// Opaque storage of a single-precision setpoint conversion (initialize with
+/// [`bt_setpoint_f32_init`]).
+#[repr(C)]
+pub struct BtSetpointConversionF32 {
+    /// Set by the initialization; do not touch.
+    pub magic: u64,
+    /// The Rust object; do not touch.
+    pub storage: [u64; BT_SETPOINT_F32_WORDS],
+}
+
+/// Opaque storage of a move for sampling in single precision (initialize
+/// with [`bt_trajectory_to_f32`]).
+#[repr(C)]
+pub struct BtTrajectoryF32 {
+    /// Set by the initialization; do not touch.
+    pub magic: u64,
+    /// The Rust object; do not touch.
+    pub storage: [u64; BT_TRAJECTORY_F32_WORDS],
 }
 
 macro_rules! opaque {
@@ -415,25 +607,108 @@ opaque!(
     setpoint_mut,
     setpoint_put
 );
+opaque!(
+    BtCascadeF32,
+    CascadeController<f32>,
+    cascade_f32_ref,
+    cascade_f32_mut,
+    cascade_f32_put
+);
+opaque!(
+    BtTrajectoryF32,
+    TrajectoryF32,
+    trajectory_f32_ref,
+    trajectory_f32_mut,
+    trajectory_f32_put
+);
+opaque!(
+    BtSetpointConversionF32,
+    SetpointConversion<f32>,
+    setpoint_f32_ref,
+    setpoint_f32_mut,
+    setpoint_f32_put
+);
 
-fn motion(s: &BtMotionSample) -> MotionSample<f64> {
-    MotionSample {
-        angle_rad: s.angle_rad,
-        velocity_rad_s: s.velocity_rad_s,
-        acceleration_rad_s2: s.acceleration_rad_s2,
-    }
+macro_rules! sample_conversions {
+    ($motion:ident, $output:ident, $m:ty, $o:ident, $t:ty) => {
+        fn $motion(s: &$m) -> MotionSample<$t> {
+            MotionSample {
+                angle_rad: s.angle_rad,
+                velocity_rad_s: s.velocity_rad_s,
+                acceleration_rad_s2: s.acceleration_rad_s2,
+            }
+        }
+
+        fn $output(o: &ControlOutput<$t>) -> $o {
+            $o {
+                torque_nm: o.torque_nm,
+                torque_unsaturated_nm: o.torque_unsaturated_nm,
+                position_error_rad: o.position_error_rad,
+                velocity_estimate_rad_s: o.velocity_estimate_rad_s,
+                feedforward_nm: o.feedforward_nm,
+                integrator_rad: o.integrator_rad,
+                saturated: o.saturated,
+                finite: o.finite,
+            }
+        }
+    };
 }
 
-fn output(o: &ControlOutput<f64>) -> BtControlOutput {
-    BtControlOutput {
-        torque_nm: o.torque_nm,
-        torque_unsaturated_nm: o.torque_unsaturated_nm,
-        position_error_rad: o.position_error_rad,
-        velocity_estimate_rad_s: o.velocity_estimate_rad_s,
-        feedforward_nm: o.feedforward_nm,
-        integrator_rad: o.integrator_rad,
-        saturated: o.saturated,
-        finite: o.finite,
+sample_conversions!(motion, output, BtMotionSample, BtControlOutput, f64);
+sample_conversions!(
+    motion_f32,
+    output_f32,
+    BtMotionSampleF32,
+    BtControlOutputF32,
+    f32
+);
+
+macro_rules! setpoint_config_conversions {
+    ($c:ty, $t:ty) => {
+        impl $c {
+            /// The transmission `i_t` (m/rad) and the belt-stretch
+            /// compensation of the Rust conversion (not validated but for the
+            /// stiffness, which must be finite and positive when the
+            /// compensation is on: `None` otherwise).
+            pub fn to_rt(&self) -> Option<($t, BeltStretch<$t>)> {
+                let belt = if self.belt_stretch {
+                    if !(self.c_n_per_m.is_finite() && self.c_n_per_m > 0.0) {
+                        return None;
+                    }
+                    BeltStretch::Profile(BeltProfile {
+                        m_c_kg: self.m_c_kg,
+                        reference_m: self.stiffness_position_m,
+                        compliance_m_per_n: 1.0 / self.c_n_per_m,
+                        compliance_slope_per_n: self.compliance_slope_per_n,
+                        compliance_curvature_per_n_m: self.compliance_curvature_per_n_m,
+                        static_force_n: self.static_force_n,
+                        cart_viscous_n_s_per_m: self.cart_viscous_n_s_per_m,
+                        cart_coulomb_n: self.cart_coulomb_n,
+                        coulomb_velocity_m_s: self.coulomb_velocity_m_s,
+                    })
+                } else {
+                    BeltStretch::Off
+                };
+                Some((self.i_t_m_per_rad, belt))
+            }
+        }
+    };
+}
+
+setpoint_config_conversions!(BtSetpointConfig, f64);
+setpoint_config_conversions!(BtSetpointConfigF32, f32);
+
+/// The direction of a held Coulomb lead: +1, -1 or 0 by the sign of `hold`,
+/// `None` for NaN.
+fn hold_direction<T: Real>(hold: T) -> Option<T> {
+    if hold > T::ZERO {
+        Some(T::ONE)
+    } else if hold < T::ZERO {
+        Some(-T::ONE)
+    } else if hold == T::ZERO {
+        Some(T::ZERO)
+    } else {
+        None
     }
 }
 
@@ -623,25 +898,10 @@ pub unsafe extern "C" fn bt_setpoint_init(
         return BT_ERR_NULL;
     };
     c.magic = 0;
-    let belt = if cfg.belt_stretch {
-        if !(cfg.c_n_per_m.is_finite() && cfg.c_n_per_m > 0.0) {
-            return BT_ERR_INVALID;
-        }
-        BeltStretch::Profile(BeltProfile {
-            m_c_kg: cfg.m_c_kg,
-            reference_m: cfg.stiffness_position_m,
-            compliance_m_per_n: 1.0 / cfg.c_n_per_m,
-            compliance_slope_per_n: cfg.compliance_slope_per_n,
-            compliance_curvature_per_n_m: cfg.compliance_curvature_per_n_m,
-            static_force_n: cfg.static_force_n,
-            cart_viscous_n_s_per_m: cfg.cart_viscous_n_s_per_m,
-            cart_coulomb_n: cfg.cart_coulomb_n,
-            coulomb_velocity_m_s: cfg.coulomb_velocity_m_s,
-        })
-    } else {
-        BeltStretch::Off
+    let Some((i_t, belt)) = cfg.to_rt() else {
+        return BT_ERR_INVALID;
     };
-    match SetpointConversion::new(cfg.i_t_m_per_rad, belt) {
+    match SetpointConversion::new(i_t, belt) {
         Ok(v) => {
             // SAFETY: `conv` is non-null and valid.
             unsafe { setpoint_put(conv, v) };
@@ -692,13 +952,7 @@ pub unsafe extern "C" fn bt_setpoint_convert_held(
     let (Some(cart), Some(out)) = (unsafe { cart.as_ref() }, unsafe { out.as_mut() }) else {
         return BT_ERR_NULL;
     };
-    let hold = if hold > 0.0 {
-        1.0
-    } else if hold < 0.0 {
-        -1.0
-    } else if hold == 0.0 {
-        0.0
-    } else {
+    let Some(hold) = hold_direction(hold) else {
         return BT_ERR_INVALID;
     };
     let m = c.motor_sample_held(
@@ -711,6 +965,274 @@ pub unsafe extern "C" fn bt_setpoint_convert_held(
         hold,
     );
     *out = BtMotionSample {
+        angle_rad: m.angle_rad,
+        velocity_rad_s: m.velocity_rad_s,
+        acceleration_rad_s2: m.acceleration_rad_s2,
+    };
+    BT_OK
+}
+
+// ---------------------------------------------------------------------------
+// Single precision (`float`): the same controller and setpoint conversion as
+// `CascadeController<f32>` / `SetpointConversion<f32>`, for MCUs with a
+// single-precision FPU (Cortex-M4F: about 270 instructions per step without a
+// soft-float call, docs/performance.md). The trajectory is planned in double
+// precision (`bt_trajectory_plan`) and sampled into `float` by
+// `bt_trajectory_sample_f32`.
+// ---------------------------------------------------------------------------
+
+/// Initialize the single-precision controller `ctrl` with `config`, at rest
+/// at angle 0. Returns [`BT_OK`], [`BT_ERR_NULL`] or [`BT_ERR_INVALID`] (then
+/// `ctrl` is uninitialized).
+///
+/// # Safety
+/// `ctrl` and `config` are null or valid pointers.
+#[no_mangle]
+pub unsafe extern "C" fn bt_cascade_f32_init(
+    ctrl: *mut BtCascadeF32,
+    config: *const BtCascadeConfigF32,
+) -> i32 {
+    // SAFETY: null or valid, by the contract.
+    let (Some(c), Some(cfg)) = (unsafe { ctrl.as_mut() }, unsafe { config.as_ref() }) else {
+        return BT_ERR_NULL;
+    };
+    c.magic = 0;
+    let Some(rt) = cfg.to_rt() else {
+        return BT_ERR_INVALID;
+    };
+    match CascadeController::new(rt) {
+        Ok(v) => {
+            // SAFETY: `ctrl` is non-null and valid.
+            unsafe { cascade_f32_put(ctrl, v) };
+            BT_OK
+        }
+        Err(_) => BT_ERR_INVALID,
+    }
+}
+
+/// Bumpless start of the single-precision controller at `angle_rad`.
+///
+/// # Safety
+/// `ctrl` is null or a valid pointer.
+#[no_mangle]
+pub unsafe extern "C" fn bt_cascade_f32_reset_to(ctrl: *mut BtCascadeF32, angle_rad: f32) -> i32 {
+    // SAFETY: null or valid, by the contract.
+    match unsafe { cascade_f32_mut(ctrl) } {
+        Ok(c) => {
+            c.reset_to(angle_rad);
+            BT_OK
+        }
+        Err(e) => e,
+    }
+}
+
+/// One sample of the single-precision controller (as [`bt_cascade_step`]):
+/// writes `out` (if not null) and returns the torque command, N m; 0 for a
+/// null or uninitialized `ctrl` or a null `setpoint`.
+///
+/// # Safety
+/// `ctrl`, `setpoint` and `out` are null or valid pointers.
+#[no_mangle]
+pub unsafe extern "C" fn bt_cascade_f32_step(
+    ctrl: *mut BtCascadeF32,
+    setpoint: *const BtSetpointF32,
+    measured_angle_rad: f32,
+    out: *mut BtControlOutputF32,
+) -> f32 {
+    // SAFETY: null or valid, by the contract.
+    let (Ok(c), Some(sp)) = (unsafe { cascade_f32_mut(ctrl) }, unsafe {
+        setpoint.as_ref()
+    }) else {
+        return 0.0;
+    };
+    let o = c.step(
+        &Setpoint::with_preview(motion_f32(&sp.now), motion_f32(&sp.ahead)),
+        measured_angle_rad,
+    );
+    // SAFETY: null or valid, by the contract.
+    if let Some(out) = unsafe { out.as_mut() } {
+        *out = output_f32(&o);
+    }
+    o.torque_nm
+}
+
+/// Integrator state of the single-precision `ctrl`, rad (NaN for a null or
+/// uninitialized `ctrl`).
+///
+/// # Safety
+/// `ctrl` is null or a valid pointer.
+#[no_mangle]
+pub unsafe extern "C" fn bt_cascade_f32_integrator_rad(ctrl: *const BtCascadeF32) -> f32 {
+    // SAFETY: null or valid, by the contract.
+    unsafe { cascade_f32_ref(ctrl) }.map_or(f32::NAN, |c| c.integrator_rad())
+}
+
+/// The move planned in double precision at time `t_s`, rounded to `float`
+/// (the documented single-precision path: plan once per move in double,
+/// sample every `T_s` into `float`; each value is the `float` nearest to
+/// [`bt_trajectory_sample`]'s).
+///
+/// # Safety
+/// `traj` and `out` are null or valid pointers.
+#[no_mangle]
+pub unsafe extern "C" fn bt_trajectory_sample_f32(
+    traj: *const BtTrajectory,
+    t_s: f64,
+    out: *mut BtCartSampleF32,
+) -> i32 {
+    // SAFETY: null or valid, by the contract.
+    let t = match unsafe { trajectory_ref(traj) } {
+        Ok(t) => t,
+        Err(e) => return e,
+    };
+    // SAFETY: null or valid, by the contract.
+    let Some(out) = (unsafe { out.as_mut() }) else {
+        return BT_ERR_NULL;
+    };
+    let s = t.sample(t_s);
+    *out = BtCartSampleF32 {
+        position_m: s.position as f32,
+        velocity_m_s: s.velocity as f32,
+        acceleration_m_s2: s.acceleration as f32,
+        jerk_m_s3: s.jerk as f32,
+    };
+    BT_OK
+}
+
+/// The move `traj` (planned by [`bt_trajectory_plan`]) for sampling in
+/// single precision into `out` (`beltune_rt::trajectory::TrajectoryF32`:
+/// each segment's start time and state rounded to `float`), once per move.
+/// Returns [`BT_OK`], [`BT_ERR_NULL`] or [`BT_ERR_UNINITIALIZED`].
+///
+/// # Safety
+/// `traj` and `out` are null or valid pointers.
+#[no_mangle]
+pub unsafe extern "C" fn bt_trajectory_to_f32(
+    traj: *const BtTrajectory,
+    out: *mut BtTrajectoryF32,
+) -> i32 {
+    // SAFETY: null or valid, by the contract.
+    let t = match unsafe { trajectory_ref(traj) } {
+        Ok(t) => t,
+        Err(e) => return e,
+    };
+    // SAFETY: null or valid, by the contract.
+    let Some(o) = (unsafe { out.as_mut() }) else {
+        return BT_ERR_NULL;
+    };
+    o.magic = 0;
+    // SAFETY: `out` is non-null and valid.
+    unsafe { trajectory_f32_put(out, t.to_f32()) };
+    BT_OK
+}
+
+/// The move at time `t_s` in single precision (no double arithmetic: at
+/// most 10 comparisons and about 15 `float` operations) into `out`; the
+/// error against [`bt_trajectory_sample`] is bounded in
+/// `beltune-rt/tests/trajectory_f32.rs` (position: `|v|max ulp(T) + 8
+/// ulp(|p|max)`).
+///
+/// # Safety
+/// `traj` and `out` are null or valid pointers.
+#[no_mangle]
+pub unsafe extern "C" fn bt_trajectory_f32_sample(
+    traj: *const BtTrajectoryF32,
+    t_s: f32,
+    out: *mut BtCartSampleF32,
+) -> i32 {
+    // SAFETY: null or valid, by the contract.
+    let t = match unsafe { trajectory_f32_ref(traj) } {
+        Ok(t) => t,
+        Err(e) => return e,
+    };
+    // SAFETY: null or valid, by the contract.
+    let Some(out) = (unsafe { out.as_mut() }) else {
+        return BT_ERR_NULL;
+    };
+    let s = t.sample(t_s);
+    *out = BtCartSampleF32 {
+        position_m: s.position,
+        velocity_m_s: s.velocity,
+        acceleration_m_s2: s.acceleration,
+        jerk_m_s3: s.jerk,
+    };
+    BT_OK
+}
+
+/// Initialize a single-precision cart -> motor setpoint conversion.
+///
+/// # Safety
+/// `conv` and `config` are null or valid pointers.
+#[no_mangle]
+pub unsafe extern "C" fn bt_setpoint_f32_init(
+    conv: *mut BtSetpointConversionF32,
+    config: *const BtSetpointConfigF32,
+) -> i32 {
+    // SAFETY: null or valid, by the contract.
+    let (Some(c), Some(cfg)) = (unsafe { conv.as_mut() }, unsafe { config.as_ref() }) else {
+        return BT_ERR_NULL;
+    };
+    c.magic = 0;
+    let Some((i_t, belt)) = cfg.to_rt() else {
+        return BT_ERR_INVALID;
+    };
+    match SetpointConversion::new(i_t, belt) {
+        Ok(v) => {
+            // SAFETY: `conv` is non-null and valid.
+            unsafe { setpoint_f32_put(conv, v) };
+            BT_OK
+        }
+        Err(_) => BT_ERR_INVALID,
+    }
+}
+
+/// The single-precision motor setpoint of a cart sample into `out`.
+///
+/// # Safety
+/// All pointers are null or valid.
+#[no_mangle]
+pub unsafe extern "C" fn bt_setpoint_f32_convert(
+    conv: *const BtSetpointConversionF32,
+    cart: *const BtCartSampleF32,
+    out: *mut BtMotionSampleF32,
+) -> i32 {
+    // SAFETY: the same contract; without a hold the held conversion is this one.
+    unsafe { bt_setpoint_f32_convert_held(conv, cart, 0.0, out) }
+}
+
+/// [`bt_setpoint_convert_held`] in single precision.
+///
+/// # Safety
+/// All pointers are null or valid.
+#[no_mangle]
+pub unsafe extern "C" fn bt_setpoint_f32_convert_held(
+    conv: *const BtSetpointConversionF32,
+    cart: *const BtCartSampleF32,
+    hold: f32,
+    out: *mut BtMotionSampleF32,
+) -> i32 {
+    // SAFETY: null or valid, by the contract.
+    let c = match unsafe { setpoint_f32_ref(conv) } {
+        Ok(c) => c,
+        Err(e) => return e,
+    };
+    // SAFETY: null or valid, by the contract.
+    let (Some(cart), Some(out)) = (unsafe { cart.as_ref() }, unsafe { out.as_mut() }) else {
+        return BT_ERR_NULL;
+    };
+    let Some(hold) = hold_direction(hold) else {
+        return BT_ERR_INVALID;
+    };
+    let m = c.motor_sample_held(
+        &CartSample {
+            position_m: cart.position_m,
+            velocity_m_s: cart.velocity_m_s,
+            acceleration_m_s2: cart.acceleration_m_s2,
+            jerk_m_s3: cart.jerk_m_s3,
+        },
+        hold,
+    );
+    *out = BtMotionSampleF32 {
         angle_rad: m.angle_rad,
         velocity_rad_s: m.velocity_rad_s,
         acceleration_rad_s2: m.acceleration_rad_s2,
@@ -804,6 +1326,82 @@ mod tests {
             assert_eq!(bt_cascade_init(&mut c, &worse), BT_ERR_INVALID);
             assert_eq!(bt_cascade_init(&mut c, &bad), BT_OK);
             assert_eq!(bt_cascade_reset_to(&mut c, 1.0), BT_OK);
+        }
+    }
+
+    /// `bt_trajectory_to_f32` and `bt_trajectory_f32_sample` are the Rust
+    /// `Trajectory::to_f32` and `TrajectoryF32::sample`, and refuse null and
+    /// uninitialized objects.
+    #[test]
+    fn the_f32_trajectory_is_the_rust_one() {
+        let mut traj = BtTrajectory {
+            magic: 0,
+            storage: [0; BT_TRAJECTORY_WORDS],
+        };
+        let mut t32 = BtTrajectoryF32 {
+            magic: 0,
+            storage: [0; BT_TRAJECTORY_F32_WORDS],
+        };
+        let limits = BtLimits {
+            v_max: 5.0,
+            v_min: -5.0,
+            a_max: 45.0,
+            a_min: -45.0,
+            j_max: 40.0,
+            j_min: -40.0,
+            position_min: -0.01,
+            position_max: 0.57,
+        };
+        let (start, target) = (
+            BtState::default(),
+            BtState {
+                position_m: 0.5,
+                ..Default::default()
+            },
+        );
+        let mut out = BtCartSampleF32::default();
+        // SAFETY: valid pointers or null.
+        unsafe {
+            assert_eq!(bt_trajectory_to_f32(&traj, &mut t32), BT_ERR_UNINITIALIZED);
+            assert_eq!(
+                bt_trajectory_f32_sample(&t32, 0.1, &mut out),
+                BT_ERR_UNINITIALIZED
+            );
+            assert_eq!(
+                bt_trajectory_plan(&mut traj, &start, &target, &limits),
+                BT_OK
+            );
+            assert_eq!(
+                bt_trajectory_to_f32(&traj, core::ptr::null_mut()),
+                BT_ERR_NULL
+            );
+            assert_eq!(bt_trajectory_to_f32(&traj, &mut t32), BT_OK);
+            let rust = Trajectory::plan(
+                &State::at_rest(0.0),
+                &State::at_rest(0.5),
+                &Limits {
+                    position_min: -0.01,
+                    position_max: 0.57,
+                    ..Limits::default()
+                },
+            )
+            .unwrap()
+            .to_f32();
+            for k in 0..9000 {
+                let t = k as f32 * 1e-4;
+                assert_eq!(bt_trajectory_f32_sample(&t32, t, &mut out), BT_OK);
+                let s = rust.sample(t);
+                assert_eq!(
+                    [
+                        out.position_m,
+                        out.velocity_m_s,
+                        out.acceleration_m_s2,
+                        out.jerk_m_s3
+                    ],
+                    [s.position, s.velocity, s.acceleration, s.jerk]
+                );
+            }
+            assert_eq!(out.position_m, 0.5);
         }
     }
 

@@ -9,34 +9,14 @@ use beltune::record::controller::ControllerFile;
 use beltune::record::export::{c_header, Lang};
 use beltune_rt::control::{CascadeController, Setpoint};
 use beltune_rt::trajectory::{Limits, State, Trajectory};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+
+mod common;
+use common::compile_c;
 
 fn manifest() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// The staticlib cargo built for this test run: the newest
-/// `libbeltune_rt_ffi-*.a` beside the test executable.
-fn staticlib() -> PathBuf {
-    let deps = std::env::current_exe()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .to_path_buf();
-    let mut found: Vec<(std::time::SystemTime, PathBuf)> = std::fs::read_dir(&deps)
-        .unwrap()
-        .filter_map(|e| {
-            let p = e.ok()?.path();
-            let n = p.file_name()?.to_str()?.to_string();
-            if !(n.starts_with("libbeltune_rt_ffi") && n.ends_with(".a")) {
-                return None;
-            }
-            Some((p.metadata().ok()?.modified().ok()?, p))
-        })
-        .collect();
-    found.sort();
-    found.pop().expect("libbeltune_rt_ffi.a built by cargo").1
 }
 
 #[test]
@@ -102,30 +82,7 @@ fn exported_c_header_runs_the_same_torques_as_rust() {
     let input: String = measured.iter().map(|m| format!("{m:?}\n")).collect();
     std::fs::write(dir.join("measured.txt"), input).unwrap();
     let exe = dir.join("run_controller");
-    let o = Command::new("cc")
-        .args([
-            "-std=c99",
-            "-Wall",
-            "-Wextra",
-            "-Werror",
-            "-pedantic",
-            "-O1",
-            "-I",
-        ])
-        .arg(manifest().join("include"))
-        .arg("-I")
-        .arg(&dir)
-        .arg(manifest().join("tests/c/run_controller.c"))
-        .arg(staticlib())
-        .args(["-lm", "-lpthread", "-ldl", "-o"])
-        .arg(&exe)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "cc failed:\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    compile_c(&manifest().join("tests/c/run_controller.c"), &dir, &exe);
     let o = Command::new(&exe)
         .arg(dir.join("measured.txt"))
         .output()

@@ -21,7 +21,7 @@ pub enum PrecisionArg {
     /// Double precision (`f64`), the values exactly as in the file.
     #[default]
     F64,
-    /// Single precision (`f32`, Rust only): for MCUs with a single-precision FPU.
+    /// Single precision (`f32`, C `float`): for MCUs with a single-precision FPU.
     F32,
 }
 
@@ -34,7 +34,8 @@ pub struct Args {
     /// Target language.
     #[arg(long, value_enum)]
     pub lang: LangArg,
-    /// Float type of the constants and structs (f32: Rust only).
+    /// Float type of the constants and structs (f32: `CascadeConfig<f32>` in
+    /// Rust, `BtCascadeConfigF32` and `float` constants in C).
     #[arg(long, value_enum, default_value = "f64")]
     pub precision: PrecisionArg,
     /// Write here instead of stdout.

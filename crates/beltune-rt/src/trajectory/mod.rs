@@ -52,6 +52,7 @@
 //! | `profile.rs` | a seven-phase profile and its admissibility check |
 //! | `block.rs` | choice of the fastest valid profile |
 //! | `math.rs` | integration of a constant-jerk phase, `libm` helpers |
+//! | `single.rs` | sampling a planned move in `f32` ([`TrajectoryF32`]) |
 //!
 //! ## Attribution
 //!
@@ -96,9 +97,11 @@ mod math;
 mod poly;
 mod profile;
 mod roots;
+mod single;
 mod step1;
 
 pub use approach::{Approach, ApproachConfig, CREEP_RAMP_S};
+pub use single::{SampleF32, TrajectoryF32};
 
 use crate::error::{finite, positive};
 use crate::Error;

@@ -1,7 +1,8 @@
 //! Firmware export of a `controller.toml`: a Rust module of `const`s that builds
 //! the `beltune_rt` [`CascadeConfig`](beltune_rt::control::CascadeConfig), and a C
 //! header with the same values for the C ABI of `beltune-rt-ffi`
-//! (`BtCascadeConfig`, `BtSetpointConfig`).
+//! (`BtCascadeConfig`, `BtSetpointConfig`; in single precision
+//! `BtCascadeConfigF32`, `BtSetpointConfigF32` with `float` literals).
 //!
 //! Both list the same named scalars first (`pub const TS_S: f64 = ...;` and
 //! `#define BELTUNE_TS_S ...`), printed as the shortest text that reads back
@@ -28,10 +29,11 @@ pub enum Precision {
     /// `f64` / `double` (the default): the values exactly as in the file.
     #[default]
     F64,
-    /// `f32`, for MCUs with a single-precision FPU (Cortex-M4F): each value
-    /// rounded to the nearest `f32`, printed as the shortest text that reads
-    /// back to that `f32`. Rust only so far (the C ABI of beltune-rt-ffi is
-    /// `double`).
+    /// `f32` / `float`, for MCUs with a single-precision FPU (Cortex-M4F):
+    /// each value rounded to the nearest `f32`, printed as the shortest text
+    /// that reads back to that `f32` (in C with the suffix `f`, a `float`
+    /// constant), for `CascadeConfig<f32>` in Rust and the single-precision
+    /// ABI of beltune-rt-ffi (`BtCascadeConfigF32`) in C.
     F32,
 }
 
@@ -40,6 +42,14 @@ impl Precision {
         match self {
             Precision::F64 => "f64",
             Precision::F32 => "f32",
+        }
+    }
+
+    /// The C names of the two configuration structs of beltune_rt.h.
+    fn c_structs(self) -> (&'static str, &'static str) {
+        match self {
+            Precision::F64 => ("BtCascadeConfig", "BtSetpointConfig"),
+            Precision::F32 => ("BtCascadeConfigF32", "BtSetpointConfigF32"),
         }
     }
 }
@@ -178,7 +188,7 @@ pub fn values(file: &ControllerFile) -> Vec<(String, Value)> {
 }
 
 /// `x` as the shortest literal that reads back to the same `f64` in Rust and
-/// C, or (`F32`) to the `f32` nearest to `x`.
+/// C, or (`F32`) to the `f32` nearest to `x` (in Rust; C adds the suffix `f`).
 fn real(x: f64, precision: Precision) -> String {
     match precision {
         Precision::F64 => format!("{x:?}"),
@@ -211,7 +221,10 @@ const C: Syntax = Syntax {
     prefix: "BELTUNE_",
     declare: |name, v, precision| {
         let lit = match v {
-            Value::Real(x) => real(*x, precision),
+            Value::Real(x) => match precision {
+                Precision::F64 => real(*x, precision),
+                Precision::F32 => real(*x, precision) + "f",
+            },
             Value::Count(c) => format!("{c}u"),
             Value::Flag(b) => b.to_string(),
         };
@@ -290,22 +303,14 @@ pub fn export(file: &ControllerFile, lang: Lang) -> String {
     }
 }
 
-/// The export of `file` in `lang` and `precision`. Errors for `F32` in C (the
-/// C ABI is `double` only) and for a value whose magnitude an `f32` cannot
-/// hold (it would round to infinity).
+/// The export of `file` in `lang` and `precision`. Errors for a value whose
+/// magnitude an `f32` cannot hold (it would round to infinity) in `F32`.
 pub fn export_as(
     file: &ControllerFile,
     lang: Lang,
     precision: Precision,
 ) -> crate::error::Result<String> {
     if precision == Precision::F32 {
-        if lang == Lang::C {
-            return Err(crate::Error::invalid(
-                "precision",
-                32.0,
-                "f32 is exported for Rust only (the C ABI of beltune_rt.h is double)",
-            ));
-        }
         for (name, v) in values(file) {
             if let Value::Real(x) = v {
                 if !(x as f32).is_finite() {
@@ -320,7 +325,7 @@ pub fn export_as(
     }
     Ok(match lang {
         Lang::Rust => rust_module_as(file, precision),
-        Lang::C => c_header(file),
+        Lang::C => c_header_as(file, precision),
     })
 }
 
@@ -392,10 +397,19 @@ pub fn rust_module_as(file: &ControllerFile, precision: Precision) -> String {
 /// The C header: `#define BELTUNE_...` values, `BELTUNE_CASCADE`
 /// (`BtCascadeConfig`) and `BELTUNE_SETPOINT` (`BtSetpointConfig`) of `beltune_rt.h`.
 pub fn c_header(file: &ControllerFile) -> String {
+    c_header_as(file, Precision::F64)
+}
+
+/// [`c_header`] in `precision`: for [`Precision::F32`] `float` constants
+/// (`0.1f`) and the single-precision structs `BtCascadeConfigF32` and
+/// `BtSetpointConfigF32` for `bt_cascade_f32_init` and `bt_setpoint_f32_init`
+/// (no check that the values fit a `float`: [`export_as`] does that).
+pub fn c_header_as(file: &ControllerFile, precision: Precision) -> String {
     let name = |n: &str| C.name(file, n);
+    let (cascade_struct, setpoint_struct) = precision.c_structs();
     let mut s = header_lines(file, "//");
     s.push_str("#ifndef BELTUNE_CONTROLLER_H\n#define BELTUNE_CONTROLLER_H\n\n#include \"beltune_rt.h\"\n\n");
-    s.push_str(&C.declarations(file, Precision::F64));
+    s.push_str(&C.declarations(file, precision));
     let sec = |i: usize| format!("{{{}}}", C.section(file, i).join(", "));
     let aw = match file.anti_windup {
         AntiWindupKind::ConditionalIntegration => "BT_ANTI_WINDUP_CONDITIONAL",
@@ -403,7 +417,7 @@ pub fn c_header(file: &ControllerFile) -> String {
     };
     let _ = write!(
         s,
-        "\n/* The commissioned controller. */\nstatic const BtCascadeConfig BELTUNE_CASCADE = {{\n    .ts_s = BELTUNE_TS_S,\n    .k_pp_per_s = BELTUNE_K_PP_PER_S,\n    .k_p_nm_s_per_rad = {kp},\n    .k_i_nm_per_rad = {ki},\n    .k_v = BELTUNE_K_V,\n    .velocity_filter = {{BELTUNE_VELOCITY_FILTER_B0, BELTUNE_VELOCITY_FILTER_B1, BELTUNE_VELOCITY_FILTER_A1}},\n    .prefilter = {{\n        {s1},\n        {s2},\n    }},\n    .torque_max_nm = {tmax},\n    .anti_windup = {aw},\n    .ff_inertia = BELTUNE_FF_INERTIA,\n    .ff_viscous = BELTUNE_FF_VISCOUS,\n    .ff_coulomb = BELTUNE_FF_COULOMB,\n    .inertia_kg_m2 = {ffi},\n    .viscous_nm_s_per_rad = {ffv},\n    .coulomb_nm = {ffc},\n    .coulomb_deadband_rad_s = BELTUNE_FF_COULOMB_DEADBAND_RAD_S,\n    .coulomb_breakaway_rad = BELTUNE_FF_COULOMB_BREAKAWAY_RAD,\n    .torque_offset_nm = {toff},\n    .filter_desired_velocity = BELTUNE_FILTER_DESIRED_VELOCITY,\n    .feedforward_preview = BELTUNE_FEEDFORWARD_PREVIEW,\n}};\n\n/* The cart -> motor setpoint conversion. */\nstatic const BtSetpointConfig BELTUNE_SETPOINT = {{\n    .i_t_m_per_rad = BELTUNE_I_T_M_PER_RAD,\n    .belt_stretch = BELTUNE_BELT_STRETCH_ON,\n    .m_c_kg = {mc},\n    .c_n_per_m = {c},\n    .stiffness_position_m = {sp},\n    .compliance_slope_per_n = {cs},\n    .compliance_curvature_per_n_m = {cc},\n    .static_force_n = {sf},\n    .cart_viscous_n_s_per_m = {cv},\n    .cart_coulomb_n = {cf},\n    .coulomb_velocity_m_s = {vc},\n}};\n\n#endif /* BELTUNE_CONTROLLER_H */\n",
+        "\n/* The commissioned controller. */\nstatic const {cascade_struct} BELTUNE_CASCADE = {{\n    .ts_s = BELTUNE_TS_S,\n    .k_pp_per_s = BELTUNE_K_PP_PER_S,\n    .k_p_nm_s_per_rad = {kp},\n    .k_i_nm_per_rad = {ki},\n    .k_v = BELTUNE_K_V,\n    .velocity_filter = {{BELTUNE_VELOCITY_FILTER_B0, BELTUNE_VELOCITY_FILTER_B1, BELTUNE_VELOCITY_FILTER_A1}},\n    .prefilter = {{\n        {s1},\n        {s2},\n    }},\n    .torque_max_nm = {tmax},\n    .anti_windup = {aw},\n    .ff_inertia = BELTUNE_FF_INERTIA,\n    .ff_viscous = BELTUNE_FF_VISCOUS,\n    .ff_coulomb = BELTUNE_FF_COULOMB,\n    .inertia_kg_m2 = {ffi},\n    .viscous_nm_s_per_rad = {ffv},\n    .coulomb_nm = {ffc},\n    .coulomb_deadband_rad_s = BELTUNE_FF_COULOMB_DEADBAND_RAD_S,\n    .coulomb_breakaway_rad = BELTUNE_FF_COULOMB_BREAKAWAY_RAD,\n    .torque_offset_nm = {toff},\n    .filter_desired_velocity = BELTUNE_FILTER_DESIRED_VELOCITY,\n    .feedforward_preview = BELTUNE_FEEDFORWARD_PREVIEW,\n}};\n\n/* The cart -> motor setpoint conversion. */\nstatic const {setpoint_struct} BELTUNE_SETPOINT = {{\n    .i_t_m_per_rad = BELTUNE_I_T_M_PER_RAD,\n    .belt_stretch = BELTUNE_BELT_STRETCH_ON,\n    .m_c_kg = {mc},\n    .c_n_per_m = {c},\n    .stiffness_position_m = {sp},\n    .compliance_slope_per_n = {cs},\n    .compliance_curvature_per_n_m = {cc},\n    .static_force_n = {sf},\n    .cart_viscous_n_s_per_m = {cv},\n    .cart_coulomb_n = {cf},\n    .coulomb_velocity_m_s = {vc},\n}};\n\n#endif /* BELTUNE_CONTROLLER_H */\n",
         kp = name("k_p_nm_s_per_rad"),
         ki = name("k_i_nm_per_rad"),
         s1 = sec(1),
@@ -444,6 +458,11 @@ pub fn parse_values(text: &str) -> Vec<(String, String)> {
             let (name, lit) = rest.split_once(' ')?;
             let lit = lit.trim();
             let lit = lit.strip_suffix('u').unwrap_or(lit);
+            // a `float` constant (`0.1f`) of a single-precision header
+            let lit = match lit.strip_suffix('f') {
+                Some(x) if x.parse::<f64>().is_ok() => x,
+                _ => lit,
+            };
             Some((name.to_ascii_lowercase(), lit.to_string()))
         })
         .filter(|(n, _)| n != "controller_h")

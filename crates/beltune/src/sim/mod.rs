@@ -420,8 +420,9 @@ impl SimAxis {
         match &mut self.dynamics {
             Dynamics::ThreeMass(m) => {
                 let p = params.expect("three-mass dynamics belong to a physical plant");
+                let fixed = FixedSegment::of(p);
                 for _ in 0..self.n_sub {
-                    set_three_mass_segments(m, p);
+                    set_three_mass_segments(m, p, &fixed);
                     m.step(tau, self.h_sub);
                 }
             }
@@ -567,23 +568,44 @@ fn three_mass_mech(p: &PhysicalParams, xi_m: f64) -> Mech<3, 3> {
             pretension_n,
             sign: [-1.0, 1.0, 1.0],
         }),
-    };
-    set_three_mass_segments(&mut m, p);
+        gg: [[[0.0; 3]; 3]; 3],
+    }
+    .prepared();
+    set_three_mass_segments(&mut m, p, &FixedSegment::of(p));
     m
 }
 
+/// Stiffness and damping of the segment `l_3` between the pulleys, which
+/// does not depend on the cart position: computed once per sample instead
+/// of once per sub-step (the same expression, so the same values).
+struct FixedSegment {
+    c_n_per_m: f64,
+    d_n_s_per_m: f64,
+}
+
+impl FixedSegment {
+    #[inline]
+    fn of(p: &PhysicalParams) -> Self {
+        let inv3 = 1.0 / (p.pulley_distance_m + p.end_compliance_length_m);
+        FixedSegment {
+            c_n_per_m: p.c_b_n * inv3,
+            d_n_s_per_m: p.d_b_n_s * inv3,
+        }
+    }
+}
+
 /// Segment stiffness/damping at the current cart position: (2.10) as in
-/// [`PhysicalParams::belt_segments`], written out for speed (two divisions).
+/// [`PhysicalParams::belt_segments`], written out for speed (two divisions;
+/// the segment between the pulleys from `fixed`).
 #[inline]
-fn set_three_mass_segments(m: &mut Mech<3, 3>, p: &PhysicalParams) {
+fn set_three_mass_segments(m: &mut Mech<3, 3>, p: &PhysicalParams, fixed: &FixedSegment) {
     let xi = m.q[2].clamp(0.0, p.stroke_m);
     let half = 0.5 * p.cart_belt_span_m;
     let le = p.end_compliance_length_m;
     let inv1 = 1.0 / (p.l_xi_m + xi - half + le);
     let inv2 = 1.0 / (p.pulley_distance_m - p.l_xi_m - xi - half + le);
-    let inv3 = 1.0 / (p.pulley_distance_m + le);
-    m.c = [p.c_b_n * inv1, p.c_b_n * inv2, p.c_b_n * inv3];
-    m.d = [p.d_b_n_s * inv1, p.d_b_n_s * inv2, p.d_b_n_s * inv3];
+    m.c = [p.c_b_n * inv1, p.c_b_n * inv2, fixed.c_n_per_m];
+    m.d = [p.d_b_n_s * inv1, p.d_b_n_s * inv2, fixed.d_n_s_per_m];
     if p.wear.guide_wear_n > 0.0 {
         m.coulomb[2] = p.f_c_cart_n + p.wear.guide_friction_n(xi);
     }
@@ -608,10 +630,12 @@ fn two_mass_mech(p: &PhysicalParams, xi_m: f64) -> Mech<2, 1> {
         input: [1.0, 0.0],
         constant: [0.0, p.gravity_force_n()],
         g: [[it, -1.0]],
+        gg: [[[0.0; 2]; 2]; 1],
         c: [0.0],
         d: [0.0],
         slack: None,
-    };
+    }
+    .prepared();
     set_two_mass_segments(&mut m, p);
     m
 }

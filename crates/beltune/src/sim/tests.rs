@@ -200,7 +200,7 @@ fn fast_segment_updates_equal_the_model() {
         let seg = p.belt_segments(xi);
         let mut m3 = three_mass_mech(&p, 0.3);
         m3.q[2] = xi;
-        set_three_mass_segments(&mut m3, &p);
+        set_three_mass_segments(&mut m3, &p, &FixedSegment::of(&p));
         let want3 = [
             (seg.c_1_n_per_m, m3.c[0]),
             (seg.c_2_n_per_m, m3.c[1]),
@@ -252,7 +252,7 @@ fn simulator_equations_are_2_20() {
             rng.random_range(-1.0..1.0),
         ];
         m.q = q;
-        set_three_mass_segments(&mut m, &p);
+        set_three_mass_segments(&mut m, &p, &FixedSegment::of(&p));
         let u = rng.random_range(-3.0..3.0);
         let a = m.accel(&q, &v, u);
         let x = ThreeMassState {
@@ -755,5 +755,77 @@ fn friction_is_symmetric_and_matches_the_totals_at_constant_velocity() {
             rel(fit.coulomb_nm, TABLE_A10_COULOMB_NM) < FIT_TOL,
             "{model:?} {fit:?}"
         );
+    }
+}
+
+/// The faster integrator step (products of the geometry formed once, the
+/// symmetric half of `K` and `D`, zero products skipped, the segment between
+/// the pulleys once per sample, dot products from the first term) gives the
+/// states of the step as it was written before (`Mech::step_reference`,
+/// which keeps that code) on a seeded run: egc70's three-mass and two-mass
+/// models with stick-slip friction and gravity (30 deg tilt), 5 simulated
+/// seconds at 10 kHz of a PRBS-like torque (the cart slides throughout; the stick branch is not exercised), and
+/// the belt segments updated per sub-step as `SimAxis::advance` does.
+/// Every position and velocity is equal (`==`, which leaves only the sign of
+/// a zero free) on every sample.
+#[test]
+fn fast_step_gives_the_reference_states_on_a_seeded_run() {
+    let mut p = egc70_params(11.2);
+    p.tilt_rad = 30f64.to_radians();
+    let p = p.aged();
+    let (h, n_sub) = (p.ts_s, 2);
+    let h = h / n_sub as f64;
+    let mut state = 0x5EED_31B_u64;
+    let mut torque = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        if (state >> 63) == 1 {
+            0.6
+        } else {
+            -0.45
+        }
+    };
+    let torques: Vec<f64> = (0..50_000).map(|_| torque()).collect();
+    let (mut fast, mut slow) = (three_mass_mech(&p, 0.3), three_mass_mech(&p, 0.3));
+    let fixed = FixedSegment::of(&p);
+    let (mut stuck, mut moved) = (0usize, 0.0_f64);
+    for (k, &u) in torques.iter().enumerate() {
+        for _ in 0..n_sub {
+            set_three_mass_segments(&mut fast, &p, &fixed);
+            fast.step(u, h);
+            // the segments as computed before (all three per sub-step)
+            let xi = slow.q[2].clamp(0.0, p.stroke_m);
+            let half = 0.5 * p.cart_belt_span_m;
+            let le = p.end_compliance_length_m;
+            let inv1 = 1.0 / (p.l_xi_m + xi - half + le);
+            let inv2 = 1.0 / (p.pulley_distance_m - p.l_xi_m - xi - half + le);
+            let inv3 = 1.0 / (p.pulley_distance_m + le);
+            slow.c = [p.c_b_n * inv1, p.c_b_n * inv2, p.c_b_n * inv3];
+            slow.d = [p.d_b_n_s * inv1, p.d_b_n_s * inv2, p.d_b_n_s * inv3];
+            slow.step_reference(u, h);
+        }
+        assert!(
+            fast.q == slow.q && fast.v == slow.v,
+            "sample {k}: {:?} {:?} against {:?} {:?}",
+            fast.q,
+            fast.v,
+            slow.q,
+            slow.v
+        );
+        stuck += usize::from(fast.v[2] == 0.0);
+        moved = moved.max((fast.q[2] - 0.3).abs());
+    }
+    // Measured: the cart never sticks in this run (0 samples), so the stick
+    // branch of the Coulomb step is not exercised here; printed, not asserted.
+    println!("cart stuck on {stuck} samples, moved up to {moved} m");
+
+    let (mut fast, mut slow) = (two_mass_mech(&p, 0.3), two_mass_mech(&p, 0.3));
+    for (k, &u) in torques.iter().enumerate() {
+        set_two_mass_segments(&mut fast, &p);
+        fast.step(u, p.ts_s);
+        set_two_mass_segments(&mut slow, &p);
+        slow.step_reference(u, p.ts_s);
+        assert!(fast.q == slow.q && fast.v == slow.v, "two-mass, sample {k}");
     }
 }
