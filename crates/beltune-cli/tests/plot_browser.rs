@@ -173,7 +173,10 @@ async fn hover_readout(c: &Client, id: &str, fx: f64) -> Vec<(String, String)> {
         {
             return rows;
         }
-        assert!(started.elapsed() < WAIT, "#{id}: no read-out on hover: {rows:?}");
+        assert!(
+            started.elapsed() < WAIT,
+            "#{id}: no read-out on hover: {rows:?}"
+        );
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
 }
@@ -336,7 +339,11 @@ async fn hovering_a_plot_shows_the_values_with_their_units() {
                     .total_cmp(&(b.freq_hz[k] / f).ln().abs())
             })
             .unwrap();
-        assert_eq!(f, sig4(b.freq_hz[i]), "the read-out's frequency is not a plotted one");
+        assert_eq!(
+            f,
+            sig4(b.freq_hz[i]),
+            "the read-out's frequency is not a plotted one"
+        );
         for (row, curve, label) in [
             (1, &b.open_loop_velocity, "velocity loop"),
             (2, &b.open_loop_position, "position loop"),
@@ -373,20 +380,24 @@ async fn hovering_a_plot_shows_the_values_with_their_units() {
 }
 
 /// Hovering at 25, 50 and 75 % of the width reads the frequencies a log axis
-/// has there, within half the spacing of the plotted points (the cursor snaps
-/// to the nearest) and [`PX_TOL`]; a linear axis would read several times more.
+/// has there, within half the widest step between plotted points (the cursor
+/// snaps to the nearest) and [`PX_TOL`]; a linear axis would read far off.
 async fn check_log_axis(c: &Client, id: &str) {
     let (x0, x1) = x_range(c, id).await;
     assert!(x1 / x0 > 100.0, "#{id}: {x0}..{x1} Hz is not two decades");
     let width = plot_width(c, id).await;
-    let points = js(
+    // the widest step between neighbouring plotted frequencies, as a ratio
+    let step = js(
         c,
-        &format!("document.getElementById('{id}').uplot.data[0].length"),
+        &format!(
+            "(() => {{ const x = document.getElementById('{id}').uplot.data[0]; let r = 1; \
+             for (let i = 1; i < x.length; i++) r = Math.max(r, x[i] / x[i - 1]); return r; }})()"
+        ),
     )
     .await
     .as_f64()
     .unwrap();
-    let tol = (x1 / x0).powf(0.5 / (points - 1.0) + PX_TOL / width);
+    let tol = step.sqrt() * (x1 / x0).powf(PX_TOL / width);
     for p in [0.25, 0.5, 0.75] {
         let rows = hover_readout(c, id, p).await;
         let (f, _) = value_unit(&rows[0].1);
@@ -402,7 +413,11 @@ async fn check_log_axis(c: &Client, id: &str) {
         );
     }
     // the labels: 1, 2, 5 (or every integer) times powers of ten, over two decades at least
-    let ticks = js(c, &format!("document.getElementById('{id}').dataset.xTicks")).await;
+    let ticks = js(
+        c,
+        &format!("document.getElementById('{id}').dataset.xTicks"),
+    )
+    .await;
     let ticks: Vec<f64> = ticks
         .as_str()
         .unwrap()
@@ -477,16 +492,28 @@ async fn printing_the_report_shows_the_static_svg() {
             );
         }
         for (id, [sw, sh, iw, ih, canvases]) in &screen {
-            assert!(*sw == 0.0 && *sh == 0.0, "#{id}: the SVG shows on screen ({sw} x {sh})");
-            assert!(*iw > 300.0 && *ih > 150.0 && *canvases >= 1.0, "#{id}: no chart on screen ({iw} x {ih}, {canvases} canvases)");
+            assert!(
+                *sw == 0.0 && *sh == 0.0,
+                "#{id}: the SVG shows on screen ({sw} x {sh})"
+            );
+            assert!(
+                *iw > 300.0 && *ih > 150.0 && *canvases >= 1.0,
+                "#{id}: no chart on screen ({iw} x {ih}, {canvases} canvases)"
+            );
         }
         // printed: the SVG, the interactive charts hidden
         common::emulate_media(&c, "print").await;
         let print = figures(c.execute(FIGURE_SIZES_JS, vec![]).await.unwrap());
         assert_eq!(print.len(), screen.len());
         for (id, [sw, sh, iw, ih, _]) in &print {
-            assert!(*sw > 300.0 && *sh > 150.0, "#{id}: the SVG does not print ({sw} x {sh})");
-            assert!(*iw == 0.0 && *ih == 0.0, "#{id}: the interactive chart prints ({iw} x {ih})");
+            assert!(
+                *sw > 300.0 && *sh > 150.0,
+                "#{id}: the SVG does not print ({sw} x {sh})"
+            );
+            assert!(
+                *iw == 0.0 && *ih == 0.0,
+                "#{id}: the interactive chart prints ({iw} x {ih})"
+            );
         }
         // the report needs nothing beside it: no element loads anything
         let loads = js(&c, "document.querySelectorAll('[src], link[href]').length").await;

@@ -136,7 +136,10 @@ async fn assert_no_overlapping_labels(c: &Client, what: &str, min_shown: u64) {
     let list = r["overlaps"].as_array().unwrap();
     assert!(list.is_empty(), "{what}: overlapping labels: {list:?}");
     let n = r["shown"].as_u64().unwrap();
-    assert!(n >= min_shown, "{what}: {n} labels laid out, expected {min_shown} or more");
+    assert!(
+        n >= min_shown,
+        "{what}: {n} labels laid out, expected {min_shown} or more"
+    );
 }
 
 /// The report's parameter table: name -> data-value.

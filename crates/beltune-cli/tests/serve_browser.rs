@@ -312,7 +312,9 @@ async fn series_points(c: &Client, plot: &str, name: &str) -> usize {
 async fn series_values(c: &Client, plot: &str, name: &str) -> String {
     js(
         c,
-        &format!("JSON.stringify(BeltunePlot.series(document.getElementById('{plot}'), '{name}').xy)"),
+        &format!(
+            "JSON.stringify(BeltunePlot.series(document.getElementById('{plot}'), '{name}').xy)"
+        ),
     )
     .await
     .as_str()

@@ -296,7 +296,10 @@ pub fn frf_chart(plot: &FrfPlot) -> FigureChart {
                 true,
             ),
         ],
-        hlines: vec![level(0.0, String::new(), ""), level(1.0, String::new(), "ref")],
+        hlines: vec![
+            level(0.0, String::new(), ""),
+            level(1.0, String::new(), "ref"),
+        ],
         vlines: markers(&plot.markers, false),
         ..freq_panel("Coherence (0..1)", "coherence", "")
     };
@@ -578,11 +581,11 @@ mod tests {
         let text = charts_json(&charts).unwrap();
         assert!(!text.contains('<') && !text.contains('&'));
         let back: serde_json::Value = serde_json::from_str(&text).unwrap();
-        assert_eq!(
-            back[0]["panels"][0]["series"][0]["label"],
-            "</script><b>&"
-        );
+        assert_eq!(back[0]["panels"][0]["series"][0]["label"], "</script><b>&");
         // a phase that is not a number is a gap, not a string or 0
-        assert_eq!(back[0]["panels"][1]["series"][0]["y"][1], serde_json::Value::Null);
+        assert_eq!(
+            back[0]["panels"][1]["series"][0]["y"][1],
+            serde_json::Value::Null
+        );
     }
 }

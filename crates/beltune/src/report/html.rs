@@ -339,7 +339,10 @@ mod tests {
         let allowed = html.matches("http://www.w3.org/2000/svg").count()
             + html.matches("https://github.com/leeoniya/uPlot").count();
         assert_eq!(urls, allowed, "a network address in the report");
-        assert!(!html.contains(" src="), "a script or image loaded from elsewhere");
+        assert!(
+            !html.contains(" src="),
+            "a script or image loaded from elsewhere"
+        );
     }
 
     /// A figure with an interactive chart carries its SVG (for print and
@@ -366,7 +369,11 @@ mod tests {
             .split("</figure>")
             .next()
             .unwrap();
-        assert!(fig.contains("<div class=\"static has-chart\"><svg"), "{}", &fig[..200]);
+        assert!(
+            fig.contains("<div class=\"static has-chart\"><svg"),
+            "{}",
+            &fig[..200]
+        );
         assert!(fig.contains("<div class=\"interactive\"></div>"));
         let data = html
             .split("<script type=\"application/json\" id=\"chart-data\">")
@@ -379,12 +386,14 @@ mod tests {
         assert_eq!(charts[0]["figure_id"], "controller");
         assert_eq!(charts[0]["panels"][0]["xlog"], true);
         assert!(html.contains(&format!("(v{})", web::UPLOT_VERSION)));
-        assert!(html.contains("Permission is hereby granted"), "uPlot's licence");
+        assert!(
+            html.contains("Permission is hereby granted"),
+            "uPlot's licence"
+        );
         let urls = html.matches("http").count();
         let allowed = html.matches("http://www.w3.org/2000/svg").count()
             + html.matches("https://github.com/leeoniya/uPlot").count();
         assert_eq!(urls, allowed, "a network address in the report");
         assert!(!html.contains(" src="));
     }
-
 }
