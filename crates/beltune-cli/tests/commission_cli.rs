@@ -128,6 +128,8 @@ fn commission_writes_json_toml_and_a_report_that_chromium_renders() {
             .unwrap();
         let title = client.title().await.unwrap();
         assert!(title.contains("beltune commissioning report"), "{title}");
+        // the static plots as printed (on screen, interactive charts replace most)
+        common::emulate_media(&client, "print").await;
         for id in FIGURES {
             // Each figure holds one SVG with drawn content and a non-zero rendered size.
             let script = format!(

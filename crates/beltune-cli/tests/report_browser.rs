@@ -7,7 +7,8 @@
 //! - The FRF phase axis of egc70's report stays within [-720, 360] deg (the
 //!   phase of excluded noisy lines once ran to -2000..+7000 deg).
 //! - No two text labels of any plot overlap (bounding boxes from the browser),
-//!   in the report, the page and a comparison report.
+//!   in the report (its static SVG as printed and its interactive charts on
+//!   screen), the page and a comparison report.
 //! - `beltune compare` on egc70 at 0 and 11.2 kg shows the resonance shift.
 //! - The same folder loaded into the page (`serve --commissioning`) simulates
 //!   its move on the plant the commissioning ran on: the report's number again.
@@ -97,18 +98,22 @@ async fn wait_js(c: &Client, expr: &str, what: &str) -> Value {
     }
 }
 
-/// Every pair of non-empty `<text>` elements of one `<svg>` whose browser
-/// bounding boxes overlap: `[figure, text a, text b]`.
+/// Every pair of non-empty labels of one plot whose browser bounding boxes
+/// overlap: `<text>` elements of an `<svg>` (the report's static plots) and
+/// the labels over an interactive plot (`.plot-label` in a `.plot`):
+/// `{overlaps: [[figure, text a, text b, box a, box b]], shown: labels with a size}`.
 const OVERLAPS_JS: &str = r#"
 const slack = arguments[0];
 const out = [];
-document.querySelectorAll('svg').forEach((svg) => {
-  const fig = (svg.closest('figure') && svg.closest('figure').id) || svg.id || '?';
-  const boxes = [...svg.querySelectorAll('text')]
+let shown = 0;
+document.querySelectorAll('svg, .plot').forEach((host) => {
+  const fig = (host.closest('figure') && host.closest('figure').id) || host.id || '?';
+  const boxes = [...host.querySelectorAll(host.tagName.toLowerCase() === 'svg' ? 'text' : '.plot-label')]
     .filter((t) => t.textContent.trim() !== '')
     .map((t) => { const r = t.getBoundingClientRect();
       return { t: t.textContent.trim(), x0: r.left, y0: r.top, x1: r.right, y1: r.bottom, w: r.width }; })
     .filter((b) => b.w > 0);
+  shown += boxes.length;
   for (let i = 0; i < boxes.length; i++) {
     for (let j = i + 1; j < boxes.length; j++) {
       const a = boxes[i], b = boxes[j];
@@ -118,18 +123,23 @@ document.querySelectorAll('svg').forEach((svg) => {
     }
   }
 });
-return out;
+return {overlaps: out, shown: shown};
 "#;
 
-async fn assert_no_overlapping_labels(c: &Client, what: &str) {
-    let overlaps = c
+/// No two labels of a plot overlap, and at least `min_shown` labels are laid
+/// out (the check saw the plots).
+async fn assert_no_overlapping_labels(c: &Client, what: &str, min_shown: u64) {
+    let r = c
         .execute(OVERLAPS_JS, vec![Value::from(OVERLAP_SLACK_PX)])
         .await
         .unwrap();
-    let list = overlaps.as_array().unwrap();
+    let list = r["overlaps"].as_array().unwrap();
     assert!(list.is_empty(), "{what}: overlapping labels: {list:?}");
-    let n = js(c, "return document.querySelectorAll('svg text').length;").await;
-    assert!(n.as_u64().unwrap() > 20, "{what}: no labels rendered ({n})");
+    let n = r["shown"].as_u64().unwrap();
+    assert!(
+        n >= min_shown,
+        "{what}: {n} labels laid out, expected {min_shown} or more"
+    );
 }
 
 /// The report's parameter table: name -> data-value.
@@ -256,6 +266,8 @@ async fn report_and_page_show_the_same_numbers_and_readable_plots() {
         );
         // the checks' values are SI (m); the page's numbers too
         let max_mm = checks[0] * 1e3;
+        // the static plots as printed (on screen the interactive charts replace them)
+        common::emulate_media(&c, "print").await;
         let phase = js(&c, PHASE_TICKS_JS_BODY).await;
         let phase: Vec<f64> = phase
             .as_array()
@@ -271,7 +283,10 @@ async fn report_and_page_show_the_same_numbers_and_readable_plots() {
             lo >= PHASE_AXIS_DEG.0 && hi <= PHASE_AXIS_DEG.1,
             "FRF phase axis {lo}..{hi} deg outside {PHASE_AXIS_DEG:?}"
         );
-        assert_no_overlapping_labels(&c, "report").await;
+        assert_no_overlapping_labels(&c, "report (print)", 20).await;
+        // on screen: the interactive charts' labels
+        common::emulate_media(&c, "").await;
+        assert_no_overlapping_labels(&c, "report (screen)", 8).await;
 
         // ---- the page (built-in axis, default knobs) ----
         c.goto(&format!("http://{addr}/")).await.unwrap();
@@ -342,13 +357,20 @@ async fn report_and_page_show_the_same_numbers_and_readable_plots() {
         // the measured FRF is overlaid and the axes are in Hz
         let frf_points = js(
             &c,
-            "return Number(document.querySelector('#plot-frf-mag g[data-name=measured]').dataset.points);",
+            "return BeltunePlot.series(document.getElementById('plot-frf-mag'), 'measured').points;",
         )
         .await;
         assert!(frf_points.as_f64().unwrap() > 20.0, "no measured FRF on the page");
-        let rad = js(&c, "return [...document.querySelectorAll('svg text')].some((t) => t.textContent.includes('rad/s'));").await;
+        // labels, legends and axis descriptions (the axes are drawn on a canvas:
+        // their descriptions are kept in data-xlabel / data-ylabel)
+        let rad = js(
+            &c,
+            "return [...document.querySelectorAll('.plot')].some((p) => \
+             (p.textContent + p.dataset.xlabel + p.dataset.ylabel).includes('rad/s'));",
+        )
+        .await;
         assert_eq!(rad, Value::Bool(false), "the page still shows rad/s");
-        assert_no_overlapping_labels(&c, "tuning page").await;
+        assert_no_overlapping_labels(&c, "tuning page", 8).await;
 
         // ---- the page on the loaded folder ----
         // `commissioning.json` records the plant the commissioning ran on, so
@@ -414,6 +436,8 @@ async fn compare_shows_the_resonance_shift_with_the_payload() {
     let body = tokio::spawn(async move {
         let c = client;
         c.goto(&url).await.unwrap();
+        // the static plots as printed
+        common::emulate_media(&c, "print").await;
         let row = js(
             &c,
             r#"return [...document.querySelectorAll('table.extra tr')].map((tr) =>
@@ -451,7 +475,9 @@ async fn compare_shows_the_resonance_shift_with_the_payload() {
         for want in ["f_r A", "f_r B", "A fitted model", "B fitted model"] {
             assert!(labels.iter().any(|l| l.starts_with(want)), "{want} not in {labels:?}");
         }
-        assert_no_overlapping_labels(&c, "comparison").await;
+        assert_no_overlapping_labels(&c, "comparison (print)", 20).await;
+        common::emulate_media(&c, "").await;
+        assert_no_overlapping_labels(&c, "comparison (screen)", 4).await;
     })
     .await;
     let _ = c.close().await;

@@ -236,12 +236,24 @@ fn page_and_assets_are_embedded_and_self_contained() {
     ] {
         assert!(html.contains(&format!("id=\"{id}\"")), "page lacks #{id}");
     }
-    for path in ["/", "/app.js", "/style.css"] {
+    for path in [
+        "/",
+        "/app.js",
+        "/style.css",
+        "/uPlot.iife.min.js",
+        "/uPlot.min.css",
+        "/beltune-plot.js",
+        "/beltune-plot.css",
+    ] {
         let (status, text) = http(s.addr, "GET", path, None, b"");
         assert_eq!(status, 200, "{path}");
-        // No CDN, no network: the only absolute URL anywhere is the SVG namespace.
+        // No CDN, no network: the only absolute URLs anywhere are the SVG
+        // namespace and the vendored plotting library's provenance comment.
         let urls = text.matches("http").count();
-        let ns = text.matches("http://www.w3.org/2000/svg").count();
+        let ns = text.matches("http://www.w3.org/2000/svg").count()
+            + text
+                .matches("/*! https://github.com/leeoniya/uPlot (v1.6.32) */")
+                .count();
         assert_eq!(urls, ns, "{path} references a network URL");
     }
     let (status, info) = http(s.addr, "GET", "/api/info", None, b"");

@@ -283,7 +283,7 @@ async fn check_against(c: &Client, d: &bdesign::ControllerDesign) {
     ] {
         let x: f64 = attr(
             c,
-            &format!("#plot-bode-mag line[data-name={name}]"),
+            &format!("#plot-bode-mag .bp-vline[data-name={name}]"),
             "data-x",
         )
         .await
@@ -295,6 +295,31 @@ async fn check_against(c: &Client, d: &bdesign::ControllerDesign) {
     // K_P is shown rounded to 4 significant digits
     let text = js(c, "document.getElementById('k_p').textContent").await;
     assert_eq!(text.as_str().unwrap(), sig4(d.k_p));
+}
+
+/// The number of points the plot `plot` draws of its series `name` (uPlot's data).
+async fn series_points(c: &Client, plot: &str, name: &str) -> usize {
+    let v = js(
+        c,
+        &format!("BeltunePlot.series(document.getElementById('{plot}'), '{name}').points"),
+    )
+    .await;
+    v.as_u64()
+        .unwrap_or_else(|| panic!("#{plot} has no series {name}: {v}")) as usize
+}
+
+/// The (x, y) points the plot `plot` draws of its series `name`, as JSON text.
+async fn series_values(c: &Client, plot: &str, name: &str) -> String {
+    js(
+        c,
+        &format!(
+            "JSON.stringify(BeltunePlot.series(document.getElementById('{plot}'), '{name}').xy)"
+        ),
+    )
+    .await
+    .as_str()
+    .unwrap()
+    .to_string()
 }
 
 /// `Number.prototype.toPrecision(4)` for the magnitudes that occur here (1e-3..1e5).
@@ -346,11 +371,11 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         // plots that show the result: the 6 dB line is labelled, the filter's
         // corner is marked, the frequency axis has more labels than the decades,
         // and the error panel is scaled to the delivered controller's error
-        let six = js(&c, "[...document.querySelectorAll('#plot-sensitivity text.hline-label')].map(t => t.textContent).join('|')").await;
+        let six = js(&c, "[...document.querySelectorAll('#plot-sensitivity .hline-label')].map(t => t.textContent).join('|')").await;
         assert!(six.as_str().unwrap().contains("6 dB"), "{six}");
-        let corner = js(&c, "document.querySelectorAll('#plot-bode-mag line[data-name=filter-corner]').length").await;
+        let corner = js(&c, "document.querySelectorAll('#plot-bode-mag .bp-vline[data-name=filter-corner]').length").await;
         assert_eq!(corner.as_u64(), Some(1), "the prefilter's corner is not marked");
-        let ticks = js(&c, "document.querySelectorAll('#plot-bode-mag text.x-tick').length").await;
+        let ticks = js(&c, "document.getElementById('plot-bode-mag').dataset.xTicks.split('|').filter(Boolean).length").await;
         assert!(ticks.as_u64().unwrap() >= 6, "{ticks} frequency labels");
         let peak_mm: f64 = js(&c, "document.getElementById('plot-error').dataset.peakMm")
             .await
@@ -358,17 +383,14 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
             .unwrap()
             .parse()
             .unwrap();
-        let top = js(&c, "Math.max(...[...document.querySelectorAll('#plot-error text.tick:not(.x-tick)')].map(t => Number(t.textContent)).filter(isFinite))").await;
+        let top = js(&c, "Math.max(...document.getElementById('plot-error').dataset.yTicks.split('|').map(Number).filter(isFinite))").await;
         let top = top.as_f64().unwrap();
         assert!(
             top < 3.0 * peak_mm.max(0.01),
             "the error panel reaches {top} mm for a largest error of {peak_mm} mm"
         );
-        let path0 = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "d").await;
-        let points: usize = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "data-points")
-            .await
-            .parse()
-            .unwrap();
+        let path0 = series_values(&c, "plot-bode-mag", "open-loop-velocity").await;
+        let points = series_points(&c, "plot-bode-mag", "open-loop-velocity").await;
         assert_eq!(points, serve::library::PLOT_POINTS, "curve lost points");
 
         // Move the velocity phase-margin slider with the keyboard: 60 -> 55 deg.
@@ -452,13 +474,10 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
         assert_close("max error", number(&c, "max_error").await, m.max_error_m);
         assert_close("static error", number(&c, "static_error").await, m.static_error_m);
         for (plot, name) in [("plot-error", "tracking-error"), ("plot-torque", "torque")] {
-            let n: usize = attr(&c, &format!("#{plot} path[data-name={name}]"), "data-points")
-                .await
-                .parse()
-                .unwrap();
+            let n = series_points(&c, plot, name).await;
             assert_eq!(n, m.t_s.len(), "{plot} lost points");
         }
-        let path1 = attr(&c, "#plot-bode-mag path[data-name=open-loop-velocity]", "d").await;
+        let path1 = series_values(&c, "plot-bode-mag", "open-loop-velocity").await;
         assert_ne!(path0, path1, "the open-loop curve was not redrawn");
         let stats = |k: usize| {
             let mut v: Vec<f64> = times.iter().map(|t| t[k]).collect();
@@ -500,10 +519,10 @@ async fn tuning_page_end_to_end_in_headless_chromium() {
             let fits = js(
                 &c,
                 &format!(
-                    "(() => {{ const s = document.getElementById('{plot}'); \
-                     const b = s.querySelector('text').getBBox(); \
-                     const v = s.viewBox.baseVal; \
-                     return b.x >= v.x && b.x + b.width <= v.x + v.width; }})()"
+                    "(() => {{ const s = document.getElementById('{plot}').getBoundingClientRect(); \
+                     const n = document.getElementById('{plot}').querySelector('.plot-empty'); \
+                     const b = n.getBoundingClientRect(); \
+                     return n.scrollWidth <= n.clientWidth && b.left >= s.left && b.right <= s.right; }})()"
                 ),
             )
             .await;

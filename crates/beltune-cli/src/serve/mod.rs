@@ -1,7 +1,10 @@
 //! The interactive tuning page behind `beltune serve`.
 //!
 //! - `GET /`, `/app.js`, `/style.css`: the page, embedded in the binary (no CDN, no
-//!   network); the plots are drawn client-side as inline SVG from the API's data.
+//!   network); the plots are drawn client-side from the API's data with uPlot
+//!   (`/uPlot.iife.min.js`, `/uPlot.min.css`, vendored, see
+//!   [`beltune::report::web`]) and beltune's plots on it (`/beltune-plot.js`,
+//!   `/beltune-plot.css`): zoom, read-out on hover, log frequency axes.
 //! - `GET /api/info`: model summary, knob defaults and ranges.
 //! - `POST /api/design`: knobs -> gains, margins, Bode data, simulated move ([`api`]).
 //! - `POST /api/save`: writes a new folder `tuned-<UTC time>` in the save folder
@@ -71,6 +74,7 @@ const HYPER_MAX_HEADER_BYTES: usize = 64 * 1024;
 const INDEX_HTML: &str = include_str!("assets/index.html");
 const APP_JS: &str = include_str!("assets/app.js");
 const STYLE_CSS: &str = include_str!("assets/style.css");
+use beltune::report::web::{PLOT_CSS, PLOT_JS, UPLOT_CSS, UPLOT_JS};
 
 /// The page may load only its own script and style sheet.
 const CSP: &str = "default-src 'none'; script-src 'self'; style-src 'self'; \
@@ -99,6 +103,10 @@ pub fn router(state: AppState) -> Router {
         .route("/", get(index))
         .route("/app.js", get(app_js))
         .route("/style.css", get(style_css))
+        .route("/uPlot.iife.min.js", get(|| asset(JS, UPLOT_JS)))
+        .route("/uPlot.min.css", get(|| asset(CSS, UPLOT_CSS)))
+        .route("/beltune-plot.js", get(|| asset(JS, PLOT_JS)))
+        .route("/beltune-plot.css", get(|| asset(CSS, PLOT_CSS)))
         .route("/api/info", get(info))
         .route("/api/design", post(design))
         .route("/api/save", post(save))
@@ -408,6 +416,21 @@ async fn style_css() -> Response {
             (header::CACHE_CONTROL, "no-store"),
         ],
         STYLE_CSS,
+    )
+        .into_response()
+}
+
+const JS: &str = "text/javascript; charset=utf-8";
+const CSS: &str = "text/css; charset=utf-8";
+
+/// A static asset of the page (the plotting library and beltune's plots on it).
+async fn asset(content_type: &'static str, body: &'static str) -> Response {
+    (
+        [
+            (header::CONTENT_TYPE, content_type),
+            (header::CACHE_CONTROL, "no-store"),
+        ],
+        body,
     )
         .into_response()
 }

@@ -1,7 +1,12 @@
-//! The self-contained report page: inline SVG, inline CSS, no scripts, no network.
+//! The self-contained report page: inline CSS, no network. Every figure is an
+//! inline SVG ([`super::plot`]); the figures with an interactive version
+//! ([`super::chart`]) show it on screen instead (uPlot and beltune's plots on
+//! it, [`super::web`], inlined with the charts' data as JSON): zoom, a read-out
+//! on hover, log frequency axes. Printing shows the SVG (`@media print`), and
+//! so does a browser without scripts.
 
 use super::data::Report;
-use super::plot;
+use super::{plot, web};
 use crate::{Error, Result};
 use minijinja::value::Serde;
 use minijinja::{context, Environment, Value};
@@ -29,7 +34,15 @@ th { background: #f2f2f2; } td:first-child, th:first-child { text-align: left; }
 .trace { font-size: 0.85em; color: #555; }
 figure { margin: 0.5em 0; } figure svg { width: 100%; height: auto; }
 pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; white-space: pre-wrap; overflow-wrap: anywhere; }
+figure .interactive { display: none; }
+html.js figure .static.has-chart { display: none; }
+html.js figure .interactive { display: block; }
+.chart-title { font-size: 0.9em; color: #333; margin: 0.6em 0 0.1em; }
+.plot-help { font-size: 0.8em; color: #555; margin: 0.2em 0; }
+.plot { width: 100%; position: relative; }
 @media print {
+  html.js figure .static.has-chart { display: block; }
+  html.js figure .interactive { display: none; }
   body { margin: 0; max-width: none; font-size: 10pt; }
   h2 { break-after: avoid; }
   figure, table, .verdict { break-inside: avoid; }
@@ -38,6 +51,8 @@ pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; white-space: pre-w
   a { color: inherit; text-decoration: none; }
 }
 </style>
+{% if charts %}<style>{{ uplot_css }}</style>
+<style>{{ plot_css }}</style>{% endif %}
 </head>
 <body>
 <h1>{{ title }}</h1>
@@ -72,7 +87,7 @@ pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; white-space: pre-w
 {% endfor %}
 
 {% for fig in figures %}<h2>{{ fig.heading }}</h2>
-<figure id="{{ fig.id }}">{{ fig.svg }}</figure>
+<figure id="{{ fig.id }}"><div class="static{% if fig.chart %} has-chart{% endif %}">{{ fig.svg }}</div>{% if fig.chart %}<div class="interactive"></div>{% endif %}</figure>
 {% endfor %}
 
 {% if data_files %}<h2>Data files</h2>
@@ -89,18 +104,67 @@ pre { background: #f6f8fa; padding: 0.6em; font-size: 0.85em; white-space: pre-w
 {% if log %}<h2>Log</h2>
 <pre id="log">{% for line in log %}{{ line }}
 {% endfor %}</pre>{% endif %}
+{% if charts %}<script type="application/json" id="chart-data">{{ charts }}</script>
+<script>/* uPlot {{ uplot_version }} (https://github.com/leeoniya/uPlot), its licence:
+{{ uplot_license }} */
+{{ uplot_js }}</script>
+<script>{{ plot_js }}</script>
+<script>{{ init_js }}</script>{% endif %}
 </body>
 </html>
 "#;
 
-/// Render the report to one self-contained HTML page (every plot inline SVG).
+/// Draws the report's interactive charts (the data in `#chart-data`) into
+/// their figures; panels of one figure zoom together.
+const INIT_JS: &str = r#"(function () {
+  'use strict';
+  if (!window.uPlot || !window.BeltunePlot) return;
+  const figures = JSON.parse(document.getElementById('chart-data').textContent);
+  document.documentElement.classList.add('js');
+  for (const fig of figures) {
+    const host = document.querySelector('figure#' + fig.figure_id + ' > .interactive');
+    if (!host) continue;
+    const help = document.createElement('p');
+    help.className = 'plot-help';
+    help.textContent = 'Drag across a plot to zoom into it, double-click to zoom out; the line under a plot reads the values under the cursor.';
+    host.appendChild(help);
+    const plots = fig.panels.map((p, k) => {
+      const cap = document.createElement('div');
+      cap.className = 'chart-title';
+      cap.textContent = p.title;
+      host.appendChild(cap);
+      const el = document.createElement('div');
+      el.className = 'plot';
+      el.id = fig.figure_id + '-chart-' + k;
+      host.appendChild(el);
+      return [el, p];
+    });
+    for (const [el, p] of plots) {
+      p.onZoom = (min, max) => {
+        for (const [other] of plots) {
+          const u = other.uplot;
+          if (other !== el && u && (u.scales.x.min !== min || u.scales.x.max !== max)) {
+            u.setScale('x', { min: min, max: max });
+          }
+        }
+      };
+      window.BeltunePlot.draw(el, p);
+    }
+  }
+}());"#;
+
+/// Render the report to one self-contained HTML page: every plot an inline
+/// SVG, and on screen an interactive chart where [`super::chart`] has one.
 pub fn render_html(report: &Report) -> Result<String> {
+    let charts = super::chart::report_charts(report);
+    let has_chart = |id: &str| charts.iter().any(|c| c.figure_id == id);
     let mut figures: Vec<Value> = Vec::new();
     let mut add = |id: &str, heading: &str, svg: String| {
         figures.push(context! {
             id => id,
             heading => heading,
             svg => Value::from_safe_string(svg),
+            chart => has_chart(id),
         });
     };
     if let Some(frf) = &report.frf {
@@ -169,6 +233,11 @@ pub fn render_html(report: &Report) -> Result<String> {
             }
         })
         .collect();
+    let charts_value = if charts.is_empty() {
+        Value::from(false)
+    } else {
+        Value::from_safe_string(super::chart::charts_json(&charts)?)
+    };
     tmpl.render(context! {
         title => &report.title,
         checks => checks,
@@ -184,6 +253,14 @@ pub fn render_html(report: &Report) -> Result<String> {
         provenance => Value::from(Serde(&report.provenance)),
         command_line => report.provenance.as_ref().map(|p| p.command_line_text()).unwrap_or_default(),
         log => Value::from(Serde(&report.log)),
+        charts => charts_value,
+        uplot_css => Value::from_safe_string(web::UPLOT_CSS.into()),
+        plot_css => Value::from_safe_string(web::PLOT_CSS.into()),
+        uplot_js => Value::from_safe_string(web::UPLOT_JS.into()),
+        uplot_license => Value::from_safe_string(web::UPLOT_LICENSE.into()),
+        uplot_version => web::UPLOT_VERSION,
+        plot_js => Value::from_safe_string(web::PLOT_JS.into()),
+        init_js => Value::from_safe_string(INIT_JS.into()),
     })
     .map_err(|e| Error::Report {
         reason: e.to_string(),
@@ -256,6 +333,67 @@ mod tests {
         assert!(html.contains("<code>beltune commission</code>"));
         assert!(html.contains("<svg"));
         assert!(!html.contains("http://") || html.contains("xmlns=\"http://www.w3.org/2000/svg\""));
-        assert!(!html.contains("<script"));
+        // no network: the only addresses are the SVG namespace and uPlot's
+        // provenance in comments
+        let urls = html.matches("http").count();
+        let allowed = html.matches("http://www.w3.org/2000/svg").count()
+            + html.matches("https://github.com/leeoniya/uPlot").count();
+        assert_eq!(urls, allowed, "a network address in the report");
+        assert!(
+            !html.contains(" src="),
+            "a script or image loaded from elsewhere"
+        );
+    }
+
+    /// A figure with an interactive chart carries its SVG (for print and
+    /// browsers without scripts) and the chart's data; the page inlines
+    /// uPlot and needs no network.
+    #[test]
+    fn a_figure_with_a_chart_keeps_its_svg_and_inlines_the_chart() {
+        let design = crate::design::design(
+            &crate::design::DesignInput::new(crate::model::TwoMassParams::thesis_table_a4(), 1e-3),
+            &crate::design::DesignKnobs::default(),
+        )
+        .unwrap();
+        let loops = crate::report::bode::loop_plots(&design, 10.0, 30.0).unwrap();
+        let r = Report {
+            title: "t".into(),
+            controller: Some(loops.controller),
+            ..Default::default()
+        };
+        let html = render_html(&r).unwrap();
+        let fig = html
+            .split("<figure id=\"controller\">")
+            .nth(1)
+            .expect("the controller figure")
+            .split("</figure>")
+            .next()
+            .unwrap();
+        assert!(
+            fig.contains("<div class=\"static has-chart\"><svg"),
+            "{}",
+            &fig[..200]
+        );
+        assert!(fig.contains("<div class=\"interactive\"></div>"));
+        let data = html
+            .split("<script type=\"application/json\" id=\"chart-data\">")
+            .nth(1)
+            .unwrap()
+            .split("</script>")
+            .next()
+            .unwrap();
+        let charts: serde_json::Value = serde_json::from_str(data).unwrap();
+        assert_eq!(charts[0]["figure_id"], "controller");
+        assert_eq!(charts[0]["panels"][0]["xlog"], true);
+        assert!(html.contains(&format!("(v{})", web::UPLOT_VERSION)));
+        assert!(
+            html.contains("Permission is hereby granted"),
+            "uPlot's licence"
+        );
+        let urls = html.matches("http").count();
+        let allowed = html.matches("http://www.w3.org/2000/svg").count()
+            + html.matches("https://github.com/leeoniya/uPlot").count();
+        assert_eq!(urls, allowed, "a network address in the report");
+        assert!(!html.contains(" src="));
     }
 }

@@ -12,6 +12,7 @@
 //! | [`data`] | what the page shows, as plain data |
 //! | [`vendor`] | the controller in the parameter names and units of drive families' manuals |
 //! | [`plot`], [`html`] | drawing: SVG plots, one self-contained HTML page |
+//! | [`chart`], [`web`] | the interactive plots (uPlot) of the page and the report: their data, the vendored scripts |
 //!
 //! Computation of results happens upstream (`commission`, `verdict`); this
 //! module only arranges and draws what it is given.
@@ -27,6 +28,8 @@ pub mod html;
 pub mod plot;
 pub mod plot_data;
 pub mod vendor;
+pub mod web;
+pub mod chart;
 
 pub use data::{
     BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrfPlot, FrictionPlot, MarginPoint,

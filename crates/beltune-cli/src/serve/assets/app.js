@@ -1,9 +1,9 @@
-// beltune tuning page: plain JavaScript, no libraries, no network beyond this server.
+// beltune tuning page: plain JavaScript, no network beyond this server. The plots
+// are drawn by uPlot (vendored, served by this server) through beltune-plot.js.
 // Every knob change (debounced) posts the knobs to /api/design and redraws the
-// numbers and the inline-SVG plots from the returned data.
+// numbers and the plots from the returned data.
 'use strict';
 (function () {
-  const NS = 'http://www.w3.org/2000/svg';
   const SLIDERS = ['dynamics', 'pm_velocity_deg', 'pm_position_deg',
     'resonance_suppression_db', 'filter_attenuation_db', 'payload_kg'];
   const DYNAMICS_SET = ['pm_velocity_deg', 'pm_position_deg', 'resonance_suppression_db'];
@@ -52,156 +52,19 @@
     document.body.dataset.state = 'ok';
   }
 
-  // ---------- SVG plots ----------
-  function el(tag, attrs, text) {
-    const e = document.createElementNS(NS, tag);
-    for (const k in attrs) e.setAttribute(k, attrs[k]);
-    if (text !== undefined) e.textContent = text;
-    return e;
+  // ---------- plots (uPlot through BeltunePlot: zoom, read-out on hover, log axes) ----------
+  // A redraw after a knob change keeps the x window the user zoomed into.
+  function plot(el, opts) {
+    if (el.uplot && !opts.empty) {
+      const d = el.dataset;
+      if (Number(d.xMin) > Number(d.xFullMin) || Number(d.xMax) < Number(d.xFullMax)) {
+        opts.xwindow = [Number(d.xMin), Number(d.xMax)];
+      }
+    }
+    window.BeltunePlot.draw(el, opts);
   }
-  function niceTicks(a, b, n) {
-    const step0 = (b - a) / n;
-    const mag = Math.pow(10, Math.floor(Math.log10(step0)));
-    const f = step0 / mag;
-    const step = (f < 1.5 ? 1 : f < 3 ? 2 : f < 7 ? 5 : 10) * mag;
-    const out = [];
-    for (let v = Math.ceil(a / step) * step; v <= b + 1e-9 * step; v += step) {
-      out.push(Math.abs(v) < 1e-9 * step ? 0 : v);
-    }
-    return out;
-  }
-  function tickLabel(v) {
-    const a = Math.abs(v);
-    if (a !== 0 && (a < 1e-3 || a >= 1e5)) return v.toExponential(0);
-    return String(Number(v.toPrecision(6)));
-  }
-
-  // opts: { xlog, series: [{x, y, cls, name}], vlines: [{x, cls, label}],
-  //         hlines: [{y, cls, label}], yspan (max visible span), empty (message) }
-  function plot(svg, opts) {
-    const W = 460, H = 200, L = 48, R = 12, T = 10, B = 24;
-    svg.setAttribute('viewBox', `0 0 ${W} ${H}`);
-    svg.replaceChildren();
-    if (opts.empty) {
-      // wrapped into lines of at most ~70 characters, centred: never clipped at the edges
-      const words = String(opts.empty).split(/\s+/);
-      const lines = [''];
-      for (const w of words) {
-        const cur = lines[lines.length - 1];
-        if (cur && (cur + ' ' + w).length > 70) lines.push(w);
-        else lines[lines.length - 1] = cur ? cur + ' ' + w : w;
-      }
-      const t = el('text', { x: W / 2, y: H / 2 - 6 * (lines.length - 1), 'text-anchor': 'middle', class: 'empty-note' });
-      lines.forEach((line, i) => {
-        const span = el('tspan', { x: W / 2, dy: i === 0 ? 0 : 12 }, line);
-        t.appendChild(span);
-      });
-      svg.appendChild(t);
-      svg.dataset.empty = String(opts.empty);
-      return;
-    }
-    delete svg.dataset.empty;
-    const ok = (x, y) => isFinite(x) && isFinite(y) && (!opts.xlog || x > 0);
-    let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
-    for (const s of opts.series) {
-      if (s.norange) continue;
-      for (let i = 0; i < s.x.length; i++) {
-        if (!ok(s.x[i], s.y[i])) continue;
-        x0 = Math.min(x0, s.x[i]); x1 = Math.max(x1, s.x[i]);
-        y0 = Math.min(y0, s.y[i]); y1 = Math.max(y1, s.y[i]);
-      }
-    }
-    for (const h of opts.hlines || []) {
-      if (h.norange) continue;
-      y0 = Math.min(y0, h.y); y1 = Math.max(y1, h.y);
-    }
-    if (!isFinite(x0)) { plot(svg, { empty: 'no data' }); return; }
-    if (opts.yspan && y1 - y0 > opts.yspan) y0 = y1 - opts.yspan;
-    if (y1 - y0 < 1e-12) { y0 -= 1; y1 += 1; }
-    const pad = 0.05 * (y1 - y0);
-    y0 -= pad; y1 += pad;
-    const tx = opts.xlog ? Math.log10 : (v) => v;
-    const a0 = tx(x0), a1 = tx(x1) === a0 ? a0 + 1 : tx(x1);
-    const px = (x) => L + (tx(x) - a0) / (a1 - a0) * (W - L - R);
-    const py = (y) => T + (y1 - Math.min(Math.max(y, y0), y1)) / (y1 - y0) * (H - T - B);
-
-    // grid and ticks
-    const xt = [];
-    if (opts.xlog) {
-      // 1, 2, 5 per decade labelled (a decade or less: every integer multiple)
-      const few = a1 - a0 <= 1.2;
-      for (let k = Math.floor(a0) - 1; k <= Math.ceil(a1); k++) {
-        for (const m of few ? [1, 2, 3, 4, 5, 6, 7, 8, 9] : [1, 2, 5]) {
-          const v = m * Math.pow(10, k);
-          if (tx(v) >= a0 - 1e-9 && tx(v) <= a1 + 1e-9) xt.push(v);
-        }
-      }
-    } else {
-      xt.push(...niceTicks(x0, x1, 6));
-    }
-    for (const v of xt) {
-      const X = px(v).toFixed(1);
-      svg.appendChild(el('line', { x1: X, x2: X, y1: T, y2: H - B, class: 'grid' }));
-      // the axis' unit sits at the right end: a tick label there would cover it
-      if (opts.xlabel && W - R - px(v) < 30) continue;
-      svg.appendChild(el('text', { x: X, y: H - B + 12, 'text-anchor': 'middle', class: 'tick x-tick' }, tickLabel(v)));
-    }
-    for (const v of niceTicks(y0, y1, 5)) {
-      const Y = py(v).toFixed(1);
-      svg.appendChild(el('line', { x1: L, x2: W - R, y1: Y, y2: Y, class: 'grid' }));
-      svg.appendChild(el('text', { x: L - 4, y: Number(Y) + 3, 'text-anchor': 'end', class: 'tick' }, tickLabel(v)));
-    }
-    svg.appendChild(el('rect', { x: L, y: T, width: W - L - R, height: H - T - B, class: 'axis' }));
-    if (opts.xlabel) {
-      svg.appendChild(el('text', { x: W - R, y: H - 2, 'text-anchor': 'end', class: 'tick' }, opts.xlabel));
-    }
-    if (opts.ylabel) {
-      svg.appendChild(el('text', { x: L + 3, y: T + H - T - B - 4, class: 'tick y-label' }, opts.ylabel));
-    }
-    for (const h of opts.hlines || []) {
-      if (h.y < y0 || h.y > y1) continue; // a line off the scale (e.g. a far limit) is not drawn
-      const Y = py(h.y).toFixed(1);
-      svg.appendChild(el('line', { x1: L, x2: W - R, y1: Y, y2: Y, class: h.cls || 'ref', 'data-name': h.name || '' }));
-      if (h.label) {
-        svg.appendChild(el('text', { x: W - R - 3, y: Number(Y) - 3, 'text-anchor': 'end', class: 'hline-label' }, h.label));
-      }
-    }
-    for (const s of opts.series) {
-      if (s.dots) {
-        const g = el('g', { class: `series ${s.cls}`, 'data-name': s.name, 'data-points': 0 });
-        let n = 0;
-        for (let i = 0; i < s.x.length; i++) {
-          if (!ok(s.x[i], s.y[i]) || s.y[i] < y0 || s.y[i] > y1) continue;
-          g.appendChild(el('circle', { cx: px(s.x[i]).toFixed(2), cy: py(s.y[i]).toFixed(2), r: 2.6 }));
-          n++;
-        }
-        g.setAttribute('data-points', n);
-        svg.appendChild(g);
-        continue;
-      }
-      let d = '';
-      let pen = 'M';
-      let n = 0;
-      for (let i = 0; i < s.x.length; i++) {
-        if (!ok(s.x[i], s.y[i])) { pen = 'M'; continue; }
-        d += `${pen}${px(s.x[i]).toFixed(2)},${py(s.y[i]).toFixed(2)}`;
-        pen = 'L';
-        n++;
-      }
-      svg.appendChild(el('path', { d, class: `series ${s.cls}`, 'data-name': s.name, 'data-points': n }));
-    }
-    for (const v of opts.vlines || []) {
-      if (!ok(v.x, 0) || v.x < x0 || v.x > x1) continue;
-      const X = px(v.x).toFixed(1);
-      svg.appendChild(el('line', {
-        x1: X, x2: X, y1: T, y2: H - B, class: v.cls || 'marker', 'data-x': String(v.x), 'data-name': v.name || '',
-      }));
-      if (v.label) {
-        // rows one text box (10 px font, 1.3 em) apart, so that labels of close lines never overlap
-        svg.appendChild(el('text', { x: Number(X) + 3, y: T + 10 + 13 * (v.row || 0), class: 'marker-label' }, v.label));
-      }
-    }
-  }
+  const FREQ = { xlog: true, xlabel: 'frequency / Hz', xunit: 'Hz', xname: 'frequency' };
+  const TIME = { xlabel: 'time / s', xunit: 's', xname: 'time' };
 
   const TWO_PI = 2 * Math.PI;
   const hz = (w) => w / TWO_PI;
@@ -221,16 +84,18 @@
     ];
     for (const [id, key, mkey] of [['plot-frf-mag', 'magnitude_db', 'model_magnitude_db'],
       ['plot-frf-phase', 'phase_deg', 'model_phase_deg']]) {
-      plot($(id), {
-        xlog: true, xlabel: 'Hz',
-        ylabel: id === 'plot-frf-mag' ? `dB re 1 ${info.frf_unit || 'rad/(N m)'}` : 'deg',
+      const mag = id === 'plot-frf-mag';
+      plot($(id), Object.assign({}, FREQ, {
+        ylabel: mag ? `magnitude / dB re 1 ${info.frf_unit || 'rad/(N m)'}` : 'phase / deg',
+        yunit: mag ? 'dB' : 'deg',
         series: [
-          { x: f.freq_hz, y: pick(f[key], false), cls: 'excluded', name: 'measured-excluded', dots: true, norange: true },
-          { x: f.freq_hz, y: pick(f[key], true), cls: 's0', name: 'measured', dots: true },
-          { x: f.model_freq_hz, y: f[mkey], cls: 's1', name: 'model' },
+          { x: f.freq_hz, y: pick(f[key], false), cls: 'excluded', name: 'measured-excluded',
+            label: 'measured, not used by the fit', dots: true, norange: true },
+          { x: f.freq_hz, y: pick(f[key], true), cls: 's0', name: 'measured', label: 'measured', dots: true },
+          { x: f.model_freq_hz, y: f[mkey], cls: 's1', name: 'model', label: 'fitted model' },
         ],
-        vlines: id === 'plot-frf-mag' ? markers : markers.map((m) => ({ x: m.x, name: m.name, cls: 'ref' })),
-      });
+        vlines: mag ? markers : markers.map((m) => ({ x: m.x, name: m.name, cls: 'ref' })),
+      }));
     }
   }
 
@@ -251,64 +116,64 @@
     } else if (isFinite(corner)) {
       cross.push({ x: corner, name: 'filter-corner', cls: 'filter', label: `notch ${fmt(corner, 3)} Hz`, row: 3 });
     }
-    plot($('plot-bode-mag'), {
-      xlog: true, xlabel: 'Hz', ylabel: 'dB re 1 (|L|)', yspan: 160,
+    plot($('plot-bode-mag'), Object.assign({}, FREQ, {
+      ylabel: '|L| / dB re 1', yunit: 'dB', yspan: 160,
       series: [
-        { x: f, y: ol.magnitude_db, cls: 's0', name: 'open-loop-velocity' },
-        { x: f, y: op.magnitude_db, cls: 's1', name: 'open-loop-position' },
+        { x: f, y: ol.magnitude_db, cls: 's0', name: 'open-loop-velocity', label: 'velocity loop' },
+        { x: f, y: op.magnitude_db, cls: 's1', name: 'open-loop-position', label: 'position loop', dashed: true },
       ],
       hlines: [{ y: 0 }, { y: r.knobs.resonance_suppression_db, cls: 'ref', name: 'a-sup',
         label: `A_sup ${fmt(r.knobs.resonance_suppression_db, 3)} dB` }],
       vlines: cross,
-    });
-    plot($('plot-bode-phase'), {
-      xlog: true, xlabel: 'Hz', yspan: 720,
+    }));
+    plot($('plot-bode-phase'), Object.assign({}, FREQ, {
+      ylabel: 'phase of L / deg', yunit: 'deg', yspan: 720,
       series: [
-        { x: f, y: ol.phase_deg, cls: 's0', name: 'open-loop-velocity' },
-        { x: f, y: op.phase_deg, cls: 's1', name: 'open-loop-position' },
+        { x: f, y: ol.phase_deg, cls: 's0', name: 'open-loop-velocity', label: 'velocity loop' },
+        { x: f, y: op.phase_deg, cls: 's1', name: 'open-loop-position', label: 'position loop', dashed: true },
       ],
       hlines: [{ y: -180 }],
       vlines: [
         { x: hz(cv.crossover_rad_s), name: 'crossover-velocity', label: `PMv ${fmt(cv.phase_margin_deg, 3)}°`, row: 0 },
         { x: hz(cp.crossover_rad_s), name: 'crossover-position', label: `PMp ${fmt(cp.phase_margin_deg, 3)}°`, row: 1 },
       ],
-    });
-    plot($('plot-closed-loop'), {
-      xlog: true, xlabel: 'Hz', yspan: 120,
+    }));
+    plot($('plot-closed-loop'), Object.assign({}, FREQ, {
+      yspan: 120,
       series: [
-        { x: f, y: cl.magnitude_db, cls: 's2', name: 'closed-loop-position' },
-        { x: f, y: r.bode.closed_loop_velocity.magnitude_db, cls: 's0', name: 'closed-loop-velocity' },
+        { x: f, y: cl.magnitude_db, cls: 's2', name: 'closed-loop-position', label: 'position loop' },
+        { x: f, y: r.bode.closed_loop_velocity.magnitude_db, cls: 's0', name: 'closed-loop-velocity', label: 'velocity loop' },
       ],
-      ylabel: 'dB re 1',
+      ylabel: 'magnitude / dB re 1', yunit: 'dB',
       hlines: [{ y: 0 }, { y: -3, cls: 'ref', name: 'minus-3-db', label: '-3 dB' }],
-    });
-    plot($('plot-sensitivity'), {
-      xlog: true, xlabel: 'Hz', yspan: 120,
+    }));
+    plot($('plot-sensitivity'), Object.assign({}, FREQ, {
+      yspan: 120,
       series: [
-        { x: f, y: r.bode.sensitivity_velocity.magnitude_db, cls: 's0', name: 'sensitivity-velocity' },
-        { x: f, y: r.bode.sensitivity_position.magnitude_db, cls: 's1', name: 'sensitivity-position' },
+        { x: f, y: r.bode.sensitivity_velocity.magnitude_db, cls: 's0', name: 'sensitivity-velocity', label: 'velocity loop' },
+        { x: f, y: r.bode.sensitivity_position.magnitude_db, cls: 's1', name: 'sensitivity-position', label: 'position loop', dashed: true },
       ],
-      ylabel: 'dB re 1',
+      ylabel: '|S| / dB re 1', yunit: 'dB',
       hlines: [{ y: 0 }, { y: 6, cls: 'ref', name: 'six-db', label: '6 dB (|S| limit, 50 % gain change)' }],
-    });
+    }));
     const m = r.validation_move;
     if (m) {
       const tEnd = m.settling_time_s;
       // scaled to the delivered controller's error, not to the limit: a 0.04 mm error
       // under a 1 mm limit is a curve, not a flat line
       const peakMm = Math.max(...m.error_m.map((e) => Math.abs(e) * 1e3));
-      plot($('plot-error'), {
-        xlabel: 's', ylabel: 'mm',
-        series: [{ x: m.t_s, y: m.error_m.map((e) => e * 1e3), cls: 's0', name: 'tracking-error' }],
+      plot($('plot-error'), Object.assign({}, TIME, {
+        ylabel: 'cart error / mm', yunit: 'mm',
+        series: [{ x: m.t_s, y: m.error_m.map((e) => e * 1e3), cls: 's0', name: 'tracking-error', label: 'cart tracking error' }],
         hlines: [{ y: 0 }, { y: 1, cls: 'limit', norange: true, name: 'limit', label: 'limit 1 mm' },
           { y: -1, cls: 'limit', norange: true, name: 'limit' }],
-      });
+      }));
       $('plot-error').dataset.peakMm = String(peakMm);
-      plot($('plot-torque'), {
-        xlabel: 's',
-        series: [{ x: m.t_s, y: m.torque_nm, cls: 's2', name: 'torque' }],
+      plot($('plot-torque'), Object.assign({}, TIME, {
+        ylabel: 'torque / N m', yunit: 'N m',
+        series: [{ x: m.t_s, y: m.torque_nm, cls: 's2', name: 'torque', label: 'motor torque' }],
         hlines: [{ y: 0 }],
-      });
+      }));
       $('move-note').textContent = `Move ${m.plant} with ${fmt(m.payload_kg, 3)} kg payload` +
         (tEnd === null ? ' (did not settle).' : '.') + ` Largest error ${fmt(peakMm, 3)} mm; ` +
         (peakMm < 0.5 ? 'the 1 mm limit lies outside this scale.' : 'dashed red: the 1 mm limit.');
