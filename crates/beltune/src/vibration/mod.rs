@@ -1,0 +1,10 @@
+//! Vibration after a move: input shapers (Klipper's definitions and its
+//! choice from a measured spectrum), model-based shaping of the jerk-limited
+//! trajectory with the identified mode where the cart stops, and the
+//! vibration benchmark (docs/vibration.md).
+
+pub mod klipper;
+pub mod shaper;
+
+#[cfg(test)]
+mod tests;
