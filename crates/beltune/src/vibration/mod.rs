@@ -3,8 +3,10 @@
 //! trajectory with the identified mode where the cart stops, and the
 //! vibration benchmark (docs/vibration.md).
 
+pub mod bench;
 pub mod klipper;
 pub mod shaper;
+pub mod shaping;
 
 #[cfg(test)]
 mod tests;

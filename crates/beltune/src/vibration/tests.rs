@@ -334,3 +334,4 @@ fn klipper_choice_on_one_resonance() {
         best2.vibration
     );
 }
+
