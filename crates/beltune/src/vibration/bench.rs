@@ -39,6 +39,9 @@ use serde::{Deserialize, Serialize};
 
 /// Settling band of the benchmark, m.
 pub const SETTLING_BAND_M: f64 = 10e-6;
+/// Predicted residual of the cart mode the shaping treats as none, m: a
+/// tenth of the settling band.
+pub const NEGLIGIBLE_RESIDUAL_M: f64 = 0.1 * SETTLING_BAND_M;
 /// Residual window in periods of the lowest cart mode.
 pub const WINDOW_PERIODS: f64 = 5.0;
 /// Time recorded after the residual window for settling, s.
@@ -368,7 +371,14 @@ pub fn run(setup: &BenchSetup) -> Result<VibrationBenchmark> {
             .iter()
             .map(|&p| setup.mode(end, p))
             .collect::<Result<_>>()?;
-        let choice = shaping::choose_shaper(start, end, &limits, move_time_s, &modes)?;
+        let choice = shaping::choose_shaper(
+            start,
+            end,
+            &limits,
+            move_time_s,
+            &modes,
+            NEGLIGIBLE_RESIDUAL_M,
+        )?;
         for &p in &payloads {
             let plant = setup.plant.with_payload(p)?;
             let f_z = setup.mode(end, p)?.freq_hz;

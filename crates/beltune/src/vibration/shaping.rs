@@ -170,13 +170,17 @@ pub struct ShapingChoice {
 /// design frequencies across the modes' band, the one whose predicted worst
 /// residual (the shaper's residual ratio times the residual of the base
 /// trajectory it leaves time for, [`base_residual_m`]) is least. No shaping
-/// is a candidate too.
+/// is a candidate too. Where candidates leave at most `negligible_m` of the
+/// mode, the shortest of them is taken (none first): the time a shaper
+/// does not need goes to a gentler base trajectory, whose smaller
+/// following error and friction lead are what then remain.
 pub fn choose_shaper(
     start_m: f64,
     target_m: f64,
     limits: &Limits,
     duration_s: f64,
     modes: &[Mode],
+    negligible_m: f64,
 ) -> Result<ShapingChoice> {
     if modes.is_empty() {
         return Err(Error::NoExcitation {
@@ -227,7 +231,13 @@ pub fn choose_shaper(
                 continue;
             }
             let r = predict(&shaper)?;
-            if r < best.predicted_residual_m {
+            let best_negligible = best.predicted_residual_m <= negligible_m;
+            let better = if best_negligible {
+                r <= negligible_m && shaper.duration_s() < best.shaper.duration_s()
+            } else {
+                r < best.predicted_residual_m
+            };
+            if better {
                 best = ShapingChoice {
                     kind,
                     freq_hz: f,
