@@ -9,13 +9,23 @@ use beltune::report::folder::ResultSet;
 use beltune::sim::SimConfig;
 use beltune::vibration::bench::{self, BenchSetup, VibrationBenchmark};
 
-fn commissioned(name: &str, plant: &Plant, payload_range: Option<(f64, f64)>) -> VibrationBenchmark {
+fn commissioned(
+    name: &str,
+    plant: &Plant,
+    payload_range: Option<(f64, f64)>,
+) -> VibrationBenchmark {
     let sim = SimConfig {
         seed: 1,
         ..SimConfig::default()
     };
-    let run = commission_simulated(plant, sim, None, &CommissioningConfig::default(), &mut NoProgress)
-        .unwrap();
+    let run = commission_simulated(
+        plant,
+        sim,
+        None,
+        &CommissioningConfig::default(),
+        &mut NoProgress,
+    )
+    .unwrap();
     let origin = Origin {
         name: name.into(),
         axis: AxisRecord::simulated(name, plant, 0.05, 1),
@@ -38,7 +48,12 @@ fn show(name: &str, b: &VibrationBenchmark) {
     for c in &b.contestants {
         eprintln!(
             "  {:8} worst {:8.1} um median {:8.1} um settle {:?} ({} settled) T {:.3} s",
-            c.name, c.worst_residual_um, c.median_residual_um, c.worst_settling_s, c.settled_moves, c.move_time_s
+            c.name,
+            c.worst_residual_um,
+            c.median_residual_um,
+            c.worst_settling_s,
+            c.settled_moves,
+            c.move_time_s
         );
         for m in &c.moves {
             eprintln!(
@@ -55,4 +70,3 @@ fn egc70_benchmark() {
     let b = commissioned("egc70", &plant, Some((0.0, 25.0)));
     show("egc70", &b);
 }
-

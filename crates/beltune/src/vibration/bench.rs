@@ -118,9 +118,13 @@ impl BenchSetup {
                 "must not be below the minimum",
             ));
         }
-        let mv = record.validation_move.as_ref().ok_or_else(|| Error::Infeasible {
-            reason: "the commissioning has no validation move to take the move limits from".into(),
-        })?;
+        let mv = record
+            .validation_move
+            .as_ref()
+            .ok_or_else(|| Error::Infeasible {
+                reason: "the commissioning has no validation move to take the move limits from"
+                    .into(),
+            })?;
         let identified = record.identified.params();
         let stiffness = record.target_stiffness.unwrap_or_else(|| {
             TargetStiffness::constant(mv.target_m, identified.c, identified.f_z_hz(), false)

@@ -190,12 +190,8 @@ pub fn choose_shaper(
     let f_lo = modes.iter().map(|m| m.freq_hz).fold(f64::MAX, f64::min);
     let f_hi = modes.iter().map(|m| m.freq_hz).fold(0.0, f64::max);
     let zeta = modes.iter().map(|m| m.damping_ratio).sum::<f64>() / modes.len() as f64;
-    let d_min = Trajectory::plan(
-        &State::at_rest(start_m),
-        &State::at_rest(target_m),
-        limits,
-    )?
-    .duration_s();
+    let d_min =
+        Trajectory::plan(&State::at_rest(start_m), &State::at_rest(target_m), limits)?.duration_s();
     // the band's modes (ends and 5 points between) the prediction checks
     let mut checks: Vec<Mode> = modes.to_vec();
     for i in 1..6 {
@@ -210,7 +206,8 @@ pub fn choose_shaper(
         let base = scaled_trajectory(start_m, target_m, limits, duration_s - shaper.duration_s())?;
         let mut worst: f64 = 0.0;
         for m in &checks {
-            let r = base_residual_m(&base, m, dt) * shaper.residual_vibration(m.freq_hz, m.damping_ratio);
+            let r = base_residual_m(&base, m, dt)
+                * shaper.residual_vibration(m.freq_hz, m.damping_ratio);
             worst = worst.max(r);
         }
         Ok(worst)

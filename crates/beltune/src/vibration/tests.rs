@@ -335,12 +335,14 @@ fn klipper_choice_on_one_resonance() {
     );
 }
 
-
 /// Residual of the oscillator `y'' = w^2 (x_d - y) - 2 zeta w y'` driven by
 /// the desired position `x_d` of `path` (RK4 at 10 us, the path sampled at
 /// each stage): the largest `|y - target|` over two periods after the path
 /// ends.
-fn oscillator_residual_m(path: &super::shaping::ShapedTrajectory, mode: &super::shaping::Mode) -> f64 {
+fn oscillator_residual_m(
+    path: &super::shaping::ShapedTrajectory,
+    mode: &super::shaping::Mode,
+) -> f64 {
     let w = 2.0 * std::f64::consts::PI * mode.freq_hz;
     let z = mode.damping_ratio;
     let h = 1e-5;
@@ -353,8 +355,14 @@ fn oscillator_residual_m(path: &super::shaping::ShapedTrajectory, mode: &super::
     let mut worst: f64 = 0.0;
     while t < t_end + 2.0 / mode.freq_hz {
         let (k1y, k1v) = (v, acc(t, y, v));
-        let (k2y, k2v) = (v + 0.5 * h * k1v, acc(t + 0.5 * h, y + 0.5 * h * k1y, v + 0.5 * h * k1v));
-        let (k3y, k3v) = (v + 0.5 * h * k2v, acc(t + 0.5 * h, y + 0.5 * h * k2y, v + 0.5 * h * k2v));
+        let (k2y, k2v) = (
+            v + 0.5 * h * k1v,
+            acc(t + 0.5 * h, y + 0.5 * h * k1y, v + 0.5 * h * k1v),
+        );
+        let (k3y, k3v) = (
+            v + 0.5 * h * k2v,
+            acc(t + 0.5 * h, y + 0.5 * h * k2y, v + 0.5 * h * k2v),
+        );
         let (k4y, k4v) = (v + h * k3v, acc(t + h, y + h * k3y, v + h * k3v));
         y += h / 6.0 * (k1y + 2.0 * k2y + 2.0 * k3y + k4y);
         v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
@@ -389,8 +397,14 @@ fn model_based_shaping_within_limits_and_against_an_oscillator() {
     };
     let (start, target) = (0.0, 0.1);
     let modes = [
-        Mode { freq_hz: 18.0, damping_ratio: 0.03 },
-        Mode { freq_hz: 24.0, damping_ratio: 0.03 },
+        Mode {
+            freq_hz: 18.0,
+            damping_ratio: 0.03,
+        },
+        Mode {
+            freq_hz: 24.0,
+            damping_ratio: 0.03,
+        },
     ];
     let fastest = scaled_trajectory(start, target, &limits, 0.0).err();
     assert!(fastest.is_some(), "a zero duration is refused");
@@ -404,7 +418,13 @@ fn model_based_shaping_within_limits_and_against_an_oscillator() {
     let duration = d_min + 0.09;
     let choice = choose_shaper(start, target, &limits, duration, &modes, 0.0).unwrap();
     let shaped = ShapedTrajectory {
-        base: scaled_trajectory(start, target, &limits, duration - choice.shaper.duration_s()).unwrap(),
+        base: scaled_trajectory(
+            start,
+            target,
+            &limits,
+            duration - choice.shaper.duration_s(),
+        )
+        .unwrap(),
         shaper: choice.shaper.clone(),
     };
     let plain = ShapedTrajectory {
@@ -421,9 +441,17 @@ fn model_based_shaping_within_limits_and_against_an_oscillator() {
         assert!(s.jerk.abs() <= limits.j_max * (1.0 + 1e-9), "j {t}");
         t += 1e-4;
     }
-    close(shaped.sample(duration).position, target, 1e-12, "shaped end");
+    close(
+        shaped.sample(duration).position,
+        target,
+        1e-12,
+        "shaped end",
+    );
     for f in [18.0, 21.0, 24.0] {
-        let m = Mode { freq_hz: f, damping_ratio: 0.03 };
+        let m = Mode {
+            freq_hz: f,
+            damping_ratio: 0.03,
+        };
         let s = oscillator_residual_m(&shaped, &m);
         let p = oscillator_residual_m(&plain, &m);
         assert!(
@@ -431,6 +459,11 @@ fn model_based_shaping_within_limits_and_against_an_oscillator() {
             "{f} Hz: simulated {s}, predicted {}",
             choice.predicted_residual_m
         );
-        assert!(s <= 0.2 * p, "{f} Hz: shaped {s} vs plain {p} ({:?} at {})", choice.kind, choice.freq_hz);
+        assert!(
+            s <= 0.2 * p,
+            "{f} Hz: shaped {s} vs plain {p} ({:?} at {})",
+            choice.kind,
+            choice.freq_hz
+        );
     }
 }
