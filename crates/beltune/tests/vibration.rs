@@ -64,9 +64,32 @@ fn show(name: &str, b: &VibrationBenchmark) {
     }
 }
 
+/// The benchmark on egc70 (11.2 kg commissioned, payloads 5-20 kg): three
+/// contestants of 21 moves each (7 ends x 3 payloads), all of the same
+/// duration, the residual window 5 / f_z,min of the lowest model mode over
+/// the moves (recomputed here from the identified model's formula
+/// `sqrt(c / m_c) / 2 pi`), finite figures, and Klipper's choice reducing its
+/// recorded spectra below its own 5 % goal. The targets (best
+/// contestant at most half of `klipper`'s and a third of `fixed`'s worst
+/// residual) are NOT met yet and not asserted: docs/vibration.md.
 #[test]
-fn egc70_benchmark() {
+fn egc70_benchmark_figures() {
     let plant = builtin("egc70", None).unwrap();
-    let b = commissioned("egc70", &plant, Some((0.0, 25.0)));
+    let b = commissioned("egc70", &plant, Some((5.0, 20.0)));
     show("egc70", &b);
+    assert_eq!(b.contestants.len(), 3);
+    let t = b.contestants[0].move_time_s;
+    for c in &b.contestants {
+        assert_eq!(c.moves.len(), 21, "{}", c.name);
+        assert!((c.move_time_s - t).abs() < 1e-12, "{}", c.name);
+        assert!(c.worst_residual_um.is_finite() && c.median_residual_um <= c.worst_residual_um);
+    }
+    let f_min = b.contestants[0]
+        .moves
+        .iter()
+        .map(|m| m.f_z_model_hz)
+        .fold(f64::MAX, f64::min);
+    assert!((b.f_z_min_hz - f_min).abs() < 1e-9);
+    assert!((b.window_s - 5.0 / f_min).abs() < 1e-12);
+    assert!(b.klipper.vibration < 0.05, "{:?}", b.klipper);
 }
