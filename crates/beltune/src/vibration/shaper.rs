@@ -172,14 +172,14 @@ impl Shaper {
             }
         }
         let sum: f64 = amplitudes.iter().sum();
-        if !(sum > 0.0) {
+        if sum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::invalid(
                 "shaper amplitude sum",
                 sum,
                 "must be positive",
             ));
         }
-        if times_s[0] != 0.0 || times_s.windows(2).any(|w| !(w[1] >= w[0])) {
+        if times_s[0] != 0.0 || times_s.windows(2).any(|w| w[1] < w[0] || w[1].is_nan()) {
             return Err(Error::invalid(
                 "shaper times_s",
                 times_s[0],

@@ -19,10 +19,10 @@ fn close(a: f64, b: f64, tol: f64, what: &str) {
 /// period later. Exact formulas: tolerance 1e-12.
 #[test]
 fn zv_is_singer_and_seering() {
-    for zeta in [0.0, 0.05, 0.1, 0.3] {
+    for zeta in [0.0_f64, 0.05, 0.1, 0.3] {
         let f = 40.0;
         let s = ShaperKind::Zv.design(f, zeta).unwrap();
-        let df = (1.0 - zeta * zeta as f64).sqrt();
+        let df = (1.0 - zeta * zeta).sqrt();
         let k = (-zeta * std::f64::consts::PI / df).exp();
         close(s.amplitudes[0], 1.0 / (1.0 + k), 1e-12, "A1");
         close(s.amplitudes[1], k / (1.0 + k), 1e-12, "A2");
@@ -40,17 +40,17 @@ fn zv_is_singer_and_seering() {
 /// consistent system: tolerance 1e-9.
 #[test]
 fn mzv_and_zvd_match_the_closed_forms() {
-    for zeta in [0.0, 0.1, 0.2] {
+    for zeta in [0.0_f64, 0.1, 0.2] {
         let f = 30.0;
-        let df = (1.0 - zeta * zeta as f64).sqrt();
+        let df = (1.0 - zeta * zeta).sqrt();
         let t_d = 1.0 / (f * df);
         let k = (-0.75 * zeta * std::f64::consts::PI / df).exp();
         let a1 = 1.0 - 1.0 / 2f64.sqrt();
         let raw = [a1, (2f64.sqrt() - 1.0) * k, a1 * k * k];
         let sum: f64 = raw.iter().sum();
         let s = ShaperKind::Mzv.design(f, zeta).unwrap();
-        for i in 0..3 {
-            close(s.amplitudes[i], raw[i] / sum, 1e-9, "MZV amplitude");
+        for (a, r) in s.amplitudes.iter().zip(raw) {
+            close(*a, r / sum, 1e-9, "MZV amplitude");
         }
         close(s.times_s[1], 0.375 * t_d, 1e-12, "MZV T2");
         close(s.times_s[2], 0.75 * t_d, 1e-12, "MZV T3");
