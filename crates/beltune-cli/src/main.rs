@@ -46,6 +46,8 @@ enum Command {
     Commission(cmd::commission::Args),
     /// Check the health of a commissioned axis against its commissioning (a few seconds).
     Health(cmd::health::Args),
+    /// Vibration benchmark of a commissioned axis: fixed, Klipper's shaper, model-based shaping.
+    Vibration(cmd::vibration::Args),
     /// The runs of the history database, their trends and limits.
     History(cmd::history::Args),
     /// Serve the interactive tuning page.
@@ -100,6 +102,7 @@ fn main() {
         Command::Design(a) => cmd::design::run(a),
         Command::Commission(a) => cmd::commission::run(a),
         Command::Health(a) => cmd::health::run(a),
+        Command::Vibration(a) => cmd::vibration::run(a),
         Command::History(a) => cmd::history::run(a),
         Command::Serve(a) => cmd::serve::run(a),
         Command::Montecarlo(a) => cmd::montecarlo::run(a),

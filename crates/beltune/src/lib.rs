@@ -21,6 +21,7 @@
 //! | [`record`] | the files a result is kept and handed on in: `commissioning.json`, `controller.toml`, firmware source |
 //! | [`report`] | what a person reads: plot data, the report page, the comparison |
 //! | [`study`] | the robustness study over seeded random axes |
+//! | [`vibration`] | input shapers (Klipper's and model-based) and the vibration benchmark |
 //!
 //! [`lti`] is the frequency-domain toolkit used by `model`, `ident` and
 //! `design`; [`io`] reads and writes files safely; [`units`] maps torque and
@@ -46,5 +47,6 @@ pub mod sim;
 pub mod study;
 pub mod units;
 pub mod verdict;
+pub mod vibration;
 
 pub use error::{Error, Result};

@@ -23,4 +23,5 @@ pub mod summary;
 pub mod trajectory;
 pub mod util;
 pub mod verdict;
+pub mod vibration;
 pub mod virtual_drive;
