@@ -19,6 +19,7 @@
 
 pub mod bode;
 pub mod build;
+pub mod chart;
 pub mod compare;
 pub mod data;
 pub mod data_files;
@@ -29,7 +30,6 @@ pub mod plot;
 pub mod plot_data;
 pub mod vendor;
 pub mod web;
-pub mod chart;
 
 pub use data::{
     BodeCurve, BodePlot, ExcitationPlot, FrequencyMarker, FrfPlot, FrictionPlot, MarginPoint,
