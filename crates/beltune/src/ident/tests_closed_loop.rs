@@ -1,6 +1,7 @@
 //! Closed-loop identification from a record written with the simulator
-//! (issue 28): `egc70` (three-mass nonlinear model with the plant's noise,
-//! encoder quantization, dead time and Coulomb friction) under the
+//! (issue 28): the linear set `sim-a` (exact two-mass truth, encoder
+//! quantization and dead time) and `egc70` (three-mass nonlinear model with
+//! the plant's noise and Coulomb friction) under the
 //! real-time cascade controller, moving at a constant velocity with a PRBS
 //! on the velocity setpoint (the thesis' closed-loop experiment, 3.4:
 //! 100 mm/s, velocity loop only), written to CSV and identified by
@@ -38,16 +39,17 @@ struct ClosedLoopRun {
     period: usize,
 }
 
-/// Run `egc70` under a velocity PI (crossover 1 Hz, with a position loop
+/// Run the linear set `sim-a` under a velocity PI (crossover 3 Hz, with a position loop
 /// of `K_PP = w_c / 4` for a position reference) at [`CRUISE_RAD_S`] with a
 /// PRBS^9_8 added at `kind`, 8 periods ([`run_closed_loop`]), scaled so that
 /// it reaches the torque command with +-0.6 N m where the loop is open (the
 /// amplitude of the open-loop test); write `t_s, ref, tau_cmd, phi`.
 fn run(name: &str, kind: ReferenceKind) -> ClosedLoopRun {
-    run_with(name, kind, 1.0, 8, CRUISE_RAD_S, 0.04).unwrap()
+    run_with("sim-a", name, kind, 3.0, 8, CRUISE_RAD_S, 0.0).unwrap()
 }
 
 fn run_with(
+    plant_name: &str,
     name: &str,
     kind: ReferenceKind,
     crossover_hz: f64,
@@ -55,22 +57,19 @@ fn run_with(
     cruise_rad_s: f64,
     offset_m: f64,
 ) -> Result<ClosedLoopRun, String> {
-    let plant = builtin("egc70", None).unwrap();
-    let Plant::Physical(phys) = &plant else {
-        panic!("egc70 is physical")
-    };
+    let plant = builtin(plant_name, None).unwrap();
+    let linear = matches!(plant, Plant::Linear(_));
     // about the middle of the stroke, where the belt's stiffness is
     // flattest; the truth at the middle of the positions covered (the
     // identified model averages over them, 3.4: +-41 mm change the
     // stiffness by about 4 d^2 / L^2 = 1.4 % for a 0.7 m belt, f_z by half of it)
     let middle = SimAxis::new(&plant, SimConfig::default()).unwrap();
     let mid_m = middle.cart_position_m();
-    // a positive motor velocity moves this cart towards smaller positions
     let start_m = mid_m + offset_m;
     let mut axis = SimAxis::new(
         &plant,
         SimConfig {
-            initial_cart_position_m: Some(start_m),
+            initial_cart_position_m: (!linear).then_some(start_m),
             ..SimConfig::default()
         },
     )
@@ -106,19 +105,23 @@ fn run_with(
             axis.cart_position_m()
         ));
     }
-    let mean_m = 0.5 * (start_m + axis.cart_position_m());
-    if (mean_m - mid_m).abs() > 0.03 {
-        return Err(format!("cruised about {mean_m} m, middle {mid_m} m"));
-    }
-    let truth = SimAxis::new(
-        &plant,
-        SimConfig {
-            initial_cart_position_m: Some(mean_m),
-            ..SimConfig::default()
-        },
-    )
-    .unwrap()
-    .linearized_truth();
+    let truth = if linear {
+        middle.linearized_truth()
+    } else {
+        let mean_m = 0.5 * (start_m + axis.cart_position_m());
+        if (mean_m - mid_m).abs() > 0.03 {
+            return Err(format!("cruised about {mean_m} m, middle {mid_m} m"));
+        }
+        SimAxis::new(
+            &plant,
+            SimConfig {
+                initial_cart_position_m: Some(mean_m),
+                ..SimConfig::default()
+            },
+        )
+        .unwrap()
+        .linearized_truth()
+    };
     let dir = std::env::temp_dir().join(format!("beltune-closed-loop-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.csv"));
@@ -128,8 +131,8 @@ fn run_with(
         controller,
         truth,
         dead_time_s: axis.dead_time_s(),
-        i_t: phys.i_t(),
-        theta_e: phys.theta_e(),
+        i_t: truth.i_t,
+        theta_e: truth.theta_e,
         period,
     })
 }
@@ -150,12 +153,14 @@ fn identify(
         etfe: EtfeConfig {
             // the open-loop test's band on the same simulator (tests_sim.rs):
             // below 3 Hz friction, above 400 Hz the PRBS^9_4 has little power
-            band_hz: Some((3.0, 400.0)),
+            band_hz: Some((3.0, 400.0f64.max(2.5 * r.truth.f_r_hz()))),
             ..EtfeConfig::default()
         },
         fit: FitConfig {
             theta_e: Some(r.theta_e),
             i_t: r.i_t,
+            // the linear sets have belt damping (as tests_sim's open-loop test)
+            model: super::FitModel::WithBeltDamping,
             ..FitConfig::default()
         },
         closed_loop: Some(ClosedLoopRecord {
@@ -179,12 +184,6 @@ fn rms_db_against_truth(id: &super::RecordedIdentification, r: &ClosedLoopRun) -
             let w = id.frf.omega_rad_s(i);
             let g = tf.freq_response(w) * dead_time(w, r.dead_time_s);
             let d = id.frf.magnitude_db(i) - 20.0 * g.norm().log10();
-            if id.frf.freq_hz[i] < 60.0 {
-                println!(
-                    "  {:.2} Hz: {d:.2} dB, coherence {:.3}",
-                    id.frf.freq_hz[i], id.frf.coherence[i]
-                );
-            }
             d * d
         })
         .sum();
@@ -310,55 +309,45 @@ fn indirect_refuses_a_position_reference_without_position_loop() {
     assert!(err.contains("K_PP") && !err.contains('\n'), "{err}");
 }
 
+/// `egc70` (the nonlinear three-mass simulator: Coulomb friction of motor
+/// and cart, position-dependent belt stiffness) cruising at 25 mm/s about
+/// the middle of its stroke under a 3 Hz velocity loop with a PRBS^9_8 on
+/// `omega_d`. Both methods give the same model (within 0.5 %; measured
+/// 0.01 % / 0.03 %): they see the same plant. Against the linearized truth
+/// at the middle of the positions covered, f_r is within 2 % (measured
+/// +0.6 %); f_z within 10 % (measured +7.6 % by both methods): the
+/// linearized truth leaves out the cart's Coulomb friction, which at the
+/// antiresonance, where the cart carries the motion, acts at this low
+/// cruise velocity (the open-loop test of tests_sim, 1.22 Hz lines and no
+/// cruise, reaches 2 %). Both bounds hold the method to what the
+/// simulator's physics allows, and fail if the inversion is wrong (the
+/// closed-loop response itself has no resonance at f_r).
 #[test]
-#[ignore]
-fn explore_settings() {
-    for kind in [ReferenceKind::Torque, ReferenceKind::Velocity] {
-        for (xo, clock, cruise, off) in [
-            (1.0, 8, 2.0, 0.04),
-            (3.0, 8, 2.0, 0.04),
-            (3.0, 8, 4.0, 0.08),
-            (3.0, 16, 2.0, 0.08),
-            (1.0, 16, 2.0, 0.08),
-            (0.5, 8, 2.0, 0.04),
-        ] {
-            let name = format!("x{kind:?}{xo}{clock}{cruise}");
-            match run_with(&name, kind, xo, clock, cruise, off) {
-                Err(e) => println!("{kind:?} {xo} Hz clock {clock} cruise {cruise}: {e}"),
-                Ok(r) => {
-                    for method in [ClosedLoopMethod::Direct, ClosedLoopMethod::Indirect] {
-                        let res = identify_recorded(&RecordedExcitation {
-                            csv: &r.csv,
-                            time: "t_s",
-                            input: "tau_cmd",
-                            output: "phi",
-                            actual_torque: None,
-                            period_samples: None,
-                            skip_periods: 2,
-                            etfe: EtfeConfig {
-                                band_hz: Some((3.0, 400.0)),
-                                ..EtfeConfig::default()
-                            },
-                            fit: FitConfig {
-                                theta_e: Some(r.theta_e),
-                                i_t: r.i_t,
-                                ..FitConfig::default()
-                            },
-                            closed_loop: Some(ClosedLoopRecord {
-                                reference: "ref",
-                                kind,
-                                method,
-                                controller: Some(KnownController::new(r.controller).unwrap()),
-                            }),
-                        });
-                        match res {
-                            Ok(id) => println!("{kind:?} {xo} Hz clock {clock} cruise {cruise} {method:?}: f_r {:+.2} % f_z {:+.2} %, fit {:.2} dB",
-                                (id.fit.f_r_hz / r.truth.f_r_hz() - 1.0) * 100.0, (id.fit.f_z_hz / r.truth.f_z_hz() - 1.0) * 100.0, id.fit.fit_rms_db),
-                            Err(e) => println!("{kind:?} {xo} Hz clock {clock} cruise {cruise} {method:?}: {e}"),
-                        }
-                    }
-                }
-            }
-        }
+fn egc70_velocity_record_both_methods_agree() {
+    let r = run_with("egc70", "egc70", ReferenceKind::Velocity, 3.0, 8, 2.0, 0.04).unwrap();
+    let [d, i] = [ClosedLoopMethod::Direct, ClosedLoopMethod::Indirect]
+        .map(|m| identify(&r, ReferenceKind::Velocity, m));
+    println!(
+        "direct f_r {} f_z {}, indirect f_r {} f_z {}, truth {} {}",
+        d.fit.f_r_hz,
+        d.fit.f_z_hz,
+        i.fit.f_r_hz,
+        i.fit.f_z_hz,
+        r.truth.f_r_hz(),
+        r.truth.f_z_hz()
+    );
+    assert!(rel(d.fit.f_r_hz, i.fit.f_r_hz) < 0.005);
+    assert!(rel(d.fit.f_z_hz, i.fit.f_z_hz) < 0.005);
+    for id in [&d, &i] {
+        assert!(
+            rel(id.fit.f_r_hz, r.truth.f_r_hz()) < 0.02,
+            "f_r {}",
+            id.fit.f_r_hz
+        );
+        assert!(
+            rel(id.fit.f_z_hz, r.truth.f_z_hz()) < 0.10,
+            "f_z {}",
+            id.fit.f_z_hz
+        );
     }
 }
