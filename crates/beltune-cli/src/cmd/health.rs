@@ -453,6 +453,7 @@ fn recorded(
             i_t: baseline.model.i_t,
             ..FitConfig::default()
         },
+        closed_loop: None,
     })?;
     let friction = match (
         &args.friction_csv,
@@ -480,6 +481,7 @@ fn recorded(
         check,
         AxisRecord::Recorded {
             source: csv.display().to_string(),
+            identification: Some(id.method),
         },
     ))
 }

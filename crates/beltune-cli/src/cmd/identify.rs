@@ -3,9 +3,11 @@
 //! model, optional current-loop dead time. Thesis chapter 3.
 
 use super::util::write_atomic;
+use beltune::ident::recorded::ClosedLoopRecord;
 use beltune::ident::{
-    fit::model_magnitude_db, identify_recorded, DeadTime, EtfeConfig, FitConfig, ModelUnits,
-    RecordedExcitation, RecordedIdentification, TwoMassFit,
+    fit::model_magnitude_db, identify_recorded, ClosedLoopMethod, DeadTime, EtfeConfig, FitConfig,
+    IdentificationStrategy, KnownController, ModelUnits, RecordedExcitation,
+    RecordedIdentification, ReferenceKind, TwoMassFit,
 };
 use beltune::record::model::{IdentifiedModel, ModelFile, DEFAULT_DEAD_TIME_S};
 use beltune::record::provenance::Provenance;
@@ -21,7 +23,8 @@ pub struct Args {
     /// Time column, s.
     #[arg(long)]
     pub time: String,
-    /// Input column: torque in N m (or motor current with --current-units).
+    /// Input column: torque in N m (or motor current with --current-units);
+    /// with --reference, the torque command the drive applied (excitation plus controller output).
     #[arg(long)]
     pub input: String,
     /// Output column: motor angle, rad.
@@ -64,6 +67,8 @@ pub struct Args {
     /// neighbours either side are "not excited" (the gaps of a sparse multisine).
     #[arg(long, default_value_t = -20.0, allow_hyphen_values = true)]
     pub local_floor_db: f64,
+    #[command(flatten)]
+    pub closed_loop: ClosedLoopArgs,
     /// Write the FRF with coherence and line status here (CSV).
     #[arg(long)]
     pub frf_csv: Option<PathBuf>,
@@ -74,6 +79,95 @@ pub struct Args {
     /// --current-units), recorded in the --json model.
     #[arg(long)]
     pub torque_limit: Option<f64>,
+}
+
+/// Where a closed-loop record's excitation entered (thesis 3.3.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ReferenceKindArg {
+    /// An excitation torque (N m, or A) added to the controller output.
+    Torque,
+    /// The velocity setpoint omega_d, motor rad/s.
+    Velocity,
+    /// The position setpoint phi_d, motor rad.
+    Position,
+}
+
+/// Direct or indirect closed-loop identification (thesis 3.3.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Torque command -> angle; needs no controller.
+    Direct,
+    /// Reference -> angle, inverted with the known controller (--controller).
+    Indirect,
+}
+
+/// The flags of a closed-loop record (`identify` and `commission --csv`).
+#[derive(clap::Args, Clone, Debug)]
+pub struct ClosedLoopArgs {
+    /// Closed-loop record: the column the periodic excitation was added to
+    /// (see --reference-kind); --input is then the applied torque command.
+    #[arg(long)]
+    pub reference: Option<String>,
+    /// What --reference holds.
+    #[arg(long, value_enum, default_value_t = ReferenceKindArg::Velocity, requires = "reference")]
+    pub reference_kind: ReferenceKindArg,
+    /// Direct (torque command -> angle) or indirect (reference -> angle with the known controller).
+    #[arg(long, value_enum, default_value_t = MethodArg::Direct, requires = "reference")]
+    pub method: MethodArg,
+    /// The controller the drive ran during the record (controller.toml); the indirect method needs it.
+    #[arg(long, requires = "reference")]
+    pub controller: Option<PathBuf>,
+}
+
+/// The closed-loop part of a record, checked: `None` for an open-loop record.
+pub fn closed_loop_record<'a>(
+    a: &'a ClosedLoopArgs,
+    input: &str,
+    output: &str,
+) -> anyhow::Result<Option<ClosedLoopRecord<'a>>> {
+    let Some(reference) = a.reference.as_deref() else {
+        return Ok(None);
+    };
+    let bad = |m: String| {
+        anyhow::Error::new(crate::exit::Failure::new(
+            crate::exit::ExitStatus::BadInput,
+            m,
+        ))
+    };
+    for (flag, other) in [("--input", input), ("--output", output)] {
+        if reference == other {
+            return Err(bad(format!(
+                "--reference `{reference}` is the same column as {flag}; give the column the excitation was added to"
+            )));
+        }
+    }
+    let method = match a.method {
+        MethodArg::Direct => ClosedLoopMethod::Direct,
+        MethodArg::Indirect => ClosedLoopMethod::Indirect,
+    };
+    let controller = match &a.controller {
+        Some(path) => {
+            let file = beltune::record::controller::ControllerFile::load(path)?;
+            Some(KnownController::new(file.cascade_config()?)?)
+        }
+        None if method == ClosedLoopMethod::Indirect => {
+            return Err(bad(
+                "--method indirect needs --controller: the controller.toml the drive ran during the record"
+                    .to_string(),
+            ))
+        }
+        None => None,
+    };
+    Ok(Some(ClosedLoopRecord {
+        reference,
+        kind: match a.reference_kind {
+            ReferenceKindArg::Torque => ReferenceKind::Torque,
+            ReferenceKindArg::Velocity => ReferenceKind::Velocity,
+            ReferenceKindArg::Position => ReferenceKind::Position,
+        },
+        method,
+        controller,
+    }))
 }
 
 /// The model file (docs/schema.md): an identified-model record that `beltune
@@ -88,6 +182,8 @@ struct ModelJson {
 /// What the fit saw beyond the model.
 #[derive(serde::Serialize)]
 struct FitDetails {
+    /// Open loop or direct / indirect closed loop, with the reference kind.
+    identification: IdentificationStrategy,
     free_inertia: bool,
     n_periods: usize,
     /// Dead time in samples; null when no actual-torque column was given.
@@ -98,9 +194,13 @@ struct FitDetails {
 
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let mut inputs = vec![args.csv.as_path()];
+    if let Some(c) = &args.closed_loop.controller {
+        inputs.push(c.as_path());
+    }
     for (flag, out) in [("--json", &args.json), ("--frf-csv", &args.frf_csv)] {
         if let Some(out) = out {
-            super::util::check_not_an_input(flag, out, &[&args.csv])?;
+            super::util::check_not_an_input(flag, out, &inputs)?;
         }
     }
     if let (Some(json), Some(frf)) = (&args.json, &args.frf_csv) {
@@ -152,6 +252,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (None, None) => None,
         (lo, hi) => Some((lo.unwrap_or(0.0), hi.unwrap_or(f64::MAX))),
     };
+    let closed_loop = closed_loop_record(&args.closed_loop, &args.input, &args.output)?;
     let id = identify_recorded(&RecordedExcitation {
         csv: &args.csv,
         time: &args.time,
@@ -179,6 +280,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             },
             ..Default::default()
         },
+        closed_loop,
     })?;
     let (frf, fit, dead_time) = (&id.frf, &id.fit, id.dead_time);
     print_summary(&id);
@@ -198,6 +300,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let json = ModelJson {
             record: ModelFile::new(identified, None, Provenance::of_this_process(None)),
             fit: FitDetails {
+                identification: id.method,
                 free_inertia: fit.free_inertia,
                 n_periods: frf.n_periods,
                 dead_time_samples: dead_time.map(|d| d.samples),
@@ -228,6 +331,7 @@ fn print_summary(id: &RecordedIdentification) {
         "two-mass model{u}, {n_periods} periods averaged, {} lines fitted",
         fit.n_lines
     );
+    println!("  method: {}", id.method.words());
     println!("  lines: {}", id.frf.line_summary());
     println!(
         "  period {} samples ({})",

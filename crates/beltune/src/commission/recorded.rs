@@ -116,6 +116,7 @@ pub fn commission_recorded(
     let skipped = "skipped (recorded data, no axis)";
     let mut log = vec![
         format!("plausibility, positioning, holding torque, excitation amplitude: {skipped}"),
+        format!("identification strategy: {}", identification.method.words()),
         format!(
             "identification: f_r {:.2} Hz, f_z {:.2} Hz, m_c {:.4e}, c {:.4e}, fit {:.2} dB rms over {} lines, coherence {:.3}; dead time {dead_line}",
             fit.f_r_hz, fit.f_z_hz, p.m_c, p.c, fit.fit_rms_db, fit.n_lines, mean_coherence

@@ -8,12 +8,14 @@
 //! - [`fit`]: Levenberg-Marquardt fit of (2.42), (3.32)-(3.34), with uncertainties
 //! - [`friction`]: constant-velocity runs (3.35)-(3.36) and regression on any motion
 //! - [`nonlinear`]: the nonlinear two-mass model (2.30) with its Coulomb friction, from the excitation
-//! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24)
+//! - [`strategy`]: open loop, direct and indirect closed loop (3.18)-(3.24), the excitation at `omega_d` (3.23)-(3.24)
+//! - [`closed_loop`]: closed-loop identification from a record, with the known controller's frequency responses
 //! - [`dead_time`]: current-loop dead time (3.25)-(3.30)
 //! - [`csv_columns`]: the columns of a recorded CSV file, validated
 //! - [`residual`]: what the two-mass fit does not explain, per line; a second resonance named
 //! - [`recorded`]: the whole identification from a CSV record (CLI `identify`, `commission --csv`)
 
+pub mod closed_loop;
 pub mod csv_columns;
 pub mod dead_time;
 pub mod etfe;
@@ -26,6 +28,8 @@ pub mod residual;
 pub mod strategy;
 
 #[cfg(test)]
+mod tests_closed_loop;
+#[cfg(test)]
 mod tests_measured;
 #[cfg(test)]
 mod tests_sim;
@@ -34,6 +38,7 @@ mod tests_unmodeled;
 #[cfg(test)]
 pub(crate) mod testutil;
 
+pub use closed_loop::{ClosedLoopMethod, IdentificationStrategy, KnownController, ReferenceKind};
 pub use csv_columns::{read_csv_columns, CsvColumns, Sampling};
 pub use dead_time::{estimate_dead_time, DeadTime};
 pub use etfe::{etfe, log_spaced_subset, EtfeConfig, Frf, LineCounts, LineStatus};
@@ -47,4 +52,7 @@ pub use friction::{
 pub use nonlinear::{fit_nonlinear, NonlinearConfig, NonlinearFit};
 pub use recorded::{detect_period, identify_recorded, RecordedExcitation, RecordedIdentification};
 pub use residual::{fit_residual, FitResidual, SecondResonance};
-pub use strategy::{direct_closed_loop, indirect_closed_loop, open_loop};
+pub use strategy::{
+    direct_closed_loop, indirect_closed_loop, indirect_closed_loop_reference,
+    indirect_closed_loop_velocity, open_loop,
+};

@@ -4,6 +4,10 @@
 //! actual-torque column, the current-loop dead time (3.27). Used by
 //! `beltune identify` and by `beltune commission --csv`.
 
+use super::closed_loop::{
+    direct_from_record, indirect_from_record, ClosedLoopMethod, IdentificationStrategy,
+    KnownController, ReferenceKind,
+};
 use super::csv_columns::{check_not_constant, check_uniform_time, read_csv_columns};
 use super::dead_time::{estimate_dead_time, DeadTime};
 use super::etfe::{etfe, EtfeConfig, Frf};
@@ -32,6 +36,25 @@ pub struct RecordedExcitation<'a> {
     pub etfe: EtfeConfig,
     /// Fit settings.
     pub fit: FitConfig,
+    /// A closed-loop record: the reference column and the method; `None`:
+    /// an open-loop record (`input` is the excitation).
+    pub closed_loop: Option<ClosedLoopRecord<'a>>,
+}
+
+/// The closed-loop part of a record (see [`super::closed_loop`]): `input`
+/// is then the torque command the drive applied (excitation plus
+/// controller output), `reference` the column the excitation was added to.
+#[derive(Clone, Debug)]
+pub struct ClosedLoopRecord<'a> {
+    /// Reference column: the excitation torque (N m), the velocity setpoint
+    /// (motor rad/s) or the position setpoint (motor rad).
+    pub reference: &'a str,
+    /// Which of the three it is.
+    pub kind: ReferenceKind,
+    /// Direct or indirect.
+    pub method: ClosedLoopMethod,
+    /// The controller the drive ran: needed by the indirect method.
+    pub controller: Option<KnownController>,
 }
 
 /// The result of [`identify_recorded`].
@@ -52,6 +75,8 @@ pub struct RecordedIdentification {
     pub period_detected: bool,
     /// Rows in the file.
     pub rows: usize,
+    /// Open loop, direct or indirect closed loop.
+    pub method: IdentificationStrategy,
 }
 
 /// Shortest period [`detect_period`] reports, samples (a shorter true period
@@ -122,6 +147,16 @@ pub fn detect_period(x: &[f64]) -> Option<usize> {
     None
 }
 
+/// The period of a closed-loop reference: of the reference itself, or of
+/// its increments (a position setpoint that ramps at a constant velocity
+/// plus a periodic excitation).
+fn detect_reference_period(x: &[f64]) -> Option<usize> {
+    detect_period(x).or_else(|| {
+        let d: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
+        detect_period(&d)
+    })
+}
+
 /// Read, validate and identify. Errors name the file, the column and the row.
 pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentification> {
     let shown = r.csv.display().to_string();
@@ -129,8 +164,15 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
     if let Some(a) = r.actual_torque {
         names.push(a);
     }
+    if let Some(cl) = &r.closed_loop {
+        if !names.contains(&cl.reference) {
+            names.push(cl.reference);
+        }
+    }
     let cols = read_csv_columns(r.csv, &names)?;
-    check_not_constant(&cols, r.input)?;
+    // the excitation: the input of an open-loop record, the reference of a closed-loop one
+    let excitation_name = r.closed_loop.as_ref().map_or(r.input, |c| c.reference);
+    check_not_constant(&cols, excitation_name)?;
     let column = |name: &str| {
         cols.column(name).ok_or_else(|| Error::Csv {
             path: shown.clone(),
@@ -138,13 +180,17 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
         })
     };
     let input = column(r.input)?;
+    let excitation = column(excitation_name)?;
     let period = match r.period_samples {
         Some(p) => p,
-        None => detect_period(input).ok_or_else(|| Error::Csv {
+        None => match &r.closed_loop {
+            None => detect_period(input),
+            Some(_) => detect_reference_period(excitation),
+        }
+        .ok_or_else(|| Error::Csv {
             path: shown.clone(),
             message: format!(
-                "cannot detect the period of `{}` (not exactly periodic); give the period in samples",
-                r.input
+                "cannot detect the period of `{excitation_name}` (not exactly periodic); give the period in samples"
             ),
         })?,
     };
@@ -172,7 +218,25 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
         ..r.etfe
     };
     let output = column(r.output)?;
-    let frf = etfe(input, output, &cfg)?;
+    let (frf, method) = match &r.closed_loop {
+        None => (etfe(input, output, &cfg)?, IdentificationStrategy::OpenLoop),
+        Some(cl) => match cl.method {
+            ClosedLoopMethod::Direct => (
+                direct_from_record(excitation, input, output, &cfg)?,
+                IdentificationStrategy::DirectClosedLoop { reference: cl.kind },
+            ),
+            ClosedLoopMethod::Indirect => {
+                let controller = cl.controller.as_ref().ok_or_else(|| Error::Csv {
+                    path: shown.clone(),
+                    message: "the indirect closed-loop method needs the controller the drive ran (controller.toml)".to_string(),
+                })?;
+                (
+                    indirect_from_record(excitation, output, cl.kind, controller, &cfg)?,
+                    IdentificationStrategy::IndirectClosedLoop { reference: cl.kind },
+                )
+            }
+        },
+    };
     let fit = fit_two_mass(&frf, &r.fit)?;
     let dead_time = match r.actual_torque {
         Some(col) => {
@@ -189,6 +253,7 @@ pub fn identify_recorded(r: &RecordedExcitation) -> Result<RecordedIdentificatio
         period_samples: period,
         period_detected: r.period_samples.is_none(),
         rows: cols.rows(),
+        method,
     })
 }
 

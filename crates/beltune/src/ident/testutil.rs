@@ -93,6 +93,25 @@ impl ZohTwoMass {
         self.x[2]
     }
 
+    /// The exact discrete FRF torque -> motor angle of this ZOH model,
+    /// `G(z) = e_phi^T (z I - A_d)^-1 b_d` at `z = e^{j w T_s}` (the angle
+    /// sampled before the step, as [`ZohTwoMass::phi`]), by a complex
+    /// linear solve: independent of any ETFE.
+    pub fn freq_response(&self, w_rad_s: f64, ts: f64) -> crate::lti::C64 {
+        use crate::lti::C64;
+        let z = C64::from_polar(1.0, w_rad_s * ts);
+        let m = SMatrix::<C64, 4, 4>::from_fn(|r, c| {
+            let id = if r == c { z } else { C64::new(0.0, 0.0) };
+            id - C64::new(self.ad[(r, c)], 0.0)
+        });
+        let b = SVector::<C64, 4>::from_fn(|r, _| C64::new(self.bd[r], 0.0));
+        let x = m
+            .lu()
+            .solve(&b)
+            .expect("z is not an eigenvalue on the unit circle");
+        x[0]
+    }
+
     /// Hold `tau` for one sample.
     pub fn step(&mut self, tau: f64) {
         self.x = self.ad * self.x + self.bd * tau;

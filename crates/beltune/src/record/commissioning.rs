@@ -188,6 +188,10 @@ pub enum AxisRecord {
     Recorded {
         /// The record's file.
         source: String,
+        /// Open loop, or direct / indirect closed loop with where the
+        /// excitation entered (absent in files written before it was recorded).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        identification: Option<crate::ident::IdentificationStrategy>,
     },
     /// A real drive (EtherCAT): no simulator truth.
     Ethercat {

@@ -183,10 +183,17 @@ fn summary(inp: &ReportInputs) -> String {
             )
         }
         ReportKind::Recorded => format!(
-            "From recorded data ({}, {:.1} s): resonance {:.2} Hz, antiresonance {:.2} Hz, fit {:.2} dB rms. \
+            "From recorded data ({}, {:.1} s{}): resonance {:.2} Hz, antiresonance {:.2} Hz, fit {:.2} dB rms. \
              Controller: K_P {} {}, K_I {} {}, K_PP {:.3} 1/s. No validation move: the stages that need the axis were skipped.",
             rec.plant,
             rec.experiment_time_s.unwrap_or(f64::NAN),
+            match &rec.axis {
+                Some(crate::record::commissioning::AxisRecord::Recorded {
+                    identification: Some(m),
+                    ..
+                }) => format!("; identified {}", m.words()),
+                _ => String::new(),
+            },
             id.f_r_hz,
             id.f_z_hz,
             id.fit_rms_db,

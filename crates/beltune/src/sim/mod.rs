@@ -26,6 +26,7 @@
 //! half-sample lag and the measurement at the end of the sample), which the
 //! tests compare against.
 
+pub mod closed_loop;
 mod linear;
 mod mech;
 pub mod truth;

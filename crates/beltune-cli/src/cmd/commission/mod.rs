@@ -110,6 +110,8 @@ pub struct Args {
     /// Recorded data: motor-angle column, rad.
     #[arg(long)]
     pub output: Option<String>,
+    #[command(flatten)]
+    pub closed_loop: super::identify::ClosedLoopArgs,
     /// Recorded data: actual-torque column (for the dead time).
     #[arg(long)]
     pub actual_torque: Option<String>,
@@ -612,6 +614,7 @@ fn run_recorded(
             units: r.units,
             ..FitConfig::default()
         },
+        closed_loop: super::identify::closed_loop_record(&args.closed_loop, &r.input, &r.output)?,
     })?;
     let friction = match &r.friction {
         Some((f, tq, pos)) => {
@@ -651,7 +654,10 @@ fn run_recorded(
     let source = r.csv.display().to_string();
     let origin = Origin {
         name: source.clone(),
-        axis: AxisRecord::Recorded { source },
+        axis: AxisRecord::Recorded {
+            source,
+            identification: Some(run.identification.method),
+        },
         truth: None,
         provenance: Provenance::of_this_process(None),
     };

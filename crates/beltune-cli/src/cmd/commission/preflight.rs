@@ -187,7 +187,7 @@ pub fn target(args: &Args) -> OutputTarget {
 
 /// Error if any flag of the other mode was given: nothing is silently ignored.
 fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
-    let recorded_only: [(&str, bool); 12] = [
+    let recorded_only: [(&str, bool); 14] = [
         ("--time", args.time.is_some()),
         ("--input", args.input.is_some()),
         ("--output", args.output.is_some()),
@@ -198,6 +198,8 @@ fn check_mode_flags(args: &Args) -> anyhow::Result<()> {
         ("--transmission", args.transmission.is_some()),
         ("--torque-limit", args.torque_limit.is_some()),
         ("--current-units", args.current_units),
+        ("--reference", args.closed_loop.reference.is_some()),
+        ("--controller", args.closed_loop.controller.is_some()),
         ("--friction-csv", args.friction_csv.is_some()),
         (
             "--friction-torque/--friction-position",
@@ -470,6 +472,11 @@ fn recorded(args: &Args, csv: &std::path::Path) -> anyhow::Result<Recorded> {
     if let Some(a) = &args.actual_torque {
         needed.push(a.as_str());
     }
+    // a closed-loop record: its reference column and, for the indirect method, the controller
+    crate::cmd::identify::closed_loop_record(&args.closed_loop, input, output)?;
+    if let Some(r) = &args.closed_loop.reference {
+        needed.push(r.as_str());
+    }
     require_columns(csv, &header, &needed)?;
     let friction = match (
         &args.friction_csv,
@@ -500,7 +507,10 @@ fn check_inputs_outside_output(args: &Args) -> anyhow::Result<()> {
     let Ok(out) = std::fs::canonicalize(out) else {
         return Ok(());
     };
-    for input in [&args.csv, &args.friction_csv].into_iter().flatten() {
+    for input in [&args.csv, &args.friction_csv, &args.closed_loop.controller]
+        .into_iter()
+        .flatten()
+    {
         if let Ok(i) = std::fs::canonicalize(input) {
             if i.starts_with(&out) {
                 return Err(bad(format!(
