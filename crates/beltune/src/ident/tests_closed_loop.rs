@@ -96,7 +96,7 @@ fn run_with(
     let e = prbs(9, clock, amplitude, 8);
     let rec = run_closed_loop(&mut axis, &controller, kind, cruise_rad_s, &e).unwrap();
     // the start from rest to the cruise velocity saturates; the two skipped periods must not
-    if !rec.last_saturated_sample.is_none_or(|k| k < period) {
+    if rec.last_saturated_sample.is_some_and(|k| k >= period) {
         return Err(format!("saturated at {:?}", rec.last_saturated_sample));
     }
     if axis.cart_outside_stroke() {
