@@ -198,6 +198,10 @@ pub const COMMISSION_HEADINGS: [(&str, &[&str]); 8] = [
             "friction_torque",
             "friction_position",
             "current_units",
+            "reference",
+            "reference_kind",
+            "method",
+            "controller",
         ],
     ),
     (
